@@ -1,0 +1,46 @@
+#pragma once
+// Exceptions thrown inside the C++ layers. Messages name the offending value
+// and what was expected; the C ABI translates them into status codes.
+#include <sstream>
+#include <stdexcept>
+#include <string>
+
+namespace lodestone {
+
+/// Base of every Lodestone exception.
+class Error : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+/// A caller passed a value outside its valid range (bad units, NaN, sizes...).
+class InvalidArgument : public Error {
+ public:
+  using Error::Error;
+};
+
+namespace detail {
+inline void appendAll(std::ostringstream&) {}
+template <typename Head, typename... Tail>
+void appendAll(std::ostringstream& os, const Head& h, const Tail&... t) {
+  os << h;
+  appendAll(os, t...);
+}
+}  // namespace detail
+
+/// Concatenates the arguments with operator<< (full double precision).
+template <typename... Args>
+std::string concat(const Args&... args) {
+  std::ostringstream os;
+  os.precision(17);
+  detail::appendAll(os, args...);
+  return os.str();
+}
+
+/// Throws InvalidArgument with the concatenated message unless `ok`.
+template <typename... Args>
+void require(bool ok, const Args&... args) {
+  if (!ok) throw InvalidArgument(concat(args...));
+}
+
+}  // namespace lodestone
