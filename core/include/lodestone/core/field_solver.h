@@ -1,0 +1,84 @@
+#pragma once
+// Newton-PCG solve of the nonlinear magnetostatic problem (Algorithm 1 of the
+// paper, with the decisions of docs/physics.md): warm start, inexact Newton
+// with Eisenstat-Walker forcing, preconditioned CG for J delta = -F, and a
+// backtracking line search on the convex energy that falls back to the
+// residual norm when the energy change is at round-off level.
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "lodestone/core/magnetostatic_problem.h"
+#include "lodestone/core/pcg.h"
+
+namespace lodestone {
+
+enum class PreconditionerKind : int { Jacobi = 0 };
+const char* toString(PreconditionerKind kind);
+
+struct FieldSolveSettings {
+  double tolerance = 1e-8;        ///< stop at ||F|| <= tolerance * ||F_ref|| (F_ref = residual at phi = 0)
+  int maxNewtonIterations = 40;   ///< Newton iteration cap
+  int maxCgIterations = 5000;     ///< CG iteration cap per Newton step
+  double forcingMax = 0.1;        ///< largest inner relative tolerance eta (Eisenstat-Walker)
+  double forcingGamma = 0.9;      ///< Eisenstat-Walker choice 2: eta = gamma (|F_k|/|F_k-1|)^alpha
+  double forcingAlpha = 2.0;
+  int maxLineSearchCuts = 30;     ///< backtracking steps before giving up
+  double armijo = 1e-4;           ///< sufficient-decrease constant
+  PreconditionerKind preconditioner = PreconditionerKind::Jacobi;
+
+  /// Throws InvalidArgument naming the first bad value.
+  void validate() const;
+};
+
+enum class SolveStatus : int {
+  Converged = 0,           ///< relative residual <= tolerance
+  Trivial = 1,             ///< no magnetization anywhere: phi = 0, H = H_ext
+  IterationCap = 2,        ///< Newton iteration cap reached first
+  LineSearchFailed = 3,    ///< no step decreased the merit
+  LinearSolverFailed = 4,  ///< CG broke down or returned a non-descent step
+  NonFinite = 5,           ///< a non-finite value appeared; phi kept at the last finite iterate
+  Cancelled = 6            ///< the progress callback asked to stop
+};
+const char* toString(SolveStatus status);
+
+/// One Newton iteration.
+struct NewtonIterationRecord {
+  int iteration = 0;
+  double relativeResidual = 0;  ///< ||F|| / ||F_ref|| at the start of the iteration
+  double forcing = 0;           ///< inner relative tolerance eta
+  int cgIterations = 0;
+  double cgRelativeResidual = 0;
+  double step = 0;              ///< accepted line-search step lambda
+  int lineSearchCuts = 0;
+  bool residualMerit = false;   ///< step accepted on the residual norm (energy at round-off)
+  double seconds = 0;           ///< wall time of the iteration
+};
+
+struct FieldSolveReport {
+  SolveStatus status = SolveStatus::Trivial;
+  int newtonIterations = 0;
+  int cgIterations = 0;            ///< total over all Newton steps
+  int lineSearchCuts = 0;          ///< total backtracking cuts
+  double relativeResidual = 0;     ///< final ||F|| / ||F_ref||
+  double referenceResidual = 0;    ///< ||F_ref||, A*m
+  double materialEnergy = 0;       ///< sum w W at the solution, A^2*m
+  double seconds = 0;
+  std::size_t materialCells = 0;
+  std::string preconditioner;
+  std::string message;             ///< human-readable outcome
+  std::vector<NewtonIterationRecord> history;
+
+  bool converged() const { return status == SolveStatus::Converged || status == SolveStatus::Trivial; }
+};
+
+/// Called after each Newton iteration; return false to cancel the solve.
+using SolveProgress = std::function<bool(const NewtonIterationRecord&)>;
+
+/// Solves for phi in place (phi holds the warm start on entry: one value per
+/// node; pass zeros for a cold start). Never leaves non-finite values in phi.
+FieldSolveReport solveField(MagnetostaticProblem& problem, std::vector<double>& phi,
+                            const FieldSolveSettings& settings, const SolveProgress& progress = {});
+
+}  // namespace lodestone

@@ -1,0 +1,32 @@
+#pragma once
+// Deterministic parallel reductions: the same sums, bit for bit, whatever the
+// number of threads. tbb::parallel_deterministic_reduce splits the range the
+// same way every time (fixed grain, simple partitioner) and joins the partial
+// sums in a fixed tree order.
+#include <cstddef>
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_reduce.h>
+
+namespace lodestone {
+
+constexpr std::size_t kReduceGrain = 4096;
+
+/// sum_{n in [0,count)} term(n), deterministic.
+template <typename T, typename Term>
+T deterministicSum(std::size_t count, const Term& term, std::size_t grain = kReduceGrain) {
+  return tbb::parallel_deterministic_reduce(
+      tbb::blocked_range<std::size_t>(0, count, grain), T{},
+      [&](const tbb::blocked_range<std::size_t>& r, T acc) {
+        for (std::size_t n = r.begin(); n != r.end(); ++n) acc += term(n);
+        return acc;
+      },
+      [](T a, const T& b) { return a += b; });
+}
+
+/// Dot product of two arrays, deterministic.
+inline double deterministicDot(const double* a, const double* b, std::size_t count) {
+  return deterministicSum<double>(count, [&](std::size_t n) { return a[n] * b[n]; });
+}
+
+}  // namespace lodestone

@@ -1,0 +1,246 @@
+#include "lodestone/core/field_solver.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include "lodestone/core/error.h"
+#include "lodestone/core/parallel.h"
+
+namespace lodestone {
+
+namespace {
+using Clock = std::chrono::steady_clock;
+double secondsSince(Clock::time_point t0) {
+  return std::chrono::duration<double>(Clock::now() - t0).count();
+}
+template <typename Fn>
+void forEach(std::size_t n, const Fn& fn) {
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 1 << 13), [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t m = r.begin(); m != r.end(); ++m) fn(m);
+  });
+}
+double norm(const std::vector<double>& v) { return std::sqrt(deterministicDot(v.data(), v.data(), v.size())); }
+
+std::unique_ptr<Preconditioner> makePreconditioner(PreconditionerKind kind) {
+  switch (kind) {
+    case PreconditionerKind::Jacobi: return std::make_unique<JacobiPreconditioner>();
+  }
+  throw InvalidArgument(concat("field solve: unknown preconditioner ", int(kind)));
+}
+}  // namespace
+
+const char* toString(PreconditionerKind kind) {
+  switch (kind) {
+    case PreconditionerKind::Jacobi: return "jacobi";
+  }
+  return "unknown";
+}
+
+const char* toString(SolveStatus status) {
+  switch (status) {
+    case SolveStatus::Converged: return "converged";
+    case SolveStatus::Trivial: return "trivial";
+    case SolveStatus::IterationCap: return "iteration-cap";
+    case SolveStatus::LineSearchFailed: return "line-search-failed";
+    case SolveStatus::LinearSolverFailed: return "linear-solver-failed";
+    case SolveStatus::NonFinite: return "non-finite";
+    case SolveStatus::Cancelled: return "cancelled";
+  }
+  return "unknown";
+}
+
+void FieldSolveSettings::validate() const {
+  require(std::isfinite(tolerance) && tolerance > 0 && tolerance < 1,
+          "field solve: tolerance must be in (0, 1), got ", tolerance);
+  require(maxNewtonIterations >= 1, "field solve: maxNewtonIterations must be >= 1, got ", maxNewtonIterations);
+  require(maxCgIterations >= 1, "field solve: maxCgIterations must be >= 1, got ", maxCgIterations);
+  require(std::isfinite(forcingMax) && forcingMax > 0 && forcingMax < 1,
+          "field solve: forcingMax must be in (0, 1), got ", forcingMax);
+  require(std::isfinite(forcingGamma) && forcingGamma > 0 && forcingGamma <= 1,
+          "field solve: forcingGamma must be in (0, 1], got ", forcingGamma);
+  require(std::isfinite(forcingAlpha) && forcingAlpha > 1 && forcingAlpha <= 2,
+          "field solve: forcingAlpha must be in (1, 2], got ", forcingAlpha);
+  require(maxLineSearchCuts >= 1, "field solve: maxLineSearchCuts must be >= 1, got ", maxLineSearchCuts);
+  require(std::isfinite(armijo) && armijo > 0 && armijo < 0.5, "field solve: armijo must be in (0, 0.5), got ",
+          armijo);
+}
+
+FieldSolveReport solveField(MagnetostaticProblem& problem, std::vector<double>& phi,
+                            const FieldSolveSettings& settings, const SolveProgress& progress) {
+  settings.validate();
+  const auto t0 = Clock::now();
+  const std::size_t n = problem.nodeCount();
+  FieldSolveReport rep;
+  rep.materialCells = problem.materialCellCount();
+  rep.preconditioner = toString(settings.preconditioner);
+  if (phi.size() != n) phi.assign(n, 0.0);
+  for (double& v : phi)
+    if (!std::isfinite(v)) {
+      std::fill(phi.begin(), phi.end(), 0.0);  // a poisoned warm start is discarded
+      break;
+    }
+
+  std::vector<double> F(n), Fref(n), delta(n), work(n), trial;
+  problem.residualAtZero(Fref.data());
+  rep.referenceResidual = norm(Fref);
+  if (!std::isfinite(rep.referenceResidual)) {
+    rep.status = SolveStatus::NonFinite;
+    rep.message = "the magnetization of the applied field is not finite";
+    rep.seconds = secondsSince(t0);
+    return rep;
+  }
+  if (!(rep.referenceResidual > 0)) {
+    std::fill(phi.begin(), phi.end(), 0.0);
+    rep.status = SolveStatus::Trivial;
+    rep.message = problem.materialCellCount() == 0 ? "no magnetic material: H = H_ext"
+                                                   : "the applied field magnetizes nothing: H = H_ext";
+    rep.seconds = secondsSince(t0);
+    return rep;
+  }
+  const double r0 = rep.referenceResidual;
+  const bool linear = problem.law().kind == LawKind::Linear;
+  auto pre = makePreconditioner(settings.preconditioner);
+  const auto applyJ = [&](const double* v, double* out) { problem.applyJacobian(v, out); };
+  std::function<void(double*)> project;
+  if (problem.boundary() == BoundaryKind::Shield) project = [&](double* v) { problem.removeMean(v); };
+
+  double prevNorm = 0, prevEta = settings.forcingMax;
+  std::vector<double> lastGood = phi;
+  for (int it = 0;; ++it) {
+    const auto ti = Clock::now();
+    MagnetostaticProblem::Evaluation ev = problem.evaluate(phi.data(), F.data());
+    if (problem.boundary() == BoundaryKind::Open && ev.finite) {
+      problem.applyOpenBoundary(ev.multipoles, phi.data());
+      ev = problem.evaluate(phi.data(), F.data());
+    }
+    const double fn = norm(F);
+    NewtonIterationRecord rec;
+    rec.iteration = it;
+    rec.relativeResidual = fn / r0;
+    rep.relativeResidual = rec.relativeResidual;
+    rep.materialEnergy = ev.materialEnergy;
+    if (!ev.finite || !std::isfinite(fn)) {
+      phi = lastGood;
+      rep.status = SolveStatus::NonFinite;
+      rep.message = concat("non-finite magnetization or residual at Newton iteration ", it);
+      break;
+    }
+    lastGood = phi;
+    if (rec.relativeResidual <= settings.tolerance) {
+      rep.status = SolveStatus::Converged;
+      rep.history.push_back(rec);
+      rep.message = concat("converged in ", it, " Newton iterations (", rep.cgIterations, " CG) to relative residual ",
+                           rec.relativeResidual);
+      break;
+    }
+    if (it >= settings.maxNewtonIterations) {
+      rep.status = SolveStatus::IterationCap;
+      rep.history.push_back(rec);
+      rep.message = concat("not converged: Newton iteration cap ", settings.maxNewtonIterations,
+                           " reached at relative residual ", rec.relativeResidual, " (tolerance ",
+                           settings.tolerance, ")");
+      break;
+    }
+
+    // Inner tolerance: Eisenstat-Walker choice 2 with safeguards, never
+    // tighter than needed to reach the outer tolerance.
+    const double floorEta = std::min(settings.forcingMax, 0.5 * settings.tolerance * r0 / fn);
+    double eta = settings.forcingMax;
+    if (linear) {
+      eta = floorEta;
+    } else if (it > 0) {
+      eta = settings.forcingGamma * std::pow(fn / prevNorm, settings.forcingAlpha);
+      const double safeguard = settings.forcingGamma * std::pow(prevEta, settings.forcingAlpha);
+      if (safeguard > 0.1) eta = std::max(eta, safeguard);
+      eta = std::min(eta, settings.forcingMax);
+    }
+    eta = std::max(eta, floorEta);
+    rec.forcing = eta;
+
+    // Newton step.
+    pre->update(problem);
+    forEach(n, [&](std::size_t m) { work[m] = -F[m]; });
+    const PcgResult cg =
+        solvePcg(n, applyJ, *pre, work.data(), delta.data(), eta, settings.maxCgIterations, project);
+    rec.cgIterations = cg.iterations;
+    rec.cgRelativeResidual = cg.relativeResidual;
+    rep.cgIterations += cg.iterations;
+    const double g0 = deterministicDot(delta.data(), F.data(), n);
+    if (cg.breakdown || !(g0 < 0)) {
+      rep.status = SolveStatus::LinearSolverFailed;
+      rep.history.push_back(rec);
+      rep.message = concat("CG ", cg.breakdown ? "broke down" : "returned a non-descent step", " at Newton iteration ",
+                           it, " (", cg.iterations, " CG iterations, relative residual ", cg.relativeResidual, ")");
+      break;
+    }
+
+    // Line search on E(phi + lambda delta) - E(phi) = lambda s1 + lambda^2 s2 / 2 + dW.
+    problem.applyVacuum(phi.data(), work.data());
+    const double s1 = deterministicDot(delta.data(), work.data(), n);
+    problem.applyVacuum(delta.data(), work.data());
+    const double s2 = deterministicDot(delta.data(), work.data(), n);
+    double lambda = 1.0;
+    bool accepted = false;
+    for (int cut = 0; cut <= settings.maxLineSearchCuts; ++cut) {
+      double absW = 0;
+      const double Wl = problem.materialEnergyAlong(phi.data(), delta.data(), lambda, &absW);
+      const double dE = lambda * s1 + 0.5 * lambda * lambda * s2 + (Wl - ev.materialEnergy);
+      const double noise = 64.0 * std::numeric_limits<double>::epsilon() *
+                           (absW + ev.materialEnergyAbs + std::fabs(lambda * s1) + 0.5 * lambda * lambda * std::fabs(s2));
+      if (!std::isfinite(dE)) {
+        // cut below
+      } else if (std::fabs(dE) > noise) {
+        accepted = dE <= settings.armijo * lambda * g0;  // the energy resolves the step: Armijo
+      } else {
+        // The energy cannot resolve this step: judge it by the residual norm.
+        trial.resize(n);
+        forEach(n, [&](std::size_t m) { trial[m] = phi[m] + lambda * delta[m]; });
+        const auto evT = problem.evaluate(trial.data(), work.data());
+        const double ft = norm(work);
+        if (evT.finite && ft <= (1.0 - settings.armijo * lambda) * fn) {
+          accepted = true;
+          rec.residualMerit = true;
+        }
+      }
+      if (accepted) break;
+      // Safeguarded quadratic backtracking.
+      double next = 0.5 * lambda;
+      if (std::isfinite(dE)) {
+        const double denom = 2.0 * (dE - g0 * lambda);
+        if (denom > 0) next = -g0 * lambda * lambda / denom;
+      }
+      lambda = std::clamp(next, 0.1 * lambda, 0.5 * lambda);
+      ++rec.lineSearchCuts;
+    }
+    rep.lineSearchCuts += rec.lineSearchCuts;
+    if (!accepted) {
+      rep.status = SolveStatus::LineSearchFailed;
+      rep.history.push_back(rec);
+      rep.message = concat("line search failed at Newton iteration ", it, " after ", rec.lineSearchCuts,
+                           " cuts (relative residual ", rec.relativeResidual, ")");
+      break;
+    }
+    rec.step = lambda;
+    forEach(n, [&](std::size_t m) { phi[m] += lambda * delta[m]; });
+    if (project) project(phi.data());
+    prevNorm = fn;
+    prevEta = eta;
+    ++rep.newtonIterations;
+    rec.seconds = secondsSince(ti);
+    rep.history.push_back(rec);
+    if (progress && !progress(rec)) {
+      rep.status = SolveStatus::Cancelled;
+      rep.message = concat("cancelled after ", rep.newtonIterations, " Newton iterations");
+      break;
+    }
+  }
+  rep.seconds = secondsSince(t0);
+  return rep;
+}
+
+}  // namespace lodestone

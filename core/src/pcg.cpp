@@ -1,0 +1,83 @@
+#include "lodestone/core/pcg.h"
+
+#include <cmath>
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include "lodestone/core/magnetostatic_problem.h"
+#include "lodestone/core/parallel.h"
+
+namespace lodestone {
+
+namespace {
+template <typename Fn>
+void forEach(std::size_t n, const Fn& fn) {
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 1 << 13), [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t m = r.begin(); m != r.end(); ++m) fn(m);
+  });
+}
+}  // namespace
+
+void JacobiPreconditioner::update(const MagnetostaticProblem& problem) {
+  inverseDiagonal_.resize(problem.nodeCount());
+  problem.jacobianDiagonal(inverseDiagonal_.data());
+  double* d = inverseDiagonal_.data();
+  forEach(inverseDiagonal_.size(), [&](std::size_t m) { d[m] = d[m] > 0 ? 1.0 / d[m] : 0.0; });
+}
+
+void JacobiPreconditioner::apply(const double* r, double* z) const {
+  const double* d = inverseDiagonal_.data();
+  forEach(inverseDiagonal_.size(), [&](std::size_t m) { z[m] = d[m] * r[m]; });
+}
+
+PcgResult solvePcg(std::size_t n, const std::function<void(const double*, double*)>& applyA,
+                   const Preconditioner& preconditioner, const double* b, double* x, double relTol,
+                   int maxIterations, const std::function<void(double*)>& project) {
+  PcgResult res;
+  std::vector<double> r(b, b + n), z(n), p(n), Ap(n);
+  forEach(n, [&](std::size_t m) { x[m] = 0.0; });
+  if (project) project(r.data());
+  const double bnorm = std::sqrt(deterministicDot(r.data(), r.data(), n));
+  if (!(bnorm > 0)) {
+    res.converged = std::isfinite(bnorm);
+    res.breakdown = !std::isfinite(bnorm);
+    return res;
+  }
+  preconditioner.apply(r.data(), z.data());
+  if (project) project(z.data());
+  p = z;
+  double rz = deterministicDot(r.data(), z.data(), n);
+  double rnorm = bnorm;
+  while (res.iterations < maxIterations) {
+    applyA(p.data(), Ap.data());
+    const double pAp = deterministicDot(p.data(), Ap.data(), n);
+    if (!(pAp > 0) || !std::isfinite(pAp) || !std::isfinite(rz)) {
+      res.breakdown = true;
+      break;
+    }
+    const double alpha = rz / pAp;
+    forEach(n, [&](std::size_t m) {
+      x[m] += alpha * p[m];
+      r[m] -= alpha * Ap[m];
+    });
+    if (project) project(r.data());
+    ++res.iterations;
+    rnorm = std::sqrt(deterministicDot(r.data(), r.data(), n));
+    if (rnorm <= relTol * bnorm) {
+      res.converged = true;
+      break;
+    }
+    preconditioner.apply(r.data(), z.data());
+    if (project) project(z.data());
+    const double rzNew = deterministicDot(r.data(), z.data(), n);
+    const double beta = rzNew / rz;
+    rz = rzNew;
+    forEach(n, [&](std::size_t m) { p[m] = z[m] + beta * p[m]; });
+  }
+  res.relativeResidual = rnorm / bnorm;
+  if (project) project(x);
+  return res;
+}
+
+}  // namespace lodestone

@@ -1,0 +1,168 @@
+// Field solve against closed forms: the empty box, linear and Langevin spheres
+// on a refinement sequence (observed order asserted), Newton robustness from
+// weak to extreme fields, and honest reporting of non-convergence.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <vector>
+
+#include "lodestone/core/magnetic_stage.h"
+#include "lodestone/core/material.h"
+#include "lodestone/core/point_dipole.h"
+#include "lodestone/core/uniform_field.h"
+#include "lodestone_test/scenes.h"
+
+using namespace lodestone;
+using namespace lodestone::test;
+
+namespace {
+
+constexpr double kRadius = 0.05;  // m
+
+struct SphereResult {
+  double relativeError;  // |mean interior H - exact| / (H0 - exact)
+  FieldSolveReport report;
+};
+
+// Sphere of radius a in a box of half-width 2a with N nodes per axis; mean H_z
+// over nodes inside r < a/2 against the closed form.
+SphereResult solveSphere(const MagneticMaterial& material, double H0, int N,
+                         BoundaryKind boundary = BoundaryKind::Open, double halfWidth = 2 * kRadius) {
+  const GridSpec g = cubeGrid(N, halfWidth);
+  const DenseGrid<double> n = rasterize(g, material.numberDensity, ball({}, kRadius));
+  MagneticStageSettings settings;
+  settings.boundary = boundary;
+  MagneticForceStage stage(g, material, settings);
+  const MagneticStageReport rep = stage.runOnDensity(n.view(), UniformField({0, 0, H0}), 0.0);
+  const double exact = sphereInteriorField(material, H0);
+  double sum = 0;
+  int count = 0;
+  for (int k = 0; k < N; ++k)
+    for (int j = 0; j < N; ++j)
+      for (int i = 0; i < N; ++i)
+        if (norm(g.nodePosition(i, j, k)) < 0.5 * kRadius) {
+          sum += stage.field()(i, j, k).z;
+          ++count;
+        }
+  return {std::fabs(sum / count - exact) / (H0 - exact), rep.solve};
+}
+
+void checkRefinement(const MagneticMaterial& material, double H0) {
+  std::vector<double> h, err;
+  for (int N : {17, 25, 33, 49}) {
+    const SphereResult r = solveSphere(material, H0, N);
+    ASSERT_EQ(r.report.status, SolveStatus::Converged) << r.report.message;
+    h.push_back(4 * kRadius / (N - 1));
+    err.push_back(r.relativeError);
+  }
+  const double order = observedOrder(h, err);
+  SCOPED_TRACE(::testing::Message() << "H0 = " << H0 << " A/m, errors " << err[0] << " " << err[1] << " "
+                                    << err[2] << " " << err[3] << ", observed order " << order);
+  EXPECT_GT(order, 0.7);
+  EXPECT_LT(order, 2.0);
+  EXPECT_LT(err.back(), 0.03);  // a = 12 dx
+  EXPECT_LT(err.back(), err.front());
+}
+
+}  // namespace
+
+TEST(FieldSolve, EmptyBoxKeepsTheAppliedFieldExactly) {
+  const GridSpec g = cubeGrid(12, 0.1);
+  const DenseGrid<double> n(g, 0.0);
+  const UniformField uniform({1e5, -3e4, 2e5});
+  const PointDipole dipole({0.3, 0.1, -0.2}, {0, 0, 50.0});
+  for (BoundaryKind b : {BoundaryKind::Open, BoundaryKind::Shield})
+    for (const FieldSource* src : {static_cast<const FieldSource*>(&uniform), static_cast<const FieldSource*>(&dipole)}) {
+      MagneticStageSettings s;
+      s.boundary = b;
+      MagneticForceStage stage(g, paperMaterial(), s);
+      const MagneticStageReport rep = stage.runOnDensity(n.view(), *src, 0.0);
+      EXPECT_EQ(rep.solve.status, SolveStatus::Trivial);
+      for (std::size_t m = 0; m < g.nodeCount(); ++m) {
+        const Vec3d Hx = src->field(g.nodePosition(int(m % 12), int((m / 12) % 12), int(m / 144)), 0.0);
+        ASSERT_LE(norm(stage.field()[m] - Hx), 1e-12 * norm(Hx)) << "boundary " << toString(b) << " node " << m;
+        ASSERT_EQ(norm(stage.nodalForce()[m]), 0.0);
+      }
+    }
+}
+
+TEST(FieldSolve, LinearSphereConvergesToClosedFormAtFirstOrder) {
+  for (double H0 : {1e3, 1e4, 1e5, 1e6}) checkRefinement(linearized(paperMaterial()), H0);
+}
+
+TEST(FieldSolve, LangevinSphereConvergesToClosedFormAtFirstOrder) {
+  for (double H0 : {1e3, 1e4, 1e5, 1e6}) checkRefinement(paperMaterial(), H0);
+}
+
+TEST(FieldSolve, LinearLawIsSolvedByOneNewtonStep) {
+  // With the shield wall the linear problem is one linear solve. With the open
+  // wall the multipole boundary values lag one iteration behind M, a fixed
+  // point that contracts by roughly (a/R)^3 per step.
+  const SphereResult shield = solveSphere(linearized(paperMaterial()), 1e5, 21, BoundaryKind::Shield);
+  EXPECT_EQ(shield.report.status, SolveStatus::Converged);
+  EXPECT_EQ(shield.report.newtonIterations, 1);
+  EXPECT_LE(shield.report.relativeResidual, 1e-8);
+  const SphereResult open = solveSphere(linearized(paperMaterial()), 1e5, 21, BoundaryKind::Open);
+  EXPECT_EQ(open.report.status, SolveStatus::Converged);
+  EXPECT_LE(open.report.newtonIterations, 8);
+  EXPECT_EQ(open.report.lineSearchCuts, 0);
+}
+
+TEST(FieldSolve, NewtonConvergesFromWeakToExtremeFields) {
+  for (BoundaryKind b : {BoundaryKind::Open, BoundaryKind::Shield})
+    for (double H0 : {1e2, 1e3, 1e4, 3e4, 1e5, 3e5, 1e6, 1e7}) {
+      const SphereResult r = solveSphere(paperMaterial(), H0, 21, b);
+      SCOPED_TRACE(::testing::Message() << toString(b) << " H0 = " << H0 << ": " << r.report.message);
+      EXPECT_EQ(r.report.status, SolveStatus::Converged);
+      EXPECT_LE(r.report.relativeResidual, 1e-8);
+      EXPECT_LE(r.report.newtonIterations, 12);
+      EXPECT_LE(r.report.lineSearchCuts, 3);  // the line search never stalls
+      for (const auto& it : r.report.history) EXPECT_TRUE(std::isfinite(it.relativeResidual));
+    }
+}
+
+TEST(FieldSolve, TinyIterationCapReportsNonConvergenceWithoutNaN) {
+  const GridSpec g = cubeGrid(21, 2 * kRadius);
+  const DenseGrid<double> n = rasterize(g, paperMaterial().numberDensity, ball({}, kRadius));
+  MagneticStageSettings s;
+  s.solve.maxNewtonIterations = 1;
+  s.solve.maxCgIterations = 3;
+  MagneticForceStage stage(g, paperMaterial(), s);
+  const MagneticStageReport rep = stage.runOnDensity(n.view(), UniformField({0, 0, 1e5}), 0.0);
+  EXPECT_EQ(rep.solve.status, SolveStatus::IterationCap);
+  EXPECT_FALSE(rep.converged());
+  EXPECT_GT(rep.solve.relativeResidual, 1e-8);
+  EXPECT_FALSE(rep.warnings.empty());
+  EXPECT_NE(rep.solve.message.find("not converged"), std::string::npos) << rep.solve.message;
+  for (std::size_t m = 0; m < g.nodeCount(); ++m) {
+    ASSERT_TRUE(isFinite(stage.field()[m]));
+    ASSERT_TRUE(isFinite(stage.nodalForce()[m]));
+  }
+}
+
+TEST(FieldSolve, WarmStartFromTheSolutionNeedsNoNewtonStep) {
+  const GridSpec g = cubeGrid(21, 2 * kRadius);
+  const DenseGrid<double> n = rasterize(g, paperMaterial().numberDensity, ball({}, kRadius));
+  MagneticForceStage stage(g, paperMaterial());
+  const UniformField src({0, 0, 1e5});
+  const auto cold = stage.runOnDensity(n.view(), src, 0.0);
+  const auto warm = stage.runOnDensity(n.view(), src, 0.0);
+  EXPECT_EQ(cold.solve.status, SolveStatus::Converged);
+  EXPECT_EQ(warm.solve.status, SolveStatus::Converged);
+  EXPECT_GE(cold.solve.newtonIterations, 3);
+  EXPECT_EQ(warm.solve.newtonIterations, 0);
+  // A 10% stronger field from the previous solution: fewer CG iterations than cold.
+  const auto warm2 = stage.runOnDensity(n.view(), UniformField({0, 0, 1.1e5}), 0.0);
+  stage.resetWarmStart();
+  const auto cold2 = stage.runOnDensity(n.view(), UniformField({0, 0, 1.1e5}), 0.0);
+  EXPECT_LT(warm2.solve.cgIterations, cold2.solve.cgIterations);
+}
+
+TEST(FieldSolve, OpenBoundaryBeatsTheShieldWallInATightBox) {
+  // Box half-width 1.5 a: the shield (superconducting) wall biases the
+  // interior field; the open (multipole) wall does not.
+  const MagneticMaterial mat = linearized(paperMaterial());
+  const double open = solveSphere(mat, 1e4, 31, BoundaryKind::Open, 1.5 * kRadius).relativeError;
+  const double shield = solveSphere(mat, 1e4, 31, BoundaryKind::Shield, 1.5 * kRadius).relativeError;
+  EXPECT_LT(open, shield) << "open " << open << ", shield " << shield;
+}
