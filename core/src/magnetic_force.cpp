@@ -1,0 +1,162 @@
+#include "lodestone/core/magnetic_force.h"
+
+#include <vector>
+
+#include <tbb/parallel_for.h>
+
+#include "lodestone/core/constants.h"
+#include "lodestone/core/error.h"
+
+namespace lodestone {
+
+const char* toString(ForceMask mask) {
+  switch (mask) {
+    case ForceMask::Material: return "material";
+    case ForceMask::None: return "none";
+  }
+  return "unknown";
+}
+
+void stressDivergence(GridView<const Vec3d> H, GridView<const Vec3d> B, GridView<const Vec3d> Hext,
+                      GridView<const double> n, ForceMask mask, GridView<Vec3d> t, int dilation) {
+  require(dilation >= 0 && dilation <= 8, "stressDivergence: mask dilation must be 0..8 nodes, got ", dilation);
+  const GridSpec& g = H.spec;
+  require(B.spec == g && t.spec == g && Hext.spec == g, "stressDivergence: grids differ");
+  require(mask == ForceMask::None || (n.data && n.spec == g), "stressDivergence: the material mask needs n");
+  const int dims[3] = {g.dims.i, g.dims.j, g.dims.k};
+  const std::ptrdiff_t stride[3] = {1, std::ptrdiff_t(g.dims.i), std::ptrdiff_t(g.dims.i) * g.dims.j};
+  // Row a of the self stress at node m: B_d,a H_d - (mu0/2)|H_d|^2 e_a with
+  // H_d = H - H_ext and B_d = B - mu0 H_ext = mu0 (H_d + M).
+  const auto row = [&](std::size_t m, int a) {
+    const Vec3d Hd = H[m] - Hext[m];
+    Vec3d r = (B[m][a] - kMu0 * Hext[m][a]) * Hd;
+    r[a] -= 0.5 * kMu0 * norm2(Hd);
+    return r;
+  };
+  tbb::parallel_for(0, g.dims.k, [&](int k) {
+    for (int j = 0; j < g.dims.j; ++j)
+      for (int i = 0; i < g.dims.i; ++i) {
+        const std::size_t m = g.index(i, j, k);
+        if (mask == ForceMask::Material) {
+          bool near = false;
+          for (int c = std::max(k - dilation, 0); c <= std::min(k + dilation, g.dims.k - 1) && !near; ++c)
+            for (int b = std::max(j - dilation, 0); b <= std::min(j + dilation, g.dims.j - 1) && !near; ++b)
+              for (int a = std::max(i - dilation, 0); a <= std::min(i + dilation, g.dims.i - 1) && !near; ++a)
+                near = n(a, b, c) > 0;
+          if (!near) {
+            t[m] = Vec3d{};
+            continue;
+          }
+        }
+        const int p[3] = {i, j, k};
+        // div T_self + mu0 (M . grad) H_ext, with M = B/mu0 - H.
+        const Vec3d M = B[m] / kMu0 - H[m];
+        Vec3d div{};
+        for (int a = 0; a < 3; ++a) {
+          const std::size_t up = p[a] < dims[a] - 1 ? m + std::size_t(stride[a]) : m;
+          const std::size_t dn = p[a] > 0 ? m - std::size_t(stride[a]) : m;
+          const double span = g.dx * double((up != m) + (dn != m));
+          div += (row(up, a) - row(dn, a)) / span;
+          div += (kMu0 * M[a] / span) * (Hext[up] - Hext[dn]);
+        }
+        t[m] = div;
+      }
+  });
+}
+
+void spreadForce(GridView<const Vec3d> t, GridView<Vec3d> f) {
+  const GridSpec& g = t.spec;
+  require(f.spec == g, "spreadForce: grids differ");
+  const std::size_t count = g.nodeCount();
+  std::vector<Vec3d> a(t.data, t.data + count), b(count);
+  const int dims[3] = {g.dims.i, g.dims.j, g.dims.k};
+  const std::size_t stride[3] = {1, std::size_t(g.dims.i), std::size_t(g.dims.i) * std::size_t(g.dims.j)};
+  const double r0 = 2.0 * g.dx / 3.0, r1 = g.dx / 6.0;
+  for (int axis = 0; axis < 3; ++axis) {
+    tbb::parallel_for(0, g.dims.k, [&](int k) {
+      for (int j = 0; j < g.dims.j; ++j)
+        for (int i = 0; i < g.dims.i; ++i) {
+          const std::size_t m = g.index(i, j, k);
+          const int p = axis == 0 ? i : (axis == 1 ? j : k);
+          Vec3d s = r0 * a[m];
+          if (p > 0) s += r1 * a[m - stride[axis]];
+          if (p < dims[axis] - 1) s += r1 * a[m + stride[axis]];
+          b[m] = s;
+        }
+    });
+    a.swap(b);
+  }
+  std::copy(a.begin(), a.end(), f.data);
+}
+
+Vec3d gatherToSupport(GridView<const Vec3d> f, GridView<const double> n, GridView<Vec3d> out, int maxDistance) {
+  const GridSpec& g = f.spec;
+  require(n.spec == g && out.spec == g, "gatherToSupport: grids differ");
+  require(maxDistance >= 0 && maxDistance <= 16, "gatherToSupport: maxDistance must be 0..16 nodes, got ", maxDistance);
+  const std::size_t count = g.nodeCount();
+  constexpr int kFar = 1 << 20;
+  // d: node distance (26-connectivity) to the support n > 0, up to maxDistance.
+  std::vector<int> d(count, kFar);
+  tbb::parallel_for(std::size_t(0), count, [&](std::size_t m) { d[m] = n[m] > 0 ? 0 : kFar; });
+  const auto forNeighbours = [&](int i, int j, int k, const auto& fn) {
+    for (int c = std::max(k - 1, 0); c <= std::min(k + 1, g.dims.k - 1); ++c)
+      for (int b = std::max(j - 1, 0); b <= std::min(j + 1, g.dims.j - 1); ++b)
+        for (int a = std::max(i - 1, 0); a <= std::min(i + 1, g.dims.i - 1); ++a)
+          if (a != i || b != j || c != k) fn(g.index(a, b, c));
+  };
+  for (int level = 1; level <= maxDistance; ++level) {
+    tbb::parallel_for(0, g.dims.k, [&](int k) {
+      for (int j = 0; j < g.dims.j; ++j)
+        for (int i = 0; i < g.dims.i; ++i) {
+          const std::size_t m = g.index(i, j, k);
+          if (d[m] != kFar) continue;
+          bool next = false;
+          forNeighbours(i, j, k, [&](std::size_t o) { next = next || d[o] == level - 1; });
+          if (next) d[m] = -level;  // mark; committed below so this pass reads only older levels
+        }
+    });
+    tbb::parallel_for(std::size_t(0), count, [&](std::size_t m) {
+      if (d[m] < 0) d[m] = -d[m];
+    });
+  }
+  // Each node at distance L > 0 splits what it holds equally among its
+  // neighbours at distance L - 1, outermost level first.
+  std::vector<Vec3d> acc(f.data, f.data + count);
+  std::vector<int> inward(count, 0);
+  tbb::parallel_for(0, g.dims.k, [&](int k) {
+    for (int j = 0; j < g.dims.j; ++j)
+      for (int i = 0; i < g.dims.i; ++i) {
+        const std::size_t m = g.index(i, j, k);
+        if (d[m] == 0 || d[m] == kFar) continue;
+        int c = 0;
+        forNeighbours(i, j, k, [&](std::size_t o) { c += d[o] == d[m] - 1; });
+        inward[m] = c;
+      }
+  });
+  for (int level = maxDistance - 1; level >= 0; --level) {
+    tbb::parallel_for(0, g.dims.k, [&](int k) {
+      for (int j = 0; j < g.dims.j; ++j)
+        for (int i = 0; i < g.dims.i; ++i) {
+          const std::size_t m = g.index(i, j, k);
+          if (d[m] != level) continue;
+          Vec3d pulled{};
+          forNeighbours(i, j, k, [&](std::size_t o) {
+            if (d[o] == level + 1) pulled += acc[o] / double(inward[o]);
+          });
+          acc[m] += pulled;
+        }
+    });
+  }
+  Vec3d lost{};
+  for (std::size_t m = 0; m < count; ++m) {
+    if (d[m] == 0) {
+      out[m] = acc[m];
+    } else {
+      if (d[m] == kFar) lost += f[m];
+      out[m] = Vec3d{};
+    }
+  }
+  return lost;
+}
+
+}  // namespace lodestone
