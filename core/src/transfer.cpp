@@ -27,9 +27,7 @@ constexpr std::uint64_t kNonFinite = std::numeric_limits<std::uint64_t>::max();
 constexpr std::uint64_t kOutside = std::numeric_limits<std::uint64_t>::max() - 1;
 constexpr std::size_t kNone = std::numeric_limits<std::size_t>::max();
 
-double secondsSince(Clock::time_point t0) {
-  return std::chrono::duration<double>(Clock::now() - t0).count();
-}
+double secondsSince(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
 void atomicMin(std::atomic<std::size_t>& a, std::size_t v) {
   std::size_t cur = a.load(std::memory_order_relaxed);
@@ -59,9 +57,8 @@ inline bool stencilBase(const Vec3d& u, const Index3& dims, Index3& base) {
 std::string describeExtent(const GridSpec& g) {
   const Vec3d hi = g.maxCorner();
   const double lo = 0.5 * g.dx;
-  return concat("the grid has origin (", g.origin.x, ", ", g.origin.y, ", ", g.origin.z, ") m, dx = ", g.dx,
-                " m and ", g.dims.i, " x ", g.dims.j, " x ", g.dims.k, " nodes, spanning up to (", hi.x, ", ",
-                hi.y, ", ", hi.z,
+  return concat("the grid has origin (", g.origin.x, ", ", g.origin.y, ", ", g.origin.z, ") m, dx = ", g.dx, " m and ",
+                g.dims.i, " x ", g.dims.j, " x ", g.dims.k, " nodes, spanning up to (", hi.x, ", ", hi.y, ", ", hi.z,
                 ") m; a quadratic B-spline stencil fits only for positions in [origin + dx/2, origin + "
                 "(dims - 3/2) dx) per axis: x in [",
                 g.origin.x + lo, ", ", g.origin.x + (g.dims.i - 1.5) * g.dx, "), y in [", g.origin.y + lo, ", ",
@@ -70,8 +67,7 @@ std::string describeExtent(const GridSpec& g) {
 }
 
 [[noreturn]] void throwNonFinitePosition(std::size_t p, const Vec3d& x) {
-  throw InvalidArgument(concat("particle ", p, ": position must be finite, got (", x.x, ", ", x.y, ", ", x.z,
-                               ") m"));
+  throw InvalidArgument(concat("particle ", p, ": position must be finite, got (", x.x, ", ", x.y, ", ", x.z, ") m"));
 }
 
 [[noreturn]] void throwOutside(std::size_t p, const Vec3d& x, const GridSpec& g) {
@@ -103,15 +99,14 @@ void ParticleBinning::clear() {
   binned_ = 0;
   skipped_ = 0;
   offsets_.assign(1, 0);
-  order_.clear();
+  entries_.clear();
 }
 
 std::size_t ParticleBinning::build(const ParticleView& particles, const GridSpec& grid, OutOfGridPolicy policy) {
   clear();
   grid.validate("particle binning grid");
   const std::size_t np = particles.size;
-  require(np == 0 || particles.positions != nullptr, "particle binning: positions is null for ", np,
-          " particles");
+  require(np == 0 || particles.positions != nullptr, "particle binning: positions is null for ", np, " particles");
   require(np <= std::size_t(std::numeric_limits<std::uint32_t>::max()) - 1,
           "particle binning: at most 2^32 - 2 particles are supported, got ", np);
 
@@ -137,7 +132,7 @@ std::size_t ParticleBinning::build(const ParticleView& particles, const GridSpec
   std::atomic<std::size_t> firstError{kNone};
   std::atomic<std::size_t> outside{0};
 
-  // Pass 1: bin key of every particle, and its (scheduling-dependent) slot.
+  // Pass 1: bin of every particle, and a (scheduling-dependent) slot in it.
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, np, 1024), [&](const tbb::blocked_range<std::size_t>& r) {
     std::size_t localOutside = 0;
     for (std::size_t p = r.begin(); p != r.end(); ++p) {
@@ -172,7 +167,7 @@ std::size_t ParticleBinning::build(const ParticleView& particles, const GridSpec
   skipped_ = outside.load();
   binned_ = np - skipped_;
 
-  // Pass 2: bin offsets (exclusive prefix sums; integer, so order-free).
+  // Pass 2: bin offsets (exclusive prefix sums; integers, so order-free).
   offsets_.resize(nb + 1);
   tbb::parallel_scan(
       tbb::blocked_range<std::size_t>(0, nb, 16384), std::uint32_t(0),
@@ -186,36 +181,50 @@ std::size_t ParticleBinning::build(const ParticleView& particles, const GridSpec
       std::plus<std::uint32_t>());
   offsets_[nb] = std::uint32_t(binned_);
 
-  // Pass 3: scatter particle indices into their bins.
-  order_.resize(binned_);
+  // Pass 3: scatter the particles into their bins. gridCoord is the same
+  // computation as in pass 1 (the stencil base used later is the bin's anyway).
+  entries_.resize(binned_);
+  const double* counts = particles.counts;
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, np, 4096), [&](const tbb::blocked_range<std::size_t>& r) {
     for (std::size_t p = r.begin(); p != r.end(); ++p) {
       const std::uint64_t key = keys_[p];
-      if (key < nb) order_[offsets_[key] + rank_[p]] = std::uint32_t(p);
+      if (key < nb) {
+        entries_[offsets_[key] + rank_[p]] = {gridCoord(pos[p], grid), counts ? counts[p] : 0.0, std::uint32_t(p)};
+      }
     }
   });
 
-  // Pass 4: canonical in-bin order, (x, y, z, count) then index. Positions are
-  // finite here so < is a strict weak order; counts use a total order on bits
-  // so even unvalidated counts (NaN) cannot break the sort.
-  const double* counts = particles.counts;
-  auto less = [pos, counts](std::uint32_t a, std::uint32_t b) {
-    const Vec3d& pa = pos[a];
-    const Vec3d& pb = pos[b];
-    if (pa.x != pb.x) return pa.x < pb.x;
-    if (pa.y != pb.y) return pa.y < pb.y;
-    if (pa.z != pb.z) return pa.z < pb.z;
-    if (counts) {
-      const std::uint64_t ca = totalOrderKey(counts[a]), cb = totalOrderKey(counts[b]);
-      if (ca != cb) return ca < cb;
-    }
-    return a < b;
+  // Pass 4: canonical in-bin order, (u.x, u.y, u.z, count) then index. u is
+  // finite here so < is a strict weak order; counts use a total order on the
+  // bits so even unvalidated counts (NaN) cannot break the sort.
+  auto less = [](const Entry& a, const Entry& b) {
+    if (a.u.x != b.u.x) return a.u.x < b.u.x;
+    if (a.u.y != b.u.y) return a.u.y < b.u.y;
+    if (a.u.z != b.u.z) return a.u.z < b.u.z;
+    const std::uint64_t ca = totalOrderKey(a.count), cb = totalOrderKey(b.count);
+    if (ca != cb) return ca < cb;
+    return a.index < b.index;
   };
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nb, 1024), [&](const tbb::blocked_range<std::size_t>& r) {
     for (std::size_t b = r.begin(); b != r.end(); ++b) {
-      std::uint32_t* first = order_.data() + offsets_[b];
-      std::uint32_t* last = order_.data() + offsets_[b + 1];
-      if (last - first > 1) std::sort(first, last, less);
+      Entry* first = entries_.data() + offsets_[b];
+      Entry* last = entries_.data() + offsets_[b + 1];
+      if (last - first < 2) continue;
+      if (last - first > 24) {
+        std::sort(first, last, less);
+        continue;
+      }
+      // Bins usually hold a handful of particles: insertion sort.
+      for (Entry* i = first + 1; i != last; ++i) {
+        if (!less(*i, *(i - 1))) continue;
+        const Entry v = *i;
+        Entry* j = i;
+        do {
+          *j = *(j - 1);
+          --j;
+        } while (j != first && less(v, *(j - 1)));
+        *j = v;
+      }
     }
   });
   return skipped_;
@@ -259,13 +268,10 @@ TransferReport depositNumberDensity(const ParticleView& particles, GridView<doub
 
   double* nd = n.data;
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, g.nodeCount(), 8192),
-                    [&](const tbb::blocked_range<std::size_t>& r) {
-                      std::fill(nd + r.begin(), nd + r.end(), 0.0);
-                    });
+                    [&](const tbb::blocked_range<std::size_t>& r) { std::fill(nd + r.begin(), nd + r.end(), 0.0); });
 
   const Index3 bd = binning.baseDims();
   const double invVolume = 1.0 / g.cellVolume();
-  const Vec3d* pos = particles.positions;
   const std::size_t sj = std::size_t(g.dims.i);
   const std::size_t sk = std::size_t(g.dims.i) * std::size_t(g.dims.j);
   // Per-row sums of n_p, added in row order at the end (deterministic).
@@ -275,19 +281,17 @@ TransferReport depositNumberDensity(const ParticleView& particles, GridView<doub
     double total = 0.0;
     const std::size_t firstBin = binning.binIndex(0, bj, bk);
     for (int bi = 0; bi < bd.i; ++bi) {
-      const std::uint32_t* it = binning.binBegin(firstBin + std::size_t(bi));
-      const std::uint32_t* end = binning.binEnd(firstBin + std::size_t(bi));
+      const ParticleBinning::Entry* it = binning.binBegin(firstBin + std::size_t(bi));
+      const ParticleBinning::Entry* end = binning.binEnd(firstBin + std::size_t(bi));
       if (it == end) continue;
       double* corner = nd + g.index(bi, bj, bk);
       for (; it != end; ++it) {
-        const std::uint32_t p = *it;
-        const Vec3d u = gridCoord(pos[p], g);
         // The bin's base, not a recomputed one: the stencil is exactly the bin's.
-        const QuadraticWeights<double> wx = quadraticWeightsAt(u.x, bi);
-        const QuadraticWeights<double> wy = quadraticWeightsAt(u.y, bj);
-        const QuadraticWeights<double> wz = quadraticWeightsAt(u.z, bk);
-        const double c = counts[p] * invVolume;
-        total += counts[p];
+        const QuadraticWeights<double> wx = quadraticWeightsAt(it->u.x, bi);
+        const QuadraticWeights<double> wy = quadraticWeightsAt(it->u.y, bj);
+        const QuadraticWeights<double> wz = quadraticWeightsAt(it->u.z, bk);
+        const double c = it->count * invVolume;
+        total += it->count;
         for (int cz = 0; cz < 3; ++cz) {
           const double wzc = wz.w[cz] * c;
           for (int cy = 0; cy < 3; ++cy) {
@@ -405,13 +409,13 @@ TransferReport sampleImpl(GridView<const V> field, const Vec3d* positions, std::
 
 }  // namespace
 
-TransferReport sampleToParticles(GridView<const Vec3d> field, const Vec3d* positions, std::size_t count,
-                                 Vec3d* out, OutOfGridPolicy policy) {
+TransferReport sampleToParticles(GridView<const Vec3d> field, const Vec3d* positions, std::size_t count, Vec3d* out,
+                                 OutOfGridPolicy policy) {
   return sampleImpl<Vec3d>(field, positions, count, out, policy, "sampleToParticles");
 }
 
-TransferReport sampleToParticles(GridView<const double> field, const Vec3d* positions, std::size_t count,
-                                 double* out, OutOfGridPolicy policy) {
+TransferReport sampleToParticles(GridView<const double> field, const Vec3d* positions, std::size_t count, double* out,
+                                 OutOfGridPolicy policy) {
   return sampleImpl<double>(field, positions, count, out, policy, "sampleToParticles");
 }
 

@@ -298,6 +298,37 @@ TEST(DepositNumberDensity, BitwiseDeterministicAcrossThreadsOrderAndReuse) {
   EXPECT_EQ(binning.skippedCount(), 0u);
 }
 
+TEST(DepositNumberDensity, NoRacesBetweenConcurrentRows) {
+  // Few, heavily loaded rows (7 rows along y, one layer in z, about 7000
+  // particles per bin): the rows that run concurrently walk their bins in
+  // lockstep, so any two concurrent rows writing a shared node would lose
+  // updates and change the result.
+  const GridSpec g = makeGrid({0, 0, 0}, 1.0 / 8, {6, 9, 3});
+  std::mt19937_64 rng(12);
+  std::uniform_real_distribution<double> ux(0.5, 4.5), uy(0.5, 7.5), uz(0.5, 1.4999);
+  std::vector<Vec3d> x(200000);
+  std::vector<double> c(x.size());
+  for (std::size_t p = 0; p < x.size(); ++p) {
+    x[p] = {ux(rng) * g.dx, uy(rng) * g.dx, uz(rng) * g.dx};
+    c[p] = 1.0 + double(p % 7);
+  }
+  std::vector<double> reference;
+  {
+    tbb::global_control one(tbb::global_control::max_allowed_parallelism, 1);
+    reference = deposit(g, x, c);
+  }
+  tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 4);
+  tbb::task_arena arena(4);
+  int differing = 0;
+  for (int run = 0; run < 12; ++run) {
+    std::vector<double> n;
+    arena.execute([&] { n = deposit(g, x, c); });
+    differing += !bitwiseEqual(n, reference);
+  }
+  EXPECT_EQ(differing, 0);
+  EXPECT_LE(std::fabs(double(sumOf(reference) * g.cellVolume() - sumOf(c))), 1e-12 * double(sumOf(c)));
+}
+
 TEST(DepositNumberDensity, BinningIsSortedByBaseNode) {
   const GridSpec g = makeGrid({0.1, 0.2, 0.3}, 0.1, {9, 8, 7});
   std::mt19937_64 rng(6);
@@ -312,14 +343,17 @@ TEST(DepositNumberDensity, BinningIsSortedByBaseNode) {
     for (int bj = 0; bj < 6; ++bj)
       for (int bi = 0; bi < 7; ++bi) {
         const std::size_t bin = b.binIndex(bi, bj, bk);
-        for (const std::uint32_t* p = b.binBegin(bin); p != b.binEnd(bin); ++p) {
-          ++seen[*p];
-          const Vec3d& xp = x[*p];
-          EXPECT_EQ(quadraticWeights((xp.x - g.origin.x) / g.dx).base, bi);
-          EXPECT_EQ(quadraticWeights((xp.y - g.origin.y) / g.dx).base, bj);
-          EXPECT_EQ(quadraticWeights((xp.z - g.origin.z) / g.dx).base, bk);
-          if (p + 1 != b.binEnd(bin)) {
-            EXPECT_LE(xp.x, x[p[1]].x);
+        for (const ParticleBinning::Entry* e = b.binBegin(bin); e != b.binEnd(bin); ++e) {
+          ASSERT_LT(e->index, x.size());
+          ++seen[e->index];
+          const Vec3d& xp = x[e->index];
+          EXPECT_EQ(e->count, c[e->index]);
+          EXPECT_EQ(e->u.x, (xp.x - g.origin.x) / g.dx);
+          EXPECT_EQ(quadraticWeights(e->u.x).base, bi);
+          EXPECT_EQ(quadraticWeights(e->u.y).base, bj);
+          EXPECT_EQ(quadraticWeights(e->u.z).base, bk);
+          if (e + 1 != b.binEnd(bin)) {
+            EXPECT_LE(e->u.x, e[1].u.x);
           }
         }
       }
@@ -337,13 +371,14 @@ TEST(DepositNumberDensity, OutOfGridThrowNamesTheParticle) {
   x[37] = {1.0, 2.3, 1.0};   // u_y = 9.2 > dims - 3/2
   x[80] = {-1.0, 1.0, 1.0};  // also outside; the lowest index is reported
   DenseGrid<double> n(g, 42.0);
-  const std::string msg =
-      thrownMessage([&] { depositNumberDensity({x.data(), c.data(), x.size()}, n.view(), OutOfGridPolicy::Throw); });
+  const std::string msg = thrownMessage([&] {
+    depositNumberDensity({x.data(), c.data(), x.size()}, n.view(), OutOfGridPolicy::Throw);
+  });
   EXPECT_NE(msg.find("particle 37 "), std::string::npos) << msg;
-  EXPECT_NE(msg.find("2.2999999999999998"), std::string::npos) << msg;  // its position
-  EXPECT_NE(msg.find("10 x 10 x 10"), std::string::npos) << msg;        // the grid
+  EXPECT_NE(msg.find("2.2999999999999998"), std::string::npos) << msg;   // its position
+  EXPECT_NE(msg.find("10 x 10 x 10"), std::string::npos) << msg;         // the grid
   EXPECT_NE(msg.find("y in [0.125, 2.125)"), std::string::npos) << msg;  // the admissible range
-  for (double v : n.values()) ASSERT_EQ(v, 42.0);                       // untouched on throw
+  for (double v : n.values()) ASSERT_EQ(v, 42.0);                        // untouched on throw
 
   // Sampling, same rule.
   DenseGrid<Vec3d> f(g, Vec3d{1, 2, 3});
@@ -411,6 +446,7 @@ TEST(DepositNumberDensity, InvalidInputAlwaysThrows) {
   for (OutOfGridPolicy policy : {OutOfGridPolicy::Throw, OutOfGridPolicy::Skip}) {
     auto x = x0;
     x[21].y = nan;
+    x[50].x = nan;  // the lowest bad index is the one reported
     std::string msg = thrownMessage([&] { deposit(g, x, c0, policy); });
     EXPECT_NE(msg.find("particle 21"), std::string::npos) << msg;
     EXPECT_NE(msg.find("nan"), std::string::npos) << msg;
@@ -500,8 +536,7 @@ TEST(DepositNumberDensity, ParticlesOnNodesAndStencilBoundaries) {
   const double lo = 0.5 * dx, hi = (g.dims.i - 1.5) * dx;
   const double mid = 3 * dx;
   TransferReport r;
-  deposit(g, {{lo, mid, mid}, {mid, lo, mid}, {mid, mid, lo}, {lo, lo, lo}}, {1, 1, 1, 1}, OutOfGridPolicy::Skip,
-          &r);
+  deposit(g, {{lo, mid, mid}, {mid, lo, mid}, {mid, mid, lo}, {lo, lo, lo}}, {1, 1, 1, 1}, OutOfGridPolicy::Skip, &r);
   EXPECT_EQ(r.skipped, 0u);
   const double below = std::nextafter(hi, 0.0);
   deposit(g, {{below, mid, mid}, {mid, below, mid}, {mid, mid, below}}, {1, 1, 1}, OutOfGridPolicy::Skip, &r);

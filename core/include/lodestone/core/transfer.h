@@ -5,9 +5,10 @@
 //    (dimensionless counts) deposit the micro-particle number density
 //        n_i = sum_p w_ip n_p / dx^3     (1/m^3)
 //    on the nodes of a GridView<double>. The deposit is parallel (TBB) and
-//    bitwise deterministic: the result depends only on the multiset of
-//    (position, count) pairs, not on the thread count, the scheduling, or the
-//    order of the particles in the input arrays (see "Determinism" below).
+//    bitwise deterministic: on a given build the result depends only on the
+//    multiset of (position, count) pairs, not on the thread count, the
+//    scheduling, or the order of the particles in the input arrays (see
+//    "Determinism" below).
 //  * sampleToParticles: interpolates a node field to particle positions,
 //        out_p = sum_i w_ip field_i,
 //    for handing force densities or H to hosts that use another grid.
@@ -23,11 +24,12 @@
 // OutOfGridPolicy.
 //
 // Determinism. Particles are binned by their base node with a counting sort;
-// within a bin they are ordered by (x, y, z, count) lexicographically, ties
-// by particle index (ties then have identical contributions, so their order
-// cannot change a sum). Base nodes are grouped into x-rows (bj, bk). A row
-// writes only nodes with j in [bj, bj+2] and k in [bk, bk+2]; two different
-// rows with equal colour (bj mod 3, bk mod 3) therefore write disjoint nodes.
+// within a bin they are ordered by grid coordinate u = (x - origin)/dx and
+// count, (u.x, u.y, u.z, n_p) lexicographically, ties by particle index (tied
+// particles have identical contributions, so their order cannot change a
+// sum). Base nodes are grouped into x-rows (bj, bk). A row writes only nodes
+// with j in [bj, bj+2] and k in [bk, bk+2]; two different rows with equal
+// colour (bj mod 3, bk mod 3) therefore write disjoint nodes.
 // The deposit runs the 9 colours one after another; within a colour the rows
 // run in parallel, each row by one task that walks its bins in increasing bi
 // and each bin's particles in sorted order. A node (i,j,k) receives
@@ -77,9 +79,21 @@ struct TransferReport {
 /// buffers are not reallocated) and for other deterministic scatters.
 ///
 /// Bins are base nodes (bi, bj, bk) with 0 <= bi < dims.i - 2 (same for j, k),
-/// flat index bi + nbi*(bj + nbj*bk) where (nbi, nbj, nbk) = baseDims().
+/// flat index bi + nbi*(bj + nbj*bk) where (nbi, nbj, nbk) = baseDims(). The
+/// binned particles are stored contiguously, bin after bin, so all bins of one
+/// x-row (bj, bk) form one contiguous range. Within a bin they are ordered by
+/// (u.x, u.y, u.z, count) lexicographically, then by particle index; this
+/// order depends only on the particle data, not on the input order (two
+/// particles that tie have identical (u, count), hence identical deposits).
 class ParticleBinning {
  public:
+  /// One binned particle.
+  struct Entry {
+    Vec3d u;              ///< grid coordinate (x - origin)/dx (dimensionless, node spacings)
+    double count;         ///< n_p (0 when the binning was built without counts)
+    std::uint32_t index;  ///< index in the input arrays
+  };
+
   ParticleBinning();
   ~ParticleBinning();
   ParticleBinning(ParticleBinning&&) noexcept;
@@ -90,10 +104,10 @@ class ParticleBinning {
   /// Bins `particles` on `grid`. Positions must be finite (else
   /// InvalidArgument naming the lowest such index). Particles whose stencil
   /// leaves the grid throw (naming the lowest such index, its position and the
-  /// grid's extent) under Throw, or are left out under Skip. Counts are not
-  /// validated here; when non-null they break ties between equal positions.
-  /// At most 2^32 - 2 particles. Returns the number of particles left out.
-  /// On throw the binning is empty.
+  /// grid's extent) under Throw, or are left out under Skip. Counts may be
+  /// null and are not validated here (they are only copied and used to order
+  /// ties). At most 2^32 - 2 particles. Returns the number of particles left
+  /// out. On throw the binning is empty.
   std::size_t build(const ParticleView& particles, const GridSpec& grid, OutOfGridPolicy policy);
 
   const GridSpec& grid() const { return grid_; }
@@ -101,16 +115,15 @@ class ParticleBinning {
   Index3 baseDims() const { return baseDims_; }
   std::size_t binCount() const { return binCount_; }
   std::size_t binIndex(int bi, int bj, int bk) const {
-    return std::size_t(bi) +
-           std::size_t(baseDims_.i) * (std::size_t(bj) + std::size_t(baseDims_.j) * std::size_t(bk));
+    return std::size_t(bi) + std::size_t(baseDims_.i) * (std::size_t(bj) + std::size_t(baseDims_.j) * std::size_t(bk));
   }
   /// Particles binned (inside the grid).
   std::size_t binnedCount() const { return binned_; }
   /// Particles left out under Skip.
   std::size_t skippedCount() const { return skipped_; }
-  /// Particle indices of bin b, in the deterministic in-bin order.
-  const std::uint32_t* binBegin(std::size_t b) const { return order_.data() + offsets_[b]; }
-  const std::uint32_t* binEnd(std::size_t b) const { return order_.data() + offsets_[b + 1]; }
+  /// The particles of bin b (b < binCount()), in the canonical in-bin order.
+  const Entry* binBegin(std::size_t b) const { return entries_.data() + offsets_[b]; }
+  const Entry* binEnd(std::size_t b) const { return entries_.data() + offsets_[b + 1]; }
 
  private:
   void clear();
@@ -120,12 +133,12 @@ class ParticleBinning {
   std::size_t binCount_ = 0;
   std::size_t binned_ = 0;
   std::size_t skipped_ = 0;
-  std::vector<std::uint64_t> keys_;   // per particle: bin, or a sentinel
-  std::vector<std::uint32_t> rank_;   // per particle: slot within its bin (scheduling-dependent)
+  std::vector<std::uint64_t> keys_;  // per particle: bin, or a sentinel
+  std::vector<std::uint32_t> rank_;  // per particle: slot within its bin (scheduling-dependent, re-sorted)
   std::unique_ptr<std::atomic<std::uint32_t>[]> binSize_;
   std::size_t binSizeCapacity_ = 0;
   std::vector<std::uint32_t> offsets_;  // binCount_ + 1 prefix sums
-  std::vector<std::uint32_t> order_;    // binned particle indices grouped by bin
+  std::vector<Entry> entries_;          // binned particles grouped by bin
 };
 
 /// Deposits the micro-particle number density n_i = sum_p w_ip n_p / dx^3
@@ -150,11 +163,11 @@ TransferReport depositNumberDensity(const ParticleView& particles, GridView<doub
 /// only on positions[p] and the field, so results are deterministic.
 /// `out` may alias `positions` (each entry is read before it is written).
 /// On throw the contents of `out` are unspecified.
-TransferReport sampleToParticles(GridView<const Vec3d> field, const Vec3d* positions, std::size_t count,
-                                 Vec3d* out, OutOfGridPolicy policy = OutOfGridPolicy::Throw);
+TransferReport sampleToParticles(GridView<const Vec3d> field, const Vec3d* positions, std::size_t count, Vec3d* out,
+                                 OutOfGridPolicy policy = OutOfGridPolicy::Throw);
 
 /// Scalar version of sampleToParticles (same rules).
-TransferReport sampleToParticles(GridView<const double> field, const Vec3d* positions, std::size_t count,
-                                 double* out, OutOfGridPolicy policy = OutOfGridPolicy::Throw);
+TransferReport sampleToParticles(GridView<const double> field, const Vec3d* positions, std::size_t count, double* out,
+                                 OutOfGridPolicy policy = OutOfGridPolicy::Throw);
 
 }  // namespace lodestone
