@@ -268,3 +268,17 @@ TEST(MagnetizationLaw, FloatEvaluationFinite) {
     EXPECT_NEAR(r.M.x, Md, 1e-5 * std::fabs(Md) + 1e-30) << Hm;
   }
 }
+
+TEST(Langevin, TripleMatchesTheSeparateKernels) {
+  for (double a : {0.0, 1e-300, 1e-8, 0.3, 0.999999, 1.0, 1.000001, 2.0, 17.5, 354.0, 710.0, 1e3, 1e30, 1e300, -0.5, -3.0}) {
+    const auto t = lodestone::langevinTriple(a);
+    EXPECT_NEAR(t.overArg, lodestone::langevinOverArg(a), 4e-16 * std::fabs(lodestone::langevinOverArg(a)) + 1e-300) << a;
+    EXPECT_NEAR(t.derivative, lodestone::langevinDerivative(a), 4e-15 * std::fabs(lodestone::langevinDerivative(a)) + 1e-300) << a;
+    EXPECT_NEAR(t.logSinhc, lodestone::logSinhOverArg(a), 4e-16 * std::fabs(lodestone::logSinhOverArg(a)) + 1e-300) << a;
+  }
+  for (float a : {0.0f, 0.5f, 1.0f, 20.0f, 1e30f}) {
+    const auto t = lodestone::langevinTriple(a);
+    EXPECT_TRUE(std::isfinite(t.overArg) && std::isfinite(t.derivative) && std::isfinite(t.logSinhc)) << a;
+    EXPECT_NEAR(t.overArg, lodestone::langevinOverArg(a), 4e-7f * std::fabs(lodestone::langevinOverArg(a)) + 1e-30f) << a;
+  }
+}

@@ -143,4 +143,41 @@ LODESTONE_HOSTDEV inline T logSinhOverArg(T a) {
   return b - T(0.69314718055994530942) - log(b) + log1p(-exp(T(-2) * b));
 }
 
+/// g = L(a)/a, L'(a) and ln(sinh a / a) together, sharing one exponential:
+/// what the Newton Jacobian needs at every Gauss point. Same branches and
+/// accuracy as the separate functions.
+template <typename T>
+struct LangevinTriple {
+  T overArg;      ///< L(a)/a
+  T derivative;   ///< L'(a)
+  T logSinhc;     ///< ln(sinh a / a)
+};
+
+template <typename T>
+LODESTONE_HOSTDEV inline LangevinTriple<T> langevinTriple(T a) {
+  static_assert(std::is_floating_point_v<T>, "floating-point argument expected");
+  using std::abs;
+  using std::exp;
+  using std::log;
+  using std::log1p;
+  const T b = abs(a);
+  LangevinTriple<T> r;
+  if (b < T(1)) {
+    const T x = b * b;
+    const T q = x * detail::seriesQ(x);
+    const T sv = detail::seriesS(x);
+    r.overArg = detail::seriesP(x) / (T(1) + q);
+    r.derivative = sv / (T(1) + x * sv);
+    r.logSinhc = log1p(q);
+    return r;
+  }
+  const T e = exp(T(-2) * b);  // in (0, e^-2]; underflows to 0 for large b
+  const T u = T(1) - e;        // >= 1 - e^-2: no cancellation
+  // coth b = (1 + e)/(1 - e) = 1 + 2e/u.
+  r.overArg = (T(1) - T(1) / b + T(2) * e / u) / b;
+  r.derivative = T(1) / (b * b) - T(4) * e / (u * u);
+  r.logSinhc = b > T(1e30) ? b : b - T(0.69314718055994530942) - log(b) + log1p(-e);
+  return r;
+}
+
 }  // namespace lodestone

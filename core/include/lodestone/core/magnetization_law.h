@@ -94,12 +94,11 @@ LODESTONE_HOSTDEV inline MagnetizationResponse<T> respond(const MagnetizationLaw
       const T Hn = norm(H);
       const T a = law.k2 * Hn;
       const T chi0x3 = n * law.moment * law.k2;  // Ms k2 = 3 chi0
-      const T g = langevinOverArg(a);
-      const T dL = langevinDerivative(a);
+      const LangevinTriple<T> L = langevinTriple(a);
       const Vec3<T> h = Hn > T(0) ? H / Hn : Vec3<T>{};
-      r.M = (chi0x3 * g) * H;
-      r.dMdH = SymMat3<T>::identityPlusOuter(chi0x3 * g, chi0x3 * (dL - g), h);
-      r.W = n * law.moment / law.k2 * logSinhOverArg(a);
+      r.M = (chi0x3 * L.overArg) * H;
+      r.dMdH = SymMat3<T>::identityPlusOuter(chi0x3 * L.overArg, chi0x3 * (L.derivative - L.overArg), h);
+      r.W = n * law.moment / law.k2 * L.logSinhc;
       break;
     }
     default:
