@@ -26,17 +26,19 @@ void forEach(std::size_t n, const Fn& fn) {
 }
 double norm(const std::vector<double>& v) { return std::sqrt(deterministicDot(v.data(), v.data(), v.size())); }
 
-std::unique_ptr<Preconditioner> makePreconditioner(PreconditionerKind kind) {
-  switch (kind) {
+std::unique_ptr<Preconditioner> makePreconditioner(const FieldSolveSettings& settings) {
+  switch (settings.preconditioner) {
     case PreconditionerKind::Jacobi: return std::make_unique<JacobiPreconditioner>();
+    case PreconditionerKind::Multigrid: return std::make_unique<MultigridPreconditioner>(settings.multigrid);
   }
-  throw InvalidArgument(concat("field solve: unknown preconditioner ", int(kind)));
+  throw InvalidArgument(concat("field solve: unknown preconditioner ", int(settings.preconditioner)));
 }
 }  // namespace
 
 const char* toString(PreconditionerKind kind) {
   switch (kind) {
     case PreconditionerKind::Jacobi: return "jacobi";
+    case PreconditionerKind::Multigrid: return "multigrid";
   }
   return "unknown";
 }
@@ -68,6 +70,9 @@ void FieldSolveSettings::validate() const {
   require(maxLineSearchCuts >= 1, "field solve: maxLineSearchCuts must be >= 1, got ", maxLineSearchCuts);
   require(std::isfinite(armijo) && armijo > 0 && armijo < 0.5, "field solve: armijo must be in (0, 0.5), got ",
           armijo);
+  require(preconditioner == PreconditionerKind::Jacobi || preconditioner == PreconditionerKind::Multigrid,
+          "field solve: unknown preconditioner ", int(preconditioner));
+  multigrid.validate();
 }
 
 FieldSolveReport solveField(MagnetostaticProblem& problem, std::vector<double>& phi,
@@ -86,6 +91,7 @@ FieldSolveReport solveField(MagnetostaticProblem& problem, std::vector<double>& 
     }
 
   std::vector<double> F(n), Fref(n), delta(n), work(n), trial;
+  PcgWorkspace pcgWork;
   problem.residualAtZero(Fref.data());
   rep.referenceResidual = norm(Fref);
   if (!std::isfinite(rep.referenceResidual)) {
@@ -104,7 +110,7 @@ FieldSolveReport solveField(MagnetostaticProblem& problem, std::vector<double>& 
   }
   const double r0 = rep.referenceResidual;
   const bool linear = problem.law().kind == LawKind::Linear;
-  auto pre = makePreconditioner(settings.preconditioner);
+  auto pre = makePreconditioner(settings);
   const auto applyJ = [&](const double* v, double* out) { problem.applyJacobian(v, out); };
   std::function<void(double*)> project;
   if (problem.boundary() == BoundaryKind::Shield) project = [&](double* v) { problem.removeMean(v); };
@@ -115,8 +121,18 @@ FieldSolveReport solveField(MagnetostaticProblem& problem, std::vector<double>& 
     const auto ti = Clock::now();
     MagnetostaticProblem::Evaluation ev = problem.evaluate(phi.data(), F.data());
     if (problem.boundary() == BoundaryKind::Open && ev.finite) {
+      // Far-field values from the magnetization just evaluated. When no
+      // material cell touches the wall they enter the residual only through
+      // the vacuum stencil, so F is corrected instead of re-evaluated.
+      work = phi;
       problem.applyOpenBoundary(ev.multipoles, phi.data());
-      ev = problem.evaluate(phi.data(), F.data());
+      if (problem.materialWallClearance() >= 1) {
+        forEach(n, [&](std::size_t m) { work[m] = phi[m] - work[m]; });
+        problem.applyVacuum(work.data(), delta.data());
+        forEach(n, [&](std::size_t m) { F[m] += delta[m]; });
+      } else {
+        ev = problem.evaluate(phi.data(), F.data());
+      }
     }
     const double fn = norm(F);
     NewtonIterationRecord rec;
@@ -166,7 +182,7 @@ FieldSolveReport solveField(MagnetostaticProblem& problem, std::vector<double>& 
     pre->update(problem);
     forEach(n, [&](std::size_t m) { work[m] = -F[m]; });
     const PcgResult cg =
-        solvePcg(n, applyJ, *pre, work.data(), delta.data(), eta, settings.maxCgIterations, project);
+        solvePcg(n, applyJ, *pre, work.data(), delta.data(), eta, settings.maxCgIterations, project, &pcgWork);
     rec.cgIterations = cg.iterations;
     rec.cgRelativeResidual = cg.relativeResidual;
     rep.cgIterations += cg.iterations;
@@ -200,7 +216,7 @@ FieldSolveReport solveField(MagnetostaticProblem& problem, std::vector<double>& 
         // The energy cannot resolve this step: judge it by the residual norm.
         trial.resize(n);
         forEach(n, [&](std::size_t m) { trial[m] = phi[m] + lambda * delta[m]; });
-        const auto evT = problem.evaluate(trial.data(), work.data());
+        const auto evT = problem.evaluate(trial.data(), work.data(), false);
         const double ft = norm(work);
         if (evT.finite && ft <= (1.0 - settings.armijo * lambda) * fn) {
           accepted = true;

@@ -7,9 +7,11 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include "lodestone/core/coloured_scatter.h"
 #include "lodestone/core/error.h"
 #include "lodestone/core/parallel.h"
 #include "lodestone/core/q1_element.h"
+#include "lodestone/core/q1_stencil.h"
 
 namespace lodestone {
 
@@ -40,14 +42,6 @@ struct EnergySums {
 };
 }  // namespace
 
-const char* toString(BoundaryKind kind) {
-  switch (kind) {
-    case BoundaryKind::Open: return "open";
-    case BoundaryKind::Shield: return "shield";
-  }
-  return "unknown";
-}
-
 MagnetostaticProblem::MagnetostaticProblem(const GridSpec& grid, const MagnetizationLaw<double>& law,
                                            BoundaryKind boundary)
     : grid_(grid), law_(law), boundary_(boundary) {
@@ -55,8 +49,7 @@ MagnetostaticProblem::MagnetostaticProblem(const GridSpec& grid, const Magnetiza
   require(boundary != BoundaryKind::Open || (grid.dims.i >= 3 && grid.dims.j >= 3 && grid.dims.k >= 3),
           "field-solve grid: the open boundary needs at least 3 nodes per axis, got ", grid.dims.i, " x ",
           grid.dims.j, " x ", grid.dims.k);
-  for (int c = 0; c < 8; ++c)
-    cornerOffset_[c] = grid_.index(c & 1, (c >> 1) & 1, (c >> 2) & 1);
+  cornerOffsets(grid_, cornerOffset_);
 }
 
 std::size_t MagnetostaticProblem::freeNodeCount() const {
@@ -103,7 +96,7 @@ void MagnetostaticProblem::setMaterial(GridView<const double> n, const AppliedFi
         const std::size_t base = grid_.index(i, j, k);
         bool any = false;
         for (int c = 0; c < 8 && !any; ++c) any = n[base + cornerOffset_[c]] > 0;
-        if (any) slabs[std::size_t(k) * 8 + std::size_t((i & 1) | ((j & 1) << 1) | ((k & 1) << 2))].push_back(base);
+        if (any) slabs[std::size_t(k) * 8 + std::size_t(cellColour(i, j, k))].push_back(base);
       }
   });
   cellBase_.clear();
@@ -118,7 +111,8 @@ void MagnetostaticProblem::setMaterial(GridView<const double> n, const AppliedFi
   const std::size_t cells = cellBase_.size();
   nq_.assign(cells * 8, 0.0);
   hext_.assign(cells * 8, Vec3d{});
-  jac_.assign(cells * 8, SymMat3d{});
+  elem_.assign(cells * kPacked, 0.0);
+  cellTensor_.assign(cells, SymMat3d{});
 
   const double h = grid_.dx;
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, cells, 256), [&](const tbb::blocked_range<std::size_t>& r) {
@@ -172,14 +166,19 @@ void MagnetostaticProblem::setMaterial(GridView<const double> n, const AppliedFi
   totalCount_ = mom.count;
   centroid_ = mom.count > 0 ? mom.first / mom.count : 0.5 * (grid_.origin + grid_.maxCorner());
 
-  // Multipole blocks: cells grouped by (i, j, k) / kMultipoleBlock, sorted by
-  // (block, slot) so the per-block sums have a fixed order.
-  const int bx = (cd.i + kMultipoleBlock - 1) / kMultipoleBlock, by = (cd.j + kMultipoleBlock - 1) / kMultipoleBlock;
+  // Multipole blocks: cells grouped by (i, j, k) / edge, sorted by (block,
+  // slot) so the per-block sums have a fixed order. The edge grows with the
+  // distance to the wall so that edge / clearance stays <= 1/2 beyond 8 cells
+  // (the truncated octupole of a block falls as (edge / distance)^3).
+  int edge = kMultipoleBlock;
+  while (edge < 32 && 4 * edge <= wallClearance_) edge *= 2;
+  blockEdge_ = edge;
+  const int bx = (cd.i + edge - 1) / edge, by = (cd.j + edge - 1) / edge;
   std::vector<std::uint64_t> key(cells);
   tbb::parallel_for(std::size_t(0), cells, [&](std::size_t s) {
     const std::size_t b = cellBase_[s], nx = std::size_t(grid_.dims.i), ny = std::size_t(grid_.dims.j);
-    const std::uint64_t i = b % nx / kMultipoleBlock, j = (b / nx) % ny / kMultipoleBlock,
-                        k = b / (nx * ny) / kMultipoleBlock;
+    const std::uint64_t i = b % nx / std::size_t(edge), j = (b / nx) % ny / std::size_t(edge),
+                        k = b / (nx * ny) / std::size_t(edge);
     key[s] = i + std::uint64_t(bx) * (j + std::uint64_t(by) * k);
   });
   blockCells_.resize(cells);
@@ -213,104 +212,14 @@ void MagnetostaticProblem::setMaterial(GridView<const double> n, const AppliedFi
 
 template <typename CellFn>
 void MagnetostaticProblem::scatterCells(double* out, const CellFn& cellFn) const {
-  for (int colour = 0; colour < 8; ++colour) {
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(colourStart_[colour], colourStart_[colour + 1], 128),
-                      [&](const tbb::blocked_range<std::size_t>& r) {
-                        for (std::size_t s = r.begin(); s != r.end(); ++s) {
-                          double local[8] = {0, 0, 0, 0, 0, 0, 0, 0};
-                          cellFn(s, local);
-                          const std::size_t base = cellBase_[s];
-                          for (int c = 0; c < 8; ++c) out[base + cornerOffset_[c]] += local[c];
-                        }
-                      });
-  }
-}
-
-// ---------------------------------------------------------------------------
-// Vacuum Laplacian: the Q1 stiffness K = dx (k x m x m + m x k x m + m x m x k)
-// with 1D stiffness k = [-1 2 -1] and mass m = [1/6 4/6 1/6] (halved at walls).
-// Interior rows: centre 8/3, face 0, edge -1/6, corner -1/12 (times dx).
-
-namespace {
-struct Axis1D {
-  double k[3], m[3];
-};
-inline Axis1D axisWeights(int p, int count) {
-  const bool left = p > 0, right = p < count - 1;
-  const double cells = double(left) + double(right);
-  return {{left ? -1.0 : 0.0, cells, right ? -1.0 : 0.0},
-          {left ? 1.0 / 6 : 0.0, cells * (2.0 / 6), right ? 1.0 / 6 : 0.0}};
-}
-}  // namespace
-
-double MagnetostaticProblem::vacuumDiagonal(int i, int j, int k) const {
-  const Axis1D x = axisWeights(i, grid_.dims.i), y = axisWeights(j, grid_.dims.j), z = axisWeights(k, grid_.dims.k);
-  return grid_.dx * (x.k[1] * y.m[1] * z.m[1] + x.m[1] * y.k[1] * z.m[1] + x.m[1] * y.m[1] * z.k[1]);
-}
-
-double MagnetostaticProblem::vacuumRowGeneral(int i, int j, int k, const double* v) const {
-  const Axis1D x = axisWeights(i, grid_.dims.i), y = axisWeights(j, grid_.dims.j), z = axisWeights(k, grid_.dims.k);
-  double s = 0;
-  for (int c = -1; c <= 1; ++c) {
-    if (z.m[c + 1] == 0) continue;
-    for (int b = -1; b <= 1; ++b) {
-      if (y.m[b + 1] == 0) continue;
-      for (int a = -1; a <= 1; ++a) {
-        if (x.m[a + 1] == 0) continue;
-        const double wgt = x.k[a + 1] * y.m[b + 1] * z.m[c + 1] + x.m[a + 1] * y.k[b + 1] * z.m[c + 1] +
-                           x.m[a + 1] * y.m[b + 1] * z.k[c + 1];
-        s += wgt * v[grid_.index(i + a, j + b, k + c)];
-      }
-    }
-  }
-  return grid_.dx * s;
+  scatterByColour(cellBase_.data(), colourStart_, cornerOffset_, out, cellFn);
 }
 
 void MagnetostaticProblem::applyVacuum(const double* v, double* out) const {
-  const int nx = grid_.dims.i, ny = grid_.dims.j, nz = grid_.dims.k;
-  const std::ptrdiff_t sy = nx, sz = std::ptrdiff_t(nx) * ny;
-  const double h = grid_.dx, cC = h * 8.0 / 3.0, cE = -h / 6.0, cK = -h / 12.0;
-  const bool shield = boundary_ == BoundaryKind::Shield;
-  tbb::parallel_for(tbb::blocked_range<int>(0, nz, 1), [&](const tbb::blocked_range<int>& kr) {
-    for (int k = kr.begin(); k != kr.end(); ++k)
-      for (int j = 0; j < ny; ++j) {
-        const std::size_t row = grid_.index(0, j, k);
-        const bool wallRow = k == 0 || k == nz - 1 || j == 0 || j == ny - 1;
-        if (wallRow) {
-          for (int i = 0; i < nx; ++i) out[row + std::size_t(i)] = shield ? vacuumRowGeneral(i, j, k, v) : 0.0;
-          continue;
-        }
-        out[row] = shield ? vacuumRowGeneral(0, j, k, v) : 0.0;
-        out[row + std::size_t(nx - 1)] = shield ? vacuumRowGeneral(nx - 1, j, k, v) : 0.0;
-        const double* p = v + row;
-        for (int i = 1; i < nx - 1; ++i) {
-          const double* c = p + i;
-          // 12 edge neighbours and 8 corner neighbours; face neighbours weigh 0.
-          const double edges = c[1 + sy] + c[1 - sy] + c[-1 + sy] + c[-1 - sy] + c[1 + sz] + c[1 - sz] +
-                               c[-1 + sz] + c[-1 - sz] + c[sy + sz] + c[sy - sz] + c[-sy + sz] + c[-sy - sz];
-          const double corners = c[1 + sy + sz] + c[1 + sy - sz] + c[1 - sy + sz] + c[1 - sy - sz] +
-                                 c[-1 + sy + sz] + c[-1 + sy - sz] + c[-1 - sy + sz] + c[-1 - sy - sz];
-          out[row + std::size_t(i)] = cC * c[0] + cE * edges + cK * corners;
-        }
-      }
-  });
+  applyQ1Laplacian(grid_, boundary_, v, out);
 }
 
-void MagnetostaticProblem::zeroFixed(double* v) const {
-  if (boundary_ == BoundaryKind::Shield) return;
-  const int nx = grid_.dims.i, ny = grid_.dims.j, nz = grid_.dims.k;
-  tbb::parallel_for(0, nz, [&](int k) {
-    for (int j = 0; j < ny; ++j) {
-      const std::size_t row = grid_.index(0, j, k);
-      if (k == 0 || k == nz - 1 || j == 0 || j == ny - 1) {
-        std::fill(v + row, v + row + std::size_t(nx), 0.0);
-      } else {
-        v[row] = 0.0;
-        v[row + std::size_t(nx - 1)] = 0.0;
-      }
-    }
-  });
-}
+void MagnetostaticProblem::zeroFixed(double* v) const { zeroFixedNodes(grid_, boundary_, v); }
 
 void MagnetostaticProblem::removeMean(double* v) const {
   const std::size_t count = grid_.nodeCount();
@@ -323,7 +232,7 @@ void MagnetostaticProblem::removeMean(double* v) const {
 // ---------------------------------------------------------------------------
 // Material terms.
 
-MagnetostaticProblem::Evaluation MagnetostaticProblem::evaluate(const double* phi, double* F) {
+MagnetostaticProblem::Evaluation MagnetostaticProblem::evaluate(const double* phi, double* F, bool jacobian) {
   applyVacuum(phi, F);
   const double h = grid_.dx, w = grid_.cellVolume() / 8.0, fScale = h * h / 8.0, jScale = h / 8.0;
   std::vector<CellSums> sums(cellBase_.size());
@@ -332,13 +241,27 @@ MagnetostaticProblem::Evaluation MagnetostaticProblem::evaluate(const double* ph
     gatherCorners(cellBase_[s], phi, pc);
     const Vec3d o = cellOrigin(cellBase_[s]);
     CellSums& cs = sums[s];
+    if (jacobian) {
+      std::fill(&elem_[s * kPacked], &elem_[s * kPacked] + kPacked, 0.0);
+      cellTensor_[s] = SymMat3d{};
+    }
     for (int q = 0; q < 8; ++q) {
       const std::size_t g = s * 8 + std::size_t(q);
       const Vec3d H = hext_[g] - q1::referenceGradient(kQ1, q, pc) / h;
       const MagnetizationResponse<double> r = respond(law_, nq_[g], H);
       SymMat3d jq = r.dMdH;
       jq *= jScale;
-      jac_[g] = jq;
+      if (jacobian) {
+        SymMat3d mean = r.dMdH;
+        mean *= 0.125;
+        cellTensor_[s] += mean;
+        // Element matrix: E_cd += dN_qc . (jq dN_qd), upper triangle packed.
+        Vec3d jd[8];
+        for (int c = 0; c < 8; ++c) jd[c] = jq * kQ1.dN[q][c];
+        double* E = &elem_[s * kPacked];
+        for (int c = 0, e = 0; c < 8; ++c)
+          for (int d = c; d < 8; ++d, ++e) E[e] += dot(kQ1.dN[q][c], jd[d]);
+      }
       cs.finite = cs.finite && isFinite(r.M) && std::isfinite(r.W) && std::isfinite(jq.trace());
       cs.energy += w * r.W;
       cs.energyAbs += w * std::fabs(r.W);
@@ -385,9 +308,13 @@ void MagnetostaticProblem::applyJacobian(const double* v, double* out) const {
   scatterCells(out, [&](std::size_t s, double local[8]) {
     double vc[8];
     gatherCorners(cellBase_[s], v, vc);
-    for (int q = 0; q < 8; ++q) {
-      const Vec3d y = jac_[s * 8 + std::size_t(q)] * q1::referenceGradient(kQ1, q, vc);
-      for (int c = 0; c < 8; ++c) local[c] += dot(kQ1.dN[q][c], y);
+    const double* E = &elem_[s * kPacked];
+    for (int c = 0, e = 0; c < 8; ++c) {
+      local[c] += E[e++] * vc[c];
+      for (int d = c + 1; d < 8; ++d, ++e) {
+        local[c] += E[e] * vc[d];
+        local[d] += E[e] * vc[c];
+      }
     }
   });
   zeroFixed(out);
@@ -397,13 +324,11 @@ void MagnetostaticProblem::jacobianDiagonal(double* out) const {
   const int nx = grid_.dims.i, ny = grid_.dims.j, nz = grid_.dims.k;
   tbb::parallel_for(0, nz, [&](int k) {
     for (int j = 0; j < ny; ++j)
-      for (int i = 0; i < nx; ++i) out[grid_.index(i, j, k)] = vacuumDiagonal(i, j, k);
+      for (int i = 0; i < nx; ++i) out[grid_.index(i, j, k)] = q1LaplacianDiagonal(grid_, i, j, k);
   });
   scatterCells(out, [&](std::size_t s, double local[8]) {
-    for (int q = 0; q < 8; ++q) {
-      const SymMat3d& A = jac_[s * 8 + std::size_t(q)];
-      for (int c = 0; c < 8; ++c) local[c] += dot(kQ1.dN[q][c], A * kQ1.dN[q][c]);
-    }
+    const double* E = &elem_[s * kPacked];
+    for (int c = 0, e = 0; c < 8; e += 8 - c, ++c) local[c] += E[e];
   });
   if (boundary_ == BoundaryKind::Open) {
     // Fixed rows: identity.
@@ -438,18 +363,38 @@ double MagnetostaticProblem::materialEnergyAlong(const double* phi, const double
 
 void MagnetostaticProblem::applyOpenBoundary(const std::vector<Multipole>& multipoles, double* phi) const {
   if (boundary_ != BoundaryKind::Open) return;
+  // The far-field potential is smooth on the wall (the material keeps a
+  // margin), so it is summed exactly on the wall nodes whose coordinates are
+  // all even (or last) and interpolated at the midpoints in between.
   const int nx = grid_.dims.i, ny = grid_.dims.j, nz = grid_.dims.k;
-  tbb::parallel_for(0, nz, [&](int k) {
-    for (int j = 0; j < ny; ++j) {
-      const bool wallRow = k == 0 || k == nz - 1 || j == 0 || j == ny - 1;
-      for (int i = 0; i < nx; i += (wallRow || i == nx - 1) ? 1 : nx - 1)
-      {
-        const Vec3d x = grid_.nodePosition(i, j, k);
-        double v = 0;
-        for (const Multipole& mp : multipoles) v += mp.potential(x);
-        phi[grid_.index(i, j, k)] = v;
+  const auto onLattice = [](int c, int count) { return c % 2 == 0 || c == count - 1; };
+  const auto forWallNodes = [&](const auto& fn) {
+    tbb::parallel_for(0, nz, [&](int k) {
+      for (int j = 0; j < ny; ++j) {
+        const bool wallRow = k == 0 || k == nz - 1 || j == 0 || j == ny - 1;
+        for (int i = 0; i < nx; i += (wallRow || i == nx - 1) ? 1 : nx - 1) fn(i, j, k);
       }
-    }
+    });
+  };
+  forWallNodes([&](int i, int j, int k) {
+    if (!onLattice(i, nx) || !onLattice(j, ny) || !onLattice(k, nz)) return;
+    const Vec3d x = grid_.nodePosition(i, j, k);
+    double v = 0;
+    for (const Multipole& mp : multipoles) v += mp.potential(x);
+    phi[grid_.index(i, j, k)] = v;
+  });
+  forWallNodes([&](int i, int j, int k) {
+    const bool li = onLattice(i, nx), lj = onLattice(j, ny), lk = onLattice(k, nz);
+    if (li && lj && lk) return;
+    double v = 0;
+    int count = 0;
+    for (int c = lk ? 0 : -1; c <= (lk ? 0 : 1); c += 2)
+      for (int b = lj ? 0 : -1; b <= (lj ? 0 : 1); b += 2)
+        for (int a = li ? 0 : -1; a <= (li ? 0 : 1); a += 2) {
+          v += phi[grid_.index(i + a, j + b, k + c)];
+          ++count;
+        }
+    phi[grid_.index(i, j, k)] = v / count;
   });
 }
 

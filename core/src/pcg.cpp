@@ -33,9 +33,16 @@ void JacobiPreconditioner::apply(const double* r, double* z) const {
 
 PcgResult solvePcg(std::size_t n, const std::function<void(const double*, double*)>& applyA,
                    const Preconditioner& preconditioner, const double* b, double* x, double relTol,
-                   int maxIterations, const std::function<void(double*)>& project) {
+                   int maxIterations, const std::function<void(double*)>& project, PcgWorkspace* workspace) {
   PcgResult res;
-  std::vector<double> r(b, b + n), z(n), p(n), Ap(n);
+  PcgWorkspace local;
+  PcgWorkspace& ws = workspace ? *workspace : local;
+  ws.r.resize(n);
+  ws.z.resize(n);
+  ws.p.resize(n);
+  ws.Ap.resize(n);
+  std::vector<double>&r = ws.r, &z = ws.z, &p = ws.p, &Ap = ws.Ap;
+  forEach(n, [&](std::size_t m) { r[m] = b[m]; });
   forEach(n, [&](std::size_t m) { x[m] = 0.0; });
   if (project) project(r.data());
   const double bnorm = std::sqrt(deterministicDot(r.data(), r.data(), n));
@@ -46,7 +53,7 @@ PcgResult solvePcg(std::size_t n, const std::function<void(const double*, double
   }
   preconditioner.apply(r.data(), z.data());
   if (project) project(z.data());
-  p = z;
+  forEach(n, [&](std::size_t m) { p[m] = z[m]; });
   double rz = deterministicDot(r.data(), z.data(), n);
   double rnorm = bnorm;
   while (res.iterations < maxIterations) {

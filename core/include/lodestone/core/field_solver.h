@@ -10,11 +10,15 @@
 #include <vector>
 
 #include "lodestone/core/magnetostatic_problem.h"
+#include "lodestone/core/multigrid.h"
 #include "lodestone/core/pcg.h"
 
 namespace lodestone {
 
-enum class PreconditionerKind : int { Jacobi = 0 };
+enum class PreconditionerKind : int {
+  Jacobi = 0,    ///< diagonal scaling: cheap set-up, iterations grow with resolution
+  Multigrid = 1  ///< geometric V-cycle: iterations nearly independent of resolution
+};
 const char* toString(PreconditionerKind kind);
 
 struct FieldSolveSettings {
@@ -26,7 +30,8 @@ struct FieldSolveSettings {
   double forcingAlpha = 2.0;
   int maxLineSearchCuts = 30;     ///< backtracking steps before giving up
   double armijo = 1e-4;           ///< sufficient-decrease constant
-  PreconditionerKind preconditioner = PreconditionerKind::Jacobi;
+  PreconditionerKind preconditioner = PreconditionerKind::Multigrid;
+  MultigridSettings multigrid;    ///< used by PreconditionerKind::Multigrid
 
   /// Throws InvalidArgument naming the first bad value.
   void validate() const;

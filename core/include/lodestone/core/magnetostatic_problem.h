@@ -9,9 +9,10 @@
 //
 // Boundary semantics (BoundaryKind):
 //  - Open: phi on the outer layer of nodes is the free-space potential of
-//    the current magnetization (a far-field condition), summed over blocks of
-//    kMultipoleBlock^3 cells, each as a dipole + quadrupole about its own
-//    centroid. Interior nodes are unknowns.
+//    the current magnetization (a far-field condition), summed over cubic
+//    blocks of cells (edge 8 cells, up to 32 when the material is far from
+//    the wall), each as a dipole + quadrupole about its own centroid.
+//    Interior nodes are unknowns.
 //  - Shield: the paper's wall, grad(phi).n = M.n (natural condition); every
 //    node is an unknown and phi is defined up to a constant (kept at mean 0).
 //
@@ -23,6 +24,7 @@
 #include <functional>
 #include <vector>
 
+#include "lodestone/core/boundary_kind.h"
 #include "lodestone/core/grid.h"
 #include "lodestone/core/magnetization_law.h"
 #include "lodestone/core/mat3.h"
@@ -30,12 +32,6 @@
 #include "lodestone/core/vec3.h"
 
 namespace lodestone {
-
-enum class BoundaryKind : int {
-  Open = 0,   ///< far-field (multipole) potential on the outer nodes
-  Shield = 1  ///< the paper's Neumann wall: H.n = H_ext.n at the walls
-};
-const char* toString(BoundaryKind kind);
 
 /// Fills H[0..count) (A/m) with the applied field at x[0..count) (m).
 /// Called from several threads at once on disjoint ranges.
@@ -74,10 +70,10 @@ class MagnetostaticProblem {
     std::vector<Multipole> multipoles;  ///< of the current magnetization, one per block
     bool finite = true;          ///< false when any M or dM/dH was not finite
   };
-  /// Evaluates M, dM/dH and W at every material Gauss point for potential phi,
-  /// keeps dM/dH for applyJacobian, and writes the residual F = dE/dphi (A m)
-  /// on free nodes (0 on fixed nodes).
-  Evaluation evaluate(const double* phi, double* F);
+  /// Evaluates M and W at every material Gauss point for potential phi and
+  /// writes the residual F = dE/dphi (A m) on free nodes (0 on fixed nodes).
+  /// With `jacobian`, also rebuilds the element matrices of applyJacobian.
+  Evaluation evaluate(const double* phi, double* F, bool jacobian = true);
 
   /// Residual of the material part alone at phi = 0 (the reference scale of
   /// relative residuals): F0 = -G^T w M(H_ext). Does not change the stored Jacobian.
@@ -94,12 +90,22 @@ class MagnetostaticProblem {
   /// sum_q w_q W at phi + lambda * delta, and sum of |w_q W| in *absSum.
   double materialEnergyAlong(const double* phi, const double* delta, double lambda, double* absSum) const;
 
+  /// Base node (flat index) of material cell `slot` (0 <= slot < materialCellCount()).
+  std::size_t materialCellBase(std::size_t slot) const { return cellBase_[slot]; }
+  /// Mean dM/dH over the Gauss points of material cell `slot` at the last
+  /// evaluate(..., true): the coefficient coarse multigrid levels use.
+  const SymMat3d& materialCellTensor(std::size_t slot) const { return cellTensor_[slot]; }
+
   /// Open boundary: writes the summed block-multipole potential into the
   /// fixed nodes of phi.
   void applyOpenBoundary(const std::vector<Multipole>& multipoles, double* phi) const;
 
-  /// Edge of the multipole blocks, in cells.
+  /// Smallest edge of the multipole blocks, in cells.
   static constexpr int kMultipoleBlock = 8;
+  /// Edge of the multipole blocks of the current material, in cells.
+  int multipoleBlockEdge() const { return blockEdge_; }
+  /// Number of multipole blocks of the current material.
+  std::size_t multipoleBlockCount() const { return blockCentre_.size(); }
 
   /// Shield boundary: subtracts the mean over all nodes (the null space).
   void removeMean(double* v) const;
@@ -112,8 +118,6 @@ class MagnetostaticProblem {
   void scatterCells(double* out, const CellFn& cellFn) const;
   void gatherCorners(std::size_t base, const double* v, double c[8]) const;
   Vec3d cellOrigin(std::size_t base) const;
-  double vacuumDiagonal(int i, int j, int k) const;
-  double vacuumRowGeneral(int i, int j, int k, const double* v) const;
 
   GridSpec grid_;
   MagnetizationLaw<double> law_;
@@ -124,9 +128,14 @@ class MagnetostaticProblem {
   std::size_t colourStart_[9] = {};
   std::vector<double> nq_;             // density at Gauss points, 8 per cell, 1/m^3
   std::vector<Vec3d> hext_;            // applied field at Gauss points, A/m
-  std::vector<SymMat3d> jac_;          // (dx/8) dM/dH at Gauss points
+  // Material element matrices sum_q w dN_q^T dM/dH_q dN_q / dx^2 (packed upper
+  // triangle of the symmetric 8x8, 36 values per cell), rebuilt by evaluate().
+  static constexpr int kPacked = 36;
+  std::vector<double> elem_;
+  std::vector<SymMat3d> cellTensor_;
   int wallClearance_ = 1 << 30;
   Vec3d centroid_;
+  int blockEdge_ = kMultipoleBlock;
   std::vector<std::size_t> blockStart_;  // blocks: blockCells_[blockStart_[b] .. blockStart_[b+1])
   std::vector<std::size_t> blockCells_;  // material cell slots sorted by block
   std::vector<Vec3d> blockCentre_;       // n-weighted centroid of each block, m

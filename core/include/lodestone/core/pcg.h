@@ -40,10 +40,16 @@ struct PcgResult {
   bool breakdown = false;       ///< p^T A p <= 0 or non-finite values
 };
 
+/// Scratch vectors of solvePcg, kept by callers that solve repeatedly.
+struct PcgWorkspace {
+  std::vector<double> r, z, p, Ap;
+};
+
 /// Solves A x = b from x = 0 until ||r|| <= relTol ||b|| or maxIterations.
 /// `project`, when set, removes the null space from residuals (singular A).
 PcgResult solvePcg(std::size_t size, const std::function<void(const double*, double*)>& applyA,
                    const Preconditioner& preconditioner, const double* b, double* x, double relTol,
-                   int maxIterations, const std::function<void(double*)>& project = {});
+                   int maxIterations, const std::function<void(double*)>& project = {},
+                   PcgWorkspace* workspace = nullptr);
 
 }  // namespace lodestone

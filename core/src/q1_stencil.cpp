@@ -1,0 +1,104 @@
+#include "lodestone/core/q1_stencil.h"
+
+#include <algorithm>
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+namespace lodestone {
+
+const char* toString(BoundaryKind kind) {
+  switch (kind) {
+    case BoundaryKind::Open: return "open";
+    case BoundaryKind::Shield: return "shield";
+  }
+  return "unknown";
+}
+
+// ---------------------------------------------------------------------------
+// Vacuum Laplacian: the Q1 stiffness K = dx (k x m x m + m x k x m + m x m x k)
+// with 1D stiffness k = [-1 2 -1] and mass m = [1/6 4/6 1/6] (halved at walls).
+// Interior rows: centre 8/3, face 0, edge -1/6, corner -1/12 (times dx).
+
+namespace {
+struct Axis1D {
+  double k[3], m[3];
+};
+inline Axis1D axisWeights(int p, int count) {
+  const bool left = p > 0, right = p < count - 1;
+  const double cells = double(left) + double(right);
+  return {{left ? -1.0 : 0.0, cells, right ? -1.0 : 0.0},
+          {left ? 1.0 / 6 : 0.0, cells * (2.0 / 6), right ? 1.0 / 6 : 0.0}};
+}
+}  // namespace
+
+double q1LaplacianDiagonal(const GridSpec& grid, int i, int j, int k) {
+  const Axis1D x = axisWeights(i, grid.dims.i), y = axisWeights(j, grid.dims.j), z = axisWeights(k, grid.dims.k);
+  return grid.dx * (x.k[1] * y.m[1] * z.m[1] + x.m[1] * y.k[1] * z.m[1] + x.m[1] * y.m[1] * z.k[1]);
+}
+
+double q1LaplacianRow(const GridSpec& grid, int i, int j, int k, const double* v) {
+  const Axis1D x = axisWeights(i, grid.dims.i), y = axisWeights(j, grid.dims.j), z = axisWeights(k, grid.dims.k);
+  double s = 0;
+  for (int c = -1; c <= 1; ++c) {
+    if (z.m[c + 1] == 0) continue;
+    for (int b = -1; b <= 1; ++b) {
+      if (y.m[b + 1] == 0) continue;
+      for (int a = -1; a <= 1; ++a) {
+        if (x.m[a + 1] == 0) continue;
+        const double wgt = x.k[a + 1] * y.m[b + 1] * z.m[c + 1] + x.m[a + 1] * y.k[b + 1] * z.m[c + 1] +
+                           x.m[a + 1] * y.m[b + 1] * z.k[c + 1];
+        s += wgt * v[grid.index(i + a, j + b, k + c)];
+      }
+    }
+  }
+  return grid.dx * s;
+}
+
+void applyQ1Laplacian(const GridSpec& grid, BoundaryKind boundary, const double* v, double* out) {
+  const int nx = grid.dims.i, ny = grid.dims.j, nz = grid.dims.k;
+  const std::ptrdiff_t sy = nx, sz = std::ptrdiff_t(nx) * ny;
+  const double h = grid.dx, cC = h * 8.0 / 3.0, cE = -h / 6.0, cK = -h / 12.0;
+  const bool shield = boundary == BoundaryKind::Shield;
+  tbb::parallel_for(tbb::blocked_range<int>(0, nz, 1), [&](const tbb::blocked_range<int>& kr) {
+    for (int k = kr.begin(); k != kr.end(); ++k)
+      for (int j = 0; j < ny; ++j) {
+        const std::size_t row = grid.index(0, j, k);
+        const bool wallRow = k == 0 || k == nz - 1 || j == 0 || j == ny - 1;
+        if (wallRow) {
+          for (int i = 0; i < nx; ++i) out[row + std::size_t(i)] = shield ? q1LaplacianRow(grid, i, j, k, v) : 0.0;
+          continue;
+        }
+        out[row] = shield ? q1LaplacianRow(grid, 0, j, k, v) : 0.0;
+        out[row + std::size_t(nx - 1)] = shield ? q1LaplacianRow(grid, nx - 1, j, k, v) : 0.0;
+        const double* p = v + row;
+        for (int i = 1; i < nx - 1; ++i) {
+          const double* c = p + i;
+          // 12 edge neighbours and 8 corner neighbours; face neighbours weigh 0.
+          const double edges = c[1 + sy] + c[1 - sy] + c[-1 + sy] + c[-1 - sy] + c[1 + sz] + c[1 - sz] +
+                               c[-1 + sz] + c[-1 - sz] + c[sy + sz] + c[sy - sz] + c[-sy + sz] + c[-sy - sz];
+          const double corners = c[1 + sy + sz] + c[1 + sy - sz] + c[1 - sy + sz] + c[1 - sy - sz] +
+                                 c[-1 + sy + sz] + c[-1 + sy - sz] + c[-1 - sy + sz] + c[-1 - sy - sz];
+          out[row + std::size_t(i)] = cC * c[0] + cE * edges + cK * corners;
+        }
+      }
+  });
+}
+
+void zeroFixedNodes(const GridSpec& grid, BoundaryKind boundary, double* v) {
+  if (boundary == BoundaryKind::Shield) return;
+  const int nx = grid.dims.i, ny = grid.dims.j, nz = grid.dims.k;
+  tbb::parallel_for(0, nz, [&](int k) {
+    for (int j = 0; j < ny; ++j) {
+      const std::size_t row = grid.index(0, j, k);
+      if (k == 0 || k == nz - 1 || j == 0 || j == ny - 1) {
+        std::fill(v + row, v + row + std::size_t(nx), 0.0);
+      } else {
+        v[row] = 0.0;
+        v[row + std::size_t(nx - 1)] = 0.0;
+      }
+    }
+  });
+}
+
+}  // namespace lodestone
