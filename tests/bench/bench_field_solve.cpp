@@ -1,0 +1,144 @@
+// Field-solve benchmark: the nonlinear (Langevin) solve of a sphere and a cube
+// of the paper's material (dx = 7.8 mm, n0 = 3.6e17 per cell) on 64^3 and
+// 128^3 grids at H0 = 1e4 and 1e5 A/m, cold (phi = 0) and warm (from the
+// previous frame's solution, with the applied field changed by 2%).
+// Prints a table and writes CSV. Not a test: timings are machine-dependent.
+//
+//   lodestone-bench-field-solve [--sizes 64,128] [--fields 1e4,1e5] [--csv FILE]
+//                               [--preconditioner multigrid|jacobi] [--tolerance 1e-8]
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <tbb/info.h>
+
+#include "lodestone/core/error.h"
+#include "lodestone/core/magnetic_stage.h"
+#include "lodestone/core/material.h"
+#include "lodestone/core/uniform_field.h"
+
+using namespace lodestone;
+
+namespace {
+
+std::vector<double> parseList(const std::string& s, const char* what) {
+  std::vector<double> v;
+  std::stringstream ss(s);
+  std::string item;
+  while (std::getline(ss, item, ',')) {
+    char* end = nullptr;
+    const double x = std::strtod(item.c_str(), &end);
+    if (item.empty() || *end != '\0' || !std::isfinite(x)) throw InvalidArgument(concat(what, ": bad value '", item, "'"));
+    v.push_back(x);
+  }
+  return v;
+}
+
+// Density of a sphere (radius N/4 cells) or a cube (edge N/2 cells) centred
+// in an N^3 grid: n0 times the volume fraction of each node's dual cell.
+DenseGrid<double> body(const GridSpec& g, bool cube, double n0) {
+  DenseGrid<double> n(g, 0.0);
+  const int N = g.dims.i;
+  const double c = 0.5 * (N - 1), R = 0.25 * (N - 1);
+  const int S = 4;
+  for (int k = 0; k < N; ++k)
+    for (int j = 0; j < N; ++j)
+      for (int i = 0; i < N; ++i) {
+        int in = 0;
+        for (int z = 0; z < S; ++z)
+          for (int y = 0; y < S; ++y)
+            for (int x = 0; x < S; ++x) {
+              const double px = i - c + (x + 0.5) / S - 0.5, py = j - c + (y + 0.5) / S - 0.5,
+                           pz = k - c + (z + 0.5) / S - 0.5;
+              in += cube ? (std::fabs(px) < R && std::fabs(py) < R && std::fabs(pz) < R)
+                         : (px * px + py * py + pz * pz < R * R);
+            }
+        n(i, j, k) = n0 * in / double(S * S * S);
+      }
+  return n;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  try {
+    std::vector<double> sizes{64, 128}, fields{1e4, 1e5};
+    std::string csvPath = "bench_field_solve.csv";
+    MagneticStageSettings settings;
+    for (int a = 1; a < argc; ++a) {
+      const std::string arg = argv[a];
+      const auto next = [&]() -> std::string {
+        if (a + 1 >= argc) throw InvalidArgument(concat(arg, " needs a value"));
+        return argv[++a];
+      };
+      if (arg == "--sizes") sizes = parseList(next(), "--sizes");
+      else if (arg == "--fields") fields = parseList(next(), "--fields");
+      else if (arg == "--csv") csvPath = next();
+      else if (arg == "--preconditioner") {
+        const std::string p = next();
+        if (p == "jacobi") settings.solve.preconditioner = PreconditionerKind::Jacobi;
+        else if (p == "multigrid") settings.solve.preconditioner = PreconditionerKind::Multigrid;
+        else throw InvalidArgument(concat("--preconditioner: expected jacobi or multigrid, got '", p, "'"));
+      } else if (arg == "--tolerance") settings.solve.tolerance = parseList(next(), "--tolerance").at(0);
+      else if (arg == "--help" || arg == "-h") {
+        std::printf(
+            "lodestone-bench-field-solve: times the nonlinear field solve\n"
+            "  --sizes LIST      grid nodes per axis (default 64,128; 16..512)\n"
+            "  --fields LIST     applied field H0 in A/m (default 1e4,1e5)\n"
+            "  --preconditioner P  multigrid (default) or jacobi\n"
+            "  --tolerance X     relative Newton residual (default 1e-8)\n"
+            "  --csv FILE        CSV output (default bench_field_solve.csv)\n");
+        return 0;
+      } else {
+        throw InvalidArgument(concat("unknown option '", arg, "' (see --help)"));
+      }
+    }
+    for (double s : sizes) require(s >= 16 && s <= 512 && s == std::floor(s), "--sizes: ", s, " is not in 16..512");
+    settings.validate();
+
+    const MagneticMaterial mat = paperMaterial();
+    std::ofstream csv(csvPath);
+    require(bool(csv), "cannot write ", csvPath);
+    csv << "body,nodes_per_axis,H0_A_per_m,start,newton_iterations,cg_iterations,line_search_cuts,relative_residual,"
+           "status,material_cells,seconds_solve,seconds_stage,threads\n";
+    const int threads = tbb::info::default_concurrency();
+    std::printf("Lodestone field-solve benchmark (%d threads, preconditioner %s, tolerance %.0e)\n", threads,
+                toString(settings.solve.preconditioner), settings.solve.tolerance);
+    std::printf("%-6s %5s %8s %5s %7s %6s %5s %10s %9s %9s\n", "body", "N", "H0", "start", "newton", "cg", "cuts",
+                "residual", "solve s", "stage s");
+    for (double sN : sizes)
+      for (int cube = 0; cube < 2; ++cube)
+        for (double H0 : fields) {
+          const int N = int(sN);
+          GridSpec g;
+          g.dx = 7.8e-3;
+          g.dims = {N, N, N};
+          const DenseGrid<double> n = body(g, cube != 0, mat.numberDensity);
+          MagneticForceStage stage(g, mat, settings);
+          for (int warm = 0; warm < 2; ++warm) {
+            const UniformField src({0, 0, H0 * (warm ? 1.02 : 1.0)});
+            const MagneticStageReport r = stage.runOnDensity(n.view(), src, 0.0);
+            const char* body = cube ? "cube" : "sphere";
+            std::printf("%-6s %5d %8.0e %5s %7d %6d %5d %10.2e %9.3f %9.3f%s\n", body, N, H0, warm ? "warm" : "cold",
+                        r.solve.newtonIterations, r.solve.cgIterations, r.solve.lineSearchCuts,
+                        r.solve.relativeResidual, r.secondsSolve, r.secondsTotal,
+                        r.converged() ? "" : "  NOT CONVERGED");
+            std::fflush(stdout);
+            csv << body << ',' << N << ',' << H0 << ',' << (warm ? "warm" : "cold") << ',' << r.solve.newtonIterations
+                << ',' << r.solve.cgIterations << ',' << r.solve.lineSearchCuts << ',' << r.solve.relativeResidual
+                << ',' << toString(r.solve.status) << ',' << r.solve.materialCells << ',' << r.secondsSolve << ','
+                << r.secondsTotal << ',' << threads << '\n';
+          }
+        }
+    std::printf("CSV written to %s\n", csvPath.c_str());
+    return 0;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "lodestone-bench-field-solve: %s\n", e.what());
+    return 1;
+  }
+}
