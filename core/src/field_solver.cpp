@@ -90,7 +90,7 @@ FieldSolveReport solveField(MagnetostaticProblem& problem, std::vector<double>& 
       break;
     }
 
-  std::vector<double> F(n), Fref(n), delta(n), work(n), trial;
+  std::vector<double> F(n), Fref(n), delta(n), work(n), trial(n);
   PcgWorkspace pcgWork;
   problem.residualAtZero(Fref.data());
   rep.referenceResidual = norm(Fref);
@@ -116,10 +116,13 @@ FieldSolveReport solveField(MagnetostaticProblem& problem, std::vector<double>& 
   if (problem.boundary() == BoundaryKind::Shield) project = [&](double* v) { problem.removeMean(v); };
 
   double prevNorm = 0, prevEta = settings.forcingMax;
-  std::vector<double> lastGood = phi;
+  std::vector<double> lastGood = phi, Ftrial(n);
+  // Each iteration starts from an evaluation at phi (residual, energy, the
+  // Jacobian's element matrices): the first here, later ones are the
+  // accepted line-search trial.
+  MagnetostaticProblem::Evaluation ev = problem.evaluate(phi.data(), F.data());
   for (int it = 0;; ++it) {
     const auto ti = Clock::now();
-    MagnetostaticProblem::Evaluation ev = problem.evaluate(phi.data(), F.data());
     if (problem.boundary() == BoundaryKind::Open && ev.finite) {
       // Far-field values from the magnetization just evaluated. When no
       // material cell touches the wall they enter the residual only through
@@ -200,41 +203,64 @@ FieldSolveReport solveField(MagnetostaticProblem& problem, std::vector<double>& 
     const double s1 = deterministicDot(delta.data(), work.data(), n);
     problem.applyVacuum(delta.data(), work.data());
     const double s2 = deterministicDot(delta.data(), work.data(), n);
-    double lambda = 1.0;
-    bool accepted = false;
-    for (int cut = 0; cut <= settings.maxLineSearchCuts; ++cut) {
-      double absW = 0;
-      const double Wl = problem.materialEnergyAlong(phi.data(), delta.data(), lambda, &absW);
-      const double dE = lambda * s1 + 0.5 * lambda * lambda * s2 + (Wl - ev.materialEnergy);
+    const double armijoSlope = settings.armijo * g0;
+    // Sufficient decrease: on the energy while it resolves the step, else on
+    // the residual norm (`Ft` = residual at the trial point).
+    const auto accept = [&](double lambda, double dE, double absW, const std::function<double()>& trialNorm,
+                            bool* residualMerit) {
       const double noise = 64.0 * std::numeric_limits<double>::epsilon() *
                            (absW + ev.materialEnergyAbs + std::fabs(lambda * s1) + 0.5 * lambda * lambda * std::fabs(s2));
-      if (!std::isfinite(dE)) {
-        // cut below
-      } else if (std::fabs(dE) > noise) {
-        accepted = dE <= settings.armijo * lambda * g0;  // the energy resolves the step: Armijo
-      } else {
-        // The energy cannot resolve this step: judge it by the residual norm.
-        trial.resize(n);
-        forEach(n, [&](std::size_t m) { trial[m] = phi[m] + lambda * delta[m]; });
-        const auto evT = problem.evaluate(trial.data(), work.data(), false);
-        const double ft = norm(work);
-        if (evT.finite && ft <= (1.0 - settings.armijo * lambda) * fn) {
-          accepted = true;
-          rec.residualMerit = true;
+      if (!std::isfinite(dE)) return false;
+      if (std::fabs(dE) > noise) return dE <= lambda * armijoSlope;
+      *residualMerit = true;
+      return trialNorm() <= (1.0 - settings.armijo * lambda) * fn;
+    };
+    // Full step first, evaluated with the Jacobian: when accepted (nearly
+    // always) this is the next iteration's evaluation.
+    double lambda = 1.0;
+    bool accepted = false;
+    forEach(n, [&](std::size_t m) { trial[m] = phi[m] + delta[m]; });
+    MagnetostaticProblem::Evaluation evT = problem.evaluate(trial.data(), Ftrial.data());
+    double dE = s1 + 0.5 * s2 + (evT.materialEnergy - ev.materialEnergy);
+    {
+      bool rm = false;
+      accepted = evT.finite && accept(1.0, dE, evT.materialEnergyAbs, [&] { return norm(Ftrial); }, &rm);
+      rec.residualMerit = rm && accepted;
+    }
+    if (accepted) {
+      phi.swap(trial);
+      F.swap(Ftrial);
+      ev = std::move(evT);
+    } else {
+      for (int cut = 1; cut <= settings.maxLineSearchCuts && !accepted; ++cut) {
+        // Safeguarded quadratic backtracking.
+        double next = 0.5 * lambda;
+        if (std::isfinite(dE)) {
+          const double denom = 2.0 * (dE - g0 * lambda);
+          if (denom > 0) next = -g0 * lambda * lambda / denom;
         }
+        lambda = std::clamp(next, 0.1 * lambda, 0.5 * lambda);
+        ++rec.lineSearchCuts;
+        double absW = 0;
+        const double Wl = problem.materialEnergyAlong(phi.data(), delta.data(), lambda, &absW);
+        dE = lambda * s1 + 0.5 * lambda * lambda * s2 + (Wl - ev.materialEnergy);
+        bool rm = false;
+        accepted = accept(lambda, dE, absW, [&] {
+          forEach(n, [&](std::size_t m) { trial[m] = phi[m] + lambda * delta[m]; });
+          const auto e = problem.evaluate(trial.data(), Ftrial.data(), false);
+          return e.finite ? norm(Ftrial) : std::numeric_limits<double>::infinity();
+        }, &rm);
+        rec.residualMerit = rm && accepted;
       }
-      if (accepted) break;
-      // Safeguarded quadratic backtracking.
-      double next = 0.5 * lambda;
-      if (std::isfinite(dE)) {
-        const double denom = 2.0 * (dE - g0 * lambda);
-        if (denom > 0) next = -g0 * lambda * lambda / denom;
+      if (accepted) {
+        forEach(n, [&](std::size_t m) { phi[m] += lambda * delta[m]; });
+        if (project) project(phi.data());
+        ev = problem.evaluate(phi.data(), F.data());
       }
-      lambda = std::clamp(next, 0.1 * lambda, 0.5 * lambda);
-      ++rec.lineSearchCuts;
     }
     rep.lineSearchCuts += rec.lineSearchCuts;
     if (!accepted) {
+      problem.evaluate(phi.data(), F.data());  // restore the state of the last iterate
       rep.status = SolveStatus::LineSearchFailed;
       rep.history.push_back(rec);
       rep.message = concat("line search failed at Newton iteration ", it, " after ", rec.lineSearchCuts,
@@ -242,8 +268,6 @@ FieldSolveReport solveField(MagnetostaticProblem& problem, std::vector<double>& 
       break;
     }
     rec.step = lambda;
-    forEach(n, [&](std::size_t m) { phi[m] += lambda * delta[m]; });
-    if (project) project(phi.data());
     prevNorm = fn;
     prevEta = eta;
     ++rep.newtonIterations;

@@ -18,6 +18,7 @@ namespace lodestone {
 namespace {
 constexpr q1::Tables kQ1 = q1::makeTables();
 
+
 // Per-cell partial sums of evaluate(), reduced deterministically afterwards.
 struct CellSums {
   double energy = 0, energyAbs = 0;
@@ -273,6 +274,7 @@ MagnetostaticProblem::Evaluation MagnetostaticProblem::evaluate(const double* ph
         for (int b = 0; b < 3; ++b) cs.multipole.quadrupole[a][b] += mw[a] * xq[b];
       for (int c = 0; c < 8; ++c) local[c] -= fScale * dot(kQ1.dN[q][c], r.M);
     }
+
   });
   zeroFixed(F);
   const CellSums total = deterministicSum<CellSums>(sums.size(), [&](std::size_t s) { return sums[s]; }, 256);
@@ -321,23 +323,12 @@ void MagnetostaticProblem::applyJacobian(const double* v, double* out) const {
 }
 
 void MagnetostaticProblem::jacobianDiagonal(double* out) const {
-  const int nx = grid_.dims.i, ny = grid_.dims.j, nz = grid_.dims.k;
-  tbb::parallel_for(0, nz, [&](int k) {
-    for (int j = 0; j < ny; ++j)
-      for (int i = 0; i < nx; ++i) out[grid_.index(i, j, k)] = q1LaplacianDiagonal(grid_, i, j, k);
-  });
+  q1LaplacianDiagonalAll(grid_, out);
   scatterCells(out, [&](std::size_t s, double local[8]) {
     const double* E = &elem_[s * kPacked];
     for (int c = 0, e = 0; c < 8; e += 8 - c, ++c) local[c] += E[e];
   });
-  if (boundary_ == BoundaryKind::Open) {
-    // Fixed rows: identity.
-    tbb::parallel_for(0, nz, [&](int k) {
-      for (int j = 0; j < ny; ++j)
-        for (int i = 0; i < nx; ++i)
-          if (grid_.isBoundaryNode(i, j, k)) out[grid_.index(i, j, k)] = 1.0;
-    });
-  }
+  setFixedNodes(grid_, boundary_, 1.0, out);  // fixed rows: identity
 }
 
 double MagnetostaticProblem::materialEnergyAlong(const double* phi, const double* delta, double lambda,
@@ -363,11 +354,15 @@ double MagnetostaticProblem::materialEnergyAlong(const double* phi, const double
 
 void MagnetostaticProblem::applyOpenBoundary(const std::vector<Multipole>& multipoles, double* phi) const {
   if (boundary_ != BoundaryKind::Open) return;
-  // The far-field potential is smooth on the wall (the material keeps a
-  // margin), so it is summed exactly on the wall nodes whose coordinates are
-  // all even (or last) and interpolated at the midpoints in between.
+  // The far-field potential is smooth on the wall on the scale of the
+  // material's clearance d, so it is summed exactly on a lattice of wall nodes
+  // with spacing s (a power of 2 <= d/6, at least 2) and interpolated
+  // (bi)linearly in between: relative error about (s/d)^2/8 <= 0.4%, below
+  // the blocks' truncated octupole.
   const int nx = grid_.dims.i, ny = grid_.dims.j, nz = grid_.dims.k;
-  const auto onLattice = [](int c, int count) { return c % 2 == 0 || c == count - 1; };
+  int s = 2;
+  while (s < 16 && 6 * (2 * s) <= wallClearance_) s *= 2;
+  const auto onLattice = [s](int c, int count) { return c % s == 0 || c == count - 1; };
   const auto forWallNodes = [&](const auto& fn) {
     tbb::parallel_for(0, nz, [&](int k) {
       for (int j = 0; j < ny; ++j) {
@@ -383,18 +378,42 @@ void MagnetostaticProblem::applyOpenBoundary(const std::vector<Multipole>& multi
     for (const Multipole& mp : multipoles) v += mp.potential(x);
     phi[grid_.index(i, j, k)] = v;
   });
+  // Off-lattice wall nodes: along each off-lattice axis, between the lattice
+  // coordinates lo = s floor(c/s) and hi = min(lo + s, count - 1). The wall's
+  // normal coordinate (0 or count - 1) is always on the lattice.
   forWallNodes([&](int i, int j, int k) {
-    const bool li = onLattice(i, nx), lj = onLattice(j, ny), lk = onLattice(k, nz);
-    if (li && lj && lk) return;
+    const int c[3] = {i, j, k}, count[3] = {nx, ny, nz};
+    int lo[3], hi[3];
+    double t[3];
+    bool all = true;
+    for (int a = 0; a < 3; ++a) {
+      if (onLattice(c[a], count[a])) {
+        lo[a] = hi[a] = c[a];
+        t[a] = 0;
+      } else {
+        all = false;
+        lo[a] = (c[a] / s) * s;
+        hi[a] = std::min(lo[a] + s, count[a] - 1);
+        t[a] = double(c[a] - lo[a]) / double(hi[a] - lo[a]);
+      }
+    }
+    if (all) return;
     double v = 0;
-    int count = 0;
-    for (int c = lk ? 0 : -1; c <= (lk ? 0 : 1); c += 2)
-      for (int b = lj ? 0 : -1; b <= (lj ? 0 : 1); b += 2)
-        for (int a = li ? 0 : -1; a <= (li ? 0 : 1); a += 2) {
-          v += phi[grid_.index(i + a, j + b, k + c)];
-          ++count;
+    for (int corner = 0; corner < 8; ++corner) {
+      double w = 1;
+      int p[3];
+      for (int a = 0; a < 3; ++a) {
+        const bool up = (corner >> a) & 1;
+        if (lo[a] == hi[a] && up) {
+          w = 0;
+          break;
         }
-    phi[grid_.index(i, j, k)] = v / count;
+        p[a] = up ? hi[a] : lo[a];
+        w *= lo[a] == hi[a] ? 1.0 : (up ? t[a] : 1.0 - t[a]);
+      }
+      if (w != 0) v += w * phi[grid_.index(p[0], p[1], p[2])];
+    }
+    phi[grid_.index(i, j, k)] = v;
   });
 }
 

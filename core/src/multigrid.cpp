@@ -156,9 +156,8 @@ void MultigridPreconditioner::update(const MagnetostaticProblem& problem) {
   problem.jacobianDiagonal(fine->invDiagonal.data());
   {
     double* d = fine->invDiagonal.data();
-    std::vector<double> mask(fine->grid.nodeCount(), 1.0);
-    zeroFixedNodes(fine->grid, fine->boundary, mask.data());
-    forEach(mask.size(), [&](std::size_t m) { d[m] = mask[m] > 0 && d[m] > 0 ? 1.0 / d[m] : 0.0; });
+    forEach(fine->grid.nodeCount(), [&](std::size_t m) { d[m] = d[m] > 0 ? 1.0 / d[m] : 0.0; });
+    zeroFixedNodes(fine->grid, fine->boundary, d);
   }
   levels_.push_back(std::move(fine));
 
@@ -230,20 +229,14 @@ void MultigridPreconditioner::update(const MagnetostaticProblem& problem) {
     const std::size_t nodes = c->grid.nodeCount();
     c->invDiagonal.assign(nodes, 0.0);
     const GridSpec cg = c->grid;
-    tbb::parallel_for(0, cg.dims.k, [&](int k) {
-      for (int j = 0; j < cg.dims.j; ++j)
-        for (int i = 0; i < cg.dims.i; ++i) c->invDiagonal[cg.index(i, j, k)] = q1LaplacianDiagonal(cg, i, j, k);
-    });
+    q1LaplacianDiagonalAll(cg, c->invDiagonal.data());
     scatterByColour(c->cellBase.data(), c->colourStart, c->offsets, c->invDiagonal.data(),
                     [&](std::size_t s, double local[8]) {
                       const double* E = &c->elem[s * kPacked];
                       for (int q = 0, e = 0; q < 8; e += 8 - q, ++q) local[q] += E[e];
                     });
-    std::vector<double> mask(nodes, 1.0);
-    zeroFixedNodes(cg, c->boundary, mask.data());
-    forEach(nodes, [&](std::size_t m) {
-      c->invDiagonal[m] = mask[m] > 0 ? 1.0 / c->invDiagonal[m] : 0.0;
-    });
+    forEach(nodes, [&](std::size_t m) { c->invDiagonal[m] = 1.0 / c->invDiagonal[m]; });
+    zeroFixedNodes(cg, c->boundary, c->invDiagonal.data());
     levels_.push_back(std::move(c));
   }
   // Work vectors persist across updates on the same grid (no page faults

@@ -1,6 +1,7 @@
 #include "lodestone/core/q1_stencil.h"
 
 #include <algorithm>
+#include <vector>
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -71,31 +72,55 @@ void applyQ1Laplacian(const GridSpec& grid, BoundaryKind boundary, const double*
         }
         out[row] = shield ? q1LaplacianRow(grid, 0, j, k, v) : 0.0;
         out[row + std::size_t(nx - 1)] = shield ? q1LaplacianRow(grid, nx - 1, j, k, v) : 0.0;
+        // Per x position, the 4 in-plane face neighbours A and the 4 in-plane
+        // diagonal neighbours D in (y, z); then edges(i) = A(i-1) + A(i+1) + D(i)
+        // and corners(i) = D(i-1) + D(i+1). Face neighbours weigh 0.
         const double* p = v + row;
-        for (int i = 1; i < nx - 1; ++i) {
+        thread_local std::vector<double> A, D;
+        A.resize(std::size_t(nx));
+        D.resize(std::size_t(nx));
+        for (int i = 0; i < nx; ++i) {
           const double* c = p + i;
-          // 12 edge neighbours and 8 corner neighbours; face neighbours weigh 0.
-          const double edges = c[1 + sy] + c[1 - sy] + c[-1 + sy] + c[-1 - sy] + c[1 + sz] + c[1 - sz] +
-                               c[-1 + sz] + c[-1 - sz] + c[sy + sz] + c[sy - sz] + c[-sy + sz] + c[-sy - sz];
-          const double corners = c[1 + sy + sz] + c[1 + sy - sz] + c[1 - sy + sz] + c[1 - sy - sz] +
-                                 c[-1 + sy + sz] + c[-1 + sy - sz] + c[-1 - sy + sz] + c[-1 - sy - sz];
-          out[row + std::size_t(i)] = cC * c[0] + cE * edges + cK * corners;
+          A[std::size_t(i)] = c[sy] + c[-sy] + c[sz] + c[-sz];
+          D[std::size_t(i)] = c[sy + sz] + c[sy - sz] + c[-sy + sz] + c[-sy - sz];
+        }
+        for (int i = 1; i < nx - 1; ++i) {
+          const std::size_t u = std::size_t(i);
+          const double edges = A[u - 1] + A[u + 1] + D[u];
+          const double corners = D[u - 1] + D[u + 1];
+          out[row + u] = cC * p[i] + cE * edges + cK * corners;
         }
       }
   });
 }
 
 void zeroFixedNodes(const GridSpec& grid, BoundaryKind boundary, double* v) {
+  setFixedNodes(grid, boundary, 0.0, v);
+}
+
+void q1LaplacianDiagonalAll(const GridSpec& grid, double* out) {
+  const double interior = grid.dx * 8.0 / 3.0;
+  tbb::parallel_for(0, grid.dims.k, [&](int k) {
+    for (int j = 0; j < grid.dims.j; ++j) {
+      const bool wallRow = k == 0 || k == grid.dims.k - 1 || j == 0 || j == grid.dims.j - 1;
+      double* row = out + grid.index(0, j, k);
+      for (int i = 0; i < grid.dims.i; ++i)
+        row[i] = (wallRow || i == 0 || i == grid.dims.i - 1) ? q1LaplacianDiagonal(grid, i, j, k) : interior;
+    }
+  });
+}
+
+void setFixedNodes(const GridSpec& grid, BoundaryKind boundary, double value, double* v) {
   if (boundary == BoundaryKind::Shield) return;
   const int nx = grid.dims.i, ny = grid.dims.j, nz = grid.dims.k;
   tbb::parallel_for(0, nz, [&](int k) {
     for (int j = 0; j < ny; ++j) {
       const std::size_t row = grid.index(0, j, k);
       if (k == 0 || k == nz - 1 || j == 0 || j == ny - 1) {
-        std::fill(v + row, v + row + std::size_t(nx), 0.0);
+        std::fill(v + row, v + row + std::size_t(nx), value);
       } else {
-        v[row] = 0.0;
-        v[row + std::size_t(nx - 1)] = 0.0;
+        v[row] = value;
+        v[row + std::size_t(nx - 1)] = value;
       }
     }
   });

@@ -20,7 +20,13 @@ double q1LaplacianRow(const GridSpec& grid, int i, int j, int k, const double* v
 /// Diagonal entry of K at node (i,j,k).
 double q1LaplacianDiagonal(const GridSpec& grid, int i, int j, int k);
 
+/// diag(K) at every node.
+void q1LaplacianDiagonalAll(const GridSpec& grid, double* out);
+
 /// Sets the fixed (wall) nodes of v to 0 for Open; nothing for Shield.
 void zeroFixedNodes(const GridSpec& grid, BoundaryKind boundary, double* v);
+
+/// Sets the fixed (wall) nodes of v to `value` for Open; nothing for Shield.
+void setFixedNodes(const GridSpec& grid, BoundaryKind boundary, double value, double* v);
 
 }  // namespace lodestone
