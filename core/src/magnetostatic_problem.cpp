@@ -18,6 +18,19 @@ namespace lodestone {
 namespace {
 constexpr q1::Tables kQ1 = q1::makeTables();
 
+// Packed upper triangles of dN_qc . dN_qd for each Gauss point q.
+struct GramAtGauss {
+  double g[8][36];
+};
+constexpr GramAtGauss makeGramAtGauss() {
+  GramAtGauss t{};
+  for (int q = 0; q < 8; ++q)
+    for (int c = 0, e = 0; c < 8; ++c)
+      for (int d = c; d < 8; ++d, ++e) t.g[q][e] = dot(kQ1.dN[q][c], kQ1.dN[q][d]);
+  return t;
+}
+constexpr GramAtGauss kGramAtGauss = makeGramAtGauss();
+
 
 // Per-cell partial sums of evaluate(), reduced deterministically afterwards.
 struct CellSums {
@@ -256,12 +269,20 @@ MagnetostaticProblem::Evaluation MagnetostaticProblem::evaluate(const double* ph
         SymMat3d mean = r.dMdH;
         mean *= 0.125;
         cellTensor_[s] += mean;
-        // Element matrix: E_cd += dN_qc . (jq dN_qd), upper triangle packed.
-        Vec3d jd[8];
-        for (int c = 0; c < 8; ++c) jd[c] = jq * kQ1.dN[q][c];
+        // Element matrix E_cd += (dx/8) dN_qc . (dM/dH dN_qd), upper triangle
+        // packed, with dM/dH = iso I + rank1 h h^T:
+        // (dx/8) [iso (dN_qc . dN_qd) + rank1 (dN_qc . h)(dN_qd . h)].
+        const double a = jScale * r.iso, b = jScale * r.rank1;
         double* E = &elem_[s * kPacked];
-        for (int c = 0, e = 0; c < 8; ++c)
-          for (int d = c; d < 8; ++d, ++e) E[e] += dot(kQ1.dN[q][c], jd[d]);
+        const double* G = kGramAtGauss.g[q];
+        if (b != 0) {
+          double u[8];
+          for (int c = 0; c < 8; ++c) u[c] = dot(kQ1.dN[q][c], r.h);
+          for (int c = 0, e = 0; c < 8; ++c)
+            for (int d = c; d < 8; ++d, ++e) E[e] += a * G[e] + b * u[c] * u[d];
+        } else {
+          for (int e = 0; e < kPacked; ++e) E[e] += a * G[e];
+        }
       }
       cs.finite = cs.finite && isFinite(r.M) && std::isfinite(r.W) && std::isfinite(jq.trace());
       cs.energy += w * r.W;

@@ -43,6 +43,10 @@ template <typename T>
 struct MagnetizationResponse {
   Vec3<T> M;        ///< magnetization, A/m
   SymMat3<T> dMdH;  ///< Jacobian block, dimensionless, symmetric positive semi-definite
+  /// The same block as iso * I + rank1 * h h^T (h unit, or zero): the
+  /// structure of every isotropic law, which element assembly exploits.
+  T iso = 0, rank1 = 0;
+  Vec3<T> h;
   T W = 0;          ///< co-energy density with dW/dH = M, A^2/m^2 (mu0 W is J/m^3)
 };
 
@@ -86,6 +90,7 @@ LODESTONE_HOSTDEV inline MagnetizationResponse<T> respond(const MagnetizationLaw
       const T chi = law.chiPerDensity * n;
       r.M = chi * H;
       r.dMdH = SymMat3<T>::scaledIdentity(chi);
+      r.iso = chi;
       r.W = T(0.5) * chi * norm2(H);
       break;
     }
@@ -97,7 +102,10 @@ LODESTONE_HOSTDEV inline MagnetizationResponse<T> respond(const MagnetizationLaw
       const LangevinTriple<T> L = langevinTriple(a);
       const Vec3<T> h = Hn > T(0) ? H / Hn : Vec3<T>{};
       r.M = (chi0x3 * L.overArg) * H;
-      r.dMdH = SymMat3<T>::identityPlusOuter(chi0x3 * L.overArg, chi0x3 * (L.derivative - L.overArg), h);
+      r.iso = chi0x3 * L.overArg;
+      r.rank1 = chi0x3 * (L.derivative - L.overArg);
+      r.h = h;
+      r.dMdH = SymMat3<T>::identityPlusOuter(r.iso, r.rank1, h);
       r.W = n * law.moment / law.k2 * L.logSinhc;
       break;
     }
