@@ -31,16 +31,19 @@ constexpr GramAtGauss makeGramAtGauss() {
 }
 constexpr GramAtGauss kGramAtGauss = makeGramAtGauss();
 
-
-// Per-cell partial sums of evaluate(), reduced deterministically afterwards.
+// Per-cell partial sums of evaluate(): the energies are reduced over all
+// cells, the multipole moments per block, both in a fixed order.
 struct CellSums {
   double energy = 0, energyAbs = 0;
   Multipole multipole;
   bool finite = true;
-  CellSums& operator+=(const CellSums& o) {
+};
+struct EnergyTotals {
+  double energy = 0, energyAbs = 0;
+  bool finite = true;
+  EnergyTotals& operator+=(const EnergyTotals& o) {
     energy += o.energy;
     energyAbs += o.energyAbs;
-    multipole += o.multipole;
     finite = finite && o.finite;
     return *this;
   }
@@ -295,10 +298,11 @@ MagnetostaticProblem::Evaluation MagnetostaticProblem::evaluate(const double* ph
         for (int b = 0; b < 3; ++b) cs.multipole.quadrupole[a][b] += mw[a] * xq[b];
       for (int c = 0; c < 8; ++c) local[c] -= fScale * dot(kQ1.dN[q][c], r.M);
     }
-
   });
   zeroFixed(F);
-  const CellSums total = deterministicSum<CellSums>(sums.size(), [&](std::size_t s) { return sums[s]; }, 256);
+  const EnergyTotals total = deterministicSum<EnergyTotals>(
+      sums.size(), [&](std::size_t s) { return EnergyTotals{sums[s].energy, sums[s].energyAbs, sums[s].finite}; },
+      256);
   Evaluation e;
   e.materialEnergy = total.energy;
   e.materialEnergyAbs = total.energyAbs;
