@@ -138,7 +138,7 @@ MagneticStageReport MagneticForceStage::solveAndForce(const FieldSource& sources
   // Force.
   t = Clock::now();
   stressDivergence(h_.view(), b_.view(), hext_.view(), n_.view(), settings_.forceMask, t_.view(),
-                   settings_.forceMaskDilation);
+                   settings_.forceMaskDilation, &sources, time);
   spreadForce(t_.view(), f_.view());
   rep.totalForce = deterministicSum<Vec3d>(count, [&](std::size_t m) { return f_[m]; });
   rep.secondsForce = secondsSince(t);

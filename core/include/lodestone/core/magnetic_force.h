@@ -17,6 +17,8 @@
 
 namespace lodestone {
 
+class FieldSource;
+
 enum class ForceMask : int {
   /// Keep t_j only at nodes within a few nodes of magnetic material (n > 0).
   /// Stress jumps at the surfaces of permanent magnets inside the grid then
@@ -34,8 +36,14 @@ const char* toString(ForceMask mask);
 /// difference, so the whole surface traction of the body is kept; measured
 /// on two spheres, 0 nodes loses ~15% of their mutual force, 1 node ~1.5%,
 /// 2 nodes ~0.4%). n may be empty when mask == None.
+/// With `applied` (the source of H_ext), the term mu0 (M . grad) H_ext is
+/// the source's own directional derivative at the node instead of a central
+/// difference of the nodal H_ext: a difference across the surface of a
+/// permanent magnet that the material touches would see H_ext's jump there
+/// (it pushed a cube resting on a magnet away with 400 N).
 void stressDivergence(GridView<const Vec3d> H, GridView<const Vec3d> B, GridView<const Vec3d> Hext,
-                      GridView<const double> n, ForceMask mask, GridView<Vec3d> t, int dilation = 2);
+                      GridView<const double> n, ForceMask mask, GridView<Vec3d> t, int dilation = 2,
+                      const FieldSource* applied = nullptr, double time = 0.0);
 
 /// Moves nodal forces f (N) that lie outside the support of the density
 /// (n = 0) onto it: a node at distance L (26-connected node steps) splits its
