@@ -1,0 +1,604 @@
+// The reference MLS-MPM step (Section 4.3 of the paper); see mpm_solver.h.
+#include "lodestone/core/mpm_solver.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <sstream>
+
+#include "lodestone/core/cuboid_magnet.h"
+#include "lodestone/core/cylinder_magnet.h"
+#include "lodestone/core/error.h"
+#include "lodestone/core/magnetic_force.h"
+#include "lodestone/core/mpm_constitutive.h"
+#include "lodestone/core/parallel.h"
+#include "lodestone/core/sphere_magnet.h"
+
+namespace lodestone {
+
+namespace {
+using Clock = std::chrono::steady_clock;
+double secondsSince(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+
+bool sameLaw(const MagnetizationLaw<double>& a, const MagnetizationLaw<double>& b) {
+  return a.kind == b.kind && a.moment == b.moment && a.k2 == b.k2 && a.chiPerDensity == b.chiPerDensity;
+}
+
+struct DomainCounts {
+  std::size_t clamped = 0, remove = 0, nonFinite = 0;
+  void join(const DomainCounts& o) {
+    clamped += o.clamped;
+    remove += o.remove;
+    nonFinite += o.nonFinite;
+  }
+};
+}  // namespace
+
+// ---------------------------------------------------------------------------
+// The applied field the stage sees: the user's sources plus the magnets.
+
+class MpmSolver::SceneField final : public FieldSource {
+ public:
+  SceneField(const FieldSourceSet& sources, const std::vector<std::unique_ptr<MagnetSource>>& magnets)
+      : sources_(sources), magnets_(magnets) {}
+
+  Vec3d field(const Vec3d& x, double t) const override {
+    Vec3d H = sources_.field(x, t);
+    for (const auto& m : magnets_) H += m->field(x, t);
+    return H;
+  }
+  Vec3d magnetization(const Vec3d& x, double t) const override {
+    Vec3d M = sources_.magnetization(x, t);
+    for (const auto& m : magnets_) M += m->magnetization(x, t);
+    return M;
+  }
+  void accumulateField(const Vec3d* x, std::size_t count, double t, Vec3d* out) const override {
+    sources_.accumulateField(x, count, t, out);
+    for (const auto& m : magnets_) m->accumulateField(x, count, t, out);
+  }
+  bool isUniform() const override { return magnets_.empty() && sources_.isUniform(); }
+  std::string describe() const override {
+    return concat(sources_.describe(), "; plus ", magnets_.size(), " magnet collider(s)");
+  }
+  std::unique_ptr<FieldSource> clone() const override {
+    auto set = std::make_unique<FieldSourceSet>(sources_);
+    for (const auto& m : magnets_) set->add(*m);
+    return set;
+  }
+  bool empty() const { return sources_.empty() && magnets_.empty(); }
+
+ private:
+  const FieldSourceSet& sources_;
+  const std::vector<std::unique_ptr<MagnetSource>>& magnets_;
+};
+
+// ---------------------------------------------------------------------------
+// Settings and reports
+
+void MpmSettings::validate() const {
+  grid.validate("MPM grid");
+  const int minDim = std::min(grid.dims.i, std::min(grid.dims.j, grid.dims.k));
+  require(minDim >= 4, "MPM grid: at least 4 nodes per axis are needed, got ", grid.dims.i, " x ", grid.dims.j, " x ",
+          grid.dims.k);
+  require(isFinite(gravity), "MPM settings: gravity must be finite (m/s^2), got (", gravity.x, ", ", gravity.y, ", ",
+          gravity.z, ")");
+  walls.validate("MPM walls");
+  require(wallNodes >= 0 && 2 * wallNodes + 2 <= minDim, "MPM settings: wallNodes must be in 0..", (minDim - 2) / 2,
+          " for a grid of ", minDim, " nodes on its shortest axis, got ", wallNodes);
+  require(outOfDomain == OutOfDomainPolicy::Clamp || outOfDomain == OutOfDomainPolicy::Remove,
+          "MPM settings: unknown out-of-domain policy ", int(outOfDomain));
+  require(std::isfinite(fixedDt) && fixedDt >= 0,
+          "MPM settings: fixedDt must be finite and >= 0 (s; 0 = adaptive), got ", fixedDt);
+  require(std::isfinite(cfl) && cfl > 0 && cfl <= 1, "MPM settings: cfl must be in (0, 1], got ", cfl);
+  require(std::isfinite(dtMax) && dtMax > 0, "MPM settings: dtMax must be a positive finite time in s, got ", dtMax);
+  require(std::isfinite(dtMin) && dtMin > 0 && dtMin <= dtMax,
+          "MPM settings: dtMin must be a positive finite time in s, at most dtMax = ", dtMax, " s, got ", dtMin);
+  require(reorderInterval >= 0, "MPM settings: reorderInterval must be >= 0 substeps, got ", reorderInterval);
+  require(magneticSolveInterval >= 0,
+          "MPM settings: magneticSolveInterval must be >= 0 substeps (0 = once per frame), got ",
+          magneticSolveInterval);
+  if (magneticGrid) magneticGrid->validate("magnetic stage grid");
+  magnetic.validate();
+}
+
+std::string MpmFrameReport::summary() const {
+  std::ostringstream os;
+  os.precision(4);
+  os << "frame to t = " << time << " s: " << substeps << " substeps, dt " << minDt << " .. " << maxDt << " s";
+  if (dtAtMinimum) os << " (" << dtAtMinimum << " at dtMin)";
+  os << (cancelled ? ", cancelled" : "") << "\n";
+  os << "time: P2G " << secondsP2G << " s, magnetic " << secondsMagnetic << " s, grid " << secondsGridUpdate
+     << " s, G2P " << secondsG2P << " s, total " << secondsTotal << " s\n";
+  os << "field solves: " << magneticReports.size() << "\n";
+  os << "particles clamped " << clamped << ", removed " << removed << " (non-finite " << nonFinite << ")\n";
+  os << "energy: kinetic " << energies.kinetic << " J, gravitational " << energies.gravitational << " J, elastic "
+     << energies.elastic << " J, total " << energies.total() << " J\n";
+  for (const auto& w : warnings) os << "warning: " << w << "\n";
+  return os.str();
+}
+
+// ---------------------------------------------------------------------------
+// Set-up
+
+MpmSolver::MpmSolver(const MpmSettings& settings) : settings_(settings) {
+  settings_.validate();
+  magneticGrid_ = settings_.magneticGrid ? *settings_.magneticGrid : settings_.grid;
+  sameGrid_ = magneticGrid_ == settings_.grid;
+  grid_ = MpmGrid(settings_.grid);
+  scene_ = std::make_unique<SceneField>(sources_, magnets_);
+  if (sameGrid_) magneticForce_.reset(settings_.grid, Vec3d{});
+}
+
+MpmSolver::~MpmSolver() = default;
+
+std::uint32_t MpmSolver::addMaterial(const MpmMaterial& material) {
+  material.validate();
+  if (material.isMagnetic()) {
+    for (const MpmMaterial& m : materials_)
+      if (m.isMagnetic())
+        require(sameLaw(m.magnetic.law, material.magnetic.law),
+                "MPM solver: every magnetic material must share one magnetization law (one field solve serves them "
+                "all); existing ",
+                m.magnetic.describe(), ", new ", material.magnetic.describe());
+  }
+  require(materials_.size() < 0xFFFFFFFFu, "MPM solver: too many materials");
+  materials_.push_back(material);
+  return std::uint32_t(materials_.size() - 1);
+}
+
+EmitReport MpmSolver::emit(const EmitterShape& shape, std::uint32_t material, EmitterSettings settings) {
+  particlesDirty_ = true;
+  require(material < materials_.size(), "MPM solver: material index ", material, " out of range (", materials_.size(),
+          " materials)");
+  if (settings.cellSize == 0) settings.cellSize = settings_.grid.dx;
+  return emitParticles(particles_, shape, materials_[material], material, settings);
+}
+
+std::size_t MpmSolver::addCollider(const MpmCollider& collider) {
+  colliders_.push_back(collider);
+  return colliders_.size() - 1;
+}
+
+MpmCollider& MpmSolver::collider(std::size_t i) {
+  require(i < colliders_.size(), "MPM solver: collider ", i, " out of range (", colliders_.size(), " colliders)");
+  return colliders_[i];
+}
+
+const MpmCollider& MpmSolver::collider(std::size_t i) const {
+  require(i < colliders_.size(), "MPM solver: collider ", i, " out of range (", colliders_.size(), " colliders)");
+  return colliders_[i];
+}
+
+std::size_t MpmSolver::addMagnet(const MagnetSource& magnet, const ColliderMotion& motion,
+                                 const BoundaryCondition& boundary) {
+  ColliderShape shape;
+  if (const auto* s = dynamic_cast<const SphereMagnet*>(&magnet)) {
+    shape = ColliderShape::sphere(s->radius());
+  } else if (const auto* c = dynamic_cast<const CylinderMagnet*>(&magnet)) {
+    shape = ColliderShape::cylinder(c->radius(), c->halfLength());
+  } else if (const auto* b = dynamic_cast<const CuboidMagnet*>(&magnet)) {
+    shape = ColliderShape::box(b->halfSize());
+  } else {
+    throw InvalidArgument(
+        concat("MPM solver: addMagnet supports sphere, cylinder and cuboid magnets, got ", magnet.describe()));
+  }
+  std::unique_ptr<FieldSource> copy = magnet.clone();
+  std::unique_ptr<MagnetSource> owned(dynamic_cast<MagnetSource*>(copy.get()));
+  require(owned != nullptr, "MPM solver: the magnet's clone is not a magnet");
+  copy.release();
+  owned->setPose(motion.poseAt(time_));
+  colliders_.emplace_back(shape, motion, boundary);
+  magnets_.push_back(std::move(owned));
+  magnetCollider_.push_back(colliders_.size() - 1);
+  return colliders_.size() - 1;
+}
+
+std::size_t MpmSolver::addMagnet(const MagnetSource& magnet, const BoundaryCondition& boundary) {
+  return addMagnet(magnet, ColliderMotion::fixed(magnet.pose()), boundary);
+}
+
+const MagnetSource& MpmSolver::magnet(std::size_t i) const {
+  require(i < magnets_.size(), "MPM solver: magnet ", i, " out of range (", magnets_.size(), " magnets)");
+  return *magnets_[i];
+}
+
+const FieldSource& MpmSolver::appliedField() const { return *scene_; }
+
+void MpmSolver::setTime(double t) {
+  require(std::isfinite(t), "MPM solver: time must be finite (s), got ", t);
+  time_ = t;
+}
+
+// ---------------------------------------------------------------------------
+// Time step
+
+double MpmSolver::suggestedDt() const {
+  if (settings_.fixedDt > 0) return settings_.fixedDt;
+  const std::size_t np = particles_.size();
+  const Vec3d* v = particles_.v.data();
+  const double vmax = tbb::parallel_reduce(
+      tbb::blocked_range<std::size_t>(0, np, 8192), 0.0,
+      [&](const tbb::blocked_range<std::size_t>& r, double m) {
+        for (std::size_t p = r.begin(); p != r.end(); ++p) m = std::max(m, norm2(v[p]));
+        return m;
+      },
+      [](double a, double b) { return std::max(a, b); });
+  double c = 0, nu = 0;
+  for (const MpmMaterial& m : materials_) {
+    c = std::max(c, m.waveSpeed());
+    nu = std::max(nu, m.kinematicViscosity());
+  }
+  const double dx = settings_.grid.dx;
+  const double speed = std::sqrt(vmax) + c;
+  double dt = speed > 0 ? settings_.cfl * dx / speed : settings_.dtMax;
+  if (nu > 0) dt = std::min(dt, settings_.cfl * dx * dx / (3 * nu));
+  dt = std::min(dt, settings_.dtMax);
+  return std::max(dt, settings_.dtMin);
+}
+
+// ---------------------------------------------------------------------------
+// Domain
+
+ParticleBounds MpmSolver::domainBounds() const {
+  const GridSpec& g = settings_.grid;
+  ParticleBounds b;
+  b.lo = g.origin + g.dx * Vec3d{1, 1, 1};
+  b.hi = g.nodePosition(g.dims.i - 2, g.dims.j - 2, g.dims.k - 2);
+  b.clamp = settings_.outOfDomain == OutOfDomainPolicy::Clamp;
+  return b;
+}
+
+std::size_t MpmSolver::enforceDomain(std::size_t& removedOut, std::size_t& nonFiniteOut) {
+  const ParticleBounds bounds = domainBounds();
+  const Vec3d lo = bounds.lo, hi = bounds.hi;
+  const bool removeOutside = settings_.outOfDomain == OutOfDomainPolicy::Remove;
+  const std::size_t np = particles_.size();
+  std::vector<std::uint8_t> flags(np, 0);
+  Vec3d* X = particles_.x.data();
+  Vec3d* V = particles_.v.data();
+  const double* J = particles_.J.data();
+  const DomainCounts counts = tbb::parallel_reduce(
+      tbb::blocked_range<std::size_t>(0, np, 4096), DomainCounts{},
+      [&](const tbb::blocked_range<std::size_t>& r, DomainCounts acc) {
+        for (std::size_t p = r.begin(); p != r.end(); ++p) {
+          if (!isFinite(X[p]) || !isFinite(V[p]) || !std::isfinite(J[p])) {
+            flags[p] = 1;
+            ++acc.remove;
+            ++acc.nonFinite;
+            continue;
+          }
+          bool outside = false;
+          for (int a = 0; a < 3; ++a) outside = outside || X[p][a] < lo[a] || X[p][a] > hi[a];
+          if (!outside) continue;
+          if (removeOutside) {
+            flags[p] = 1;
+            ++acc.remove;
+            continue;
+          }
+          for (int a = 0; a < 3; ++a) {
+            if (X[p][a] < lo[a]) {
+              X[p][a] = lo[a];
+              if (V[p][a] < 0) V[p][a] = 0;
+            } else if (X[p][a] > hi[a]) {
+              X[p][a] = hi[a];
+              if (V[p][a] > 0) V[p][a] = 0;
+            }
+          }
+          ++acc.clamped;
+        }
+        return acc;
+      },
+      [](DomainCounts a, const DomainCounts& b) {
+        a.join(b);
+        return a;
+      });
+  if (counts.remove > 0) particles_.removeFlagged(flags);
+  removedOut += counts.remove;
+  nonFiniteOut += counts.nonFinite;
+  return counts.clamped;
+}
+
+// ---------------------------------------------------------------------------
+// Magnetism
+
+bool MpmSolver::anyMagneticParticles() const {
+  bool anyMaterial = false;
+  for (const MpmMaterial& m : materials_) anyMaterial = anyMaterial || m.isMagnetic();
+  if (!anyMaterial) return false;
+  for (std::size_t p = 0; p < particles_.size(); ++p)
+    if (particles_.count[p] > 0) return true;
+  return false;
+}
+
+void MpmSolver::solveMagnetic(MpmStepReport& rep) {
+  const auto t0 = Clock::now();
+  // The magnetic points, handed to the stage as an external host would.
+  std::vector<std::uint32_t> index;
+  std::vector<Vec3d> positions;
+  std::vector<double> counts;
+  const MagneticMaterial* law = nullptr;
+  for (const MpmMaterial& m : materials_)
+    if (m.isMagnetic() && !law) law = &m.magnetic;
+  for (std::size_t p = 0; p < particles_.size(); ++p) {
+    const std::uint32_t mat = particles_.material[p];
+    if (particles_.count[p] > 0 && mat < materials_.size() && materials_[mat].isMagnetic()) {
+      index.push_back(std::uint32_t(p));
+      positions.push_back(particles_.x[p]);
+      counts.push_back(particles_.count[p]);
+    }
+  }
+  std::fill(particles_.magneticForce.begin(), particles_.magneticForce.end(), Vec3d{});
+  if (sameGrid_) magneticForce_.fill(Vec3d{});
+  magneticDropped_ = {};
+  haveMagneticForce_ = false;
+  stepsSinceSolve_ = 0;
+  if (index.empty() || !law || scene_->empty()) return;
+
+  if (!stage_) stage_ = std::make_unique<MagneticForceStage>(magneticGrid_, *law, settings_.magnetic);
+  for (std::size_t m = 0; m < magnets_.size(); ++m)
+    magnets_[m]->setPose(colliders_[magnetCollider_[m]].motion().poseAt(time_));
+  const ParticleView view{positions.data(), counts.data(), positions.size()};
+  rep.magnetic = stage_->run(view, *scene_, time_);
+  rep.magneticSolved = true;
+  if (sameGrid_) {
+    magneticDropped_ = gatherToSupport(stage_->nodalForce(), stage_->density(), magneticForce_.view());
+  } else {
+    std::vector<Vec3d> forces(positions.size());
+    stage_->particleForces(view, forces.data());
+    for (std::size_t q = 0; q < index.size(); ++q) particles_.magneticForce[index[q]] = forces[q];
+  }
+  haveMagneticForce_ = true;
+  rep.secondsMagnetic = secondsSince(t0);
+}
+
+// ---------------------------------------------------------------------------
+// Grid update (step 4)
+
+void MpmSolver::gridUpdate(double dt, MpmStepReport& rep) {
+  const GridSpec& g = settings_.grid;
+  const Index3 lo = grid_.activeLo(), hi = grid_.activeHi();
+  if (lo.i >= hi.i || lo.j >= hi.j || lo.k >= hi.k) return;
+  const double tNew = time_ + dt;
+  std::vector<ColliderState> states(colliders_.size());
+  for (std::size_t c = 0; c < colliders_.size(); ++c) states[c] = colliders_[c].stateAt(tNew);
+  const Vec3d dg = dt * settings_.gravity;
+  const int W = settings_.wallNodes;
+  const BoundaryCondition walls = settings_.walls;
+  const bool magnetic = sameGrid_ && haveMagneticForce_;
+  const Vec3d* fmag = magneticForce_.empty() ? nullptr : magneticForce_.data();
+  const std::vector<MpmNode>& nodes = grid_.nodes();
+  std::vector<Vec3d>& vel = grid_.velocity();
+  const int nj = hi.j - lo.j;
+  const std::size_t rows = std::size_t(nj) * std::size_t(hi.k - lo.k);
+  std::vector<Vec3d> rowImpulse(magnetic ? rows : 0);
+
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, rows, 4), [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t row = r.begin(); row != r.end(); ++row) {
+      const int j = lo.j + int(row % std::size_t(nj));
+      const int k = lo.k + int(row / std::size_t(nj));
+      Vec3d impulse{};
+      for (int i = lo.i; i < hi.i; ++i) {
+        const std::size_t n = g.index(i, j, k);
+        const double m = nodes[n].mass;
+        if (!(m > 0)) {
+          vel[n] = Vec3d{};
+          continue;
+        }
+        Vec3d p = nodes[n].momentum;
+        if (magnetic) {
+          const Vec3d I = dt * fmag[n];  // N*s
+          p += I;
+          impulse += I;
+        }
+        Vec3d v = p / m + dg;
+        if (!colliders_.empty()) {
+          const Vec3d x = g.nodePosition(i, j, k);
+          for (std::size_t c = 0; c < colliders_.size(); ++c) v = colliders_[c].apply(states[c], x, v);
+        }
+        if (W > 0) {
+          const int idx[3] = {i, j, k};
+          const int dims[3] = {g.dims.i, g.dims.j, g.dims.k};
+          for (int a = 0; a < 3; ++a) {
+            Vec3d nrm{};
+            if (idx[a] < W) {
+              nrm[a] = 1;
+            } else if (idx[a] > dims[a] - 1 - W) {
+              nrm[a] = -1;
+            } else {
+              continue;
+            }
+            v = applyBoundaryCondition(v, Vec3d{}, nrm, walls);
+          }
+        }
+        vel[n] = v;
+      }
+      if (magnetic) rowImpulse[row] = impulse;
+    }
+  });
+  if (magnetic) {
+    Vec3d total{};
+    for (const Vec3d& I : rowImpulse) total += I;
+    rep.magneticImpulse = total;
+  }
+}
+
+// ---------------------------------------------------------------------------
+// Substeps and frames
+
+MpmStepReport MpmSolver::step(double dt) {
+  require(std::isfinite(dt) && dt > 0, "MPM step: dt must be a positive finite time in s, got ", dt);
+  require(time_ + dt > time_, "MPM step: dt = ", dt, " s is below the resolution of the time ", time_, " s");
+  particles_.checkSizes();
+  const auto tStart = Clock::now();
+  MpmStepReport rep;
+  rep.dt = dt;
+
+  // 0. Keep every particle where its stencil fits (G2P does it after
+  // advection; here only when the particles were handed out since).
+  auto t = Clock::now();
+  if (particlesDirty_) {
+    rep.clamped += enforceDomain(rep.removed, rep.nonFinite);
+    particlesDirty_ = false;
+  }
+  const double secondsDomain = secondsSince(t);
+
+  // 2-3. Field solve and magnetic force on the solver's interval.
+  const bool magneticScene = !scene_->empty() && anyMagneticParticles();
+  if (magneticScene) {
+    const bool due =
+        settings_.magneticSolveInterval > 0 ? stepsSinceSolve_ >= settings_.magneticSolveInterval : frameStart_;
+    if (due || !haveMagneticForce_) solveMagnetic(rep);
+  } else if (haveMagneticForce_) {
+    solveMagnetic(rep);  // clears the cached force
+  }
+  frameStart_ = false;
+
+  // 1. P2G.
+  t = Clock::now();
+  const bool particleForces = !sameGrid_ && haveMagneticForce_;
+  grid_.particleToGrid(particles_, materials_, dt, particleForces ? particles_.magneticForce.data() : nullptr);
+  if (particleForces) {
+    rep.magneticImpulse =
+        deterministicSum<Vec3d>(particles_.size(), [&](std::size_t p) { return dt * particles_.magneticForce[p]; });
+  }
+  rep.secondsP2G = secondsDomain + secondsSince(t);
+  rep.secondsBinning = grid_.lastBinningSeconds();
+
+  // 4. Grid update.
+  t = Clock::now();
+  gridUpdate(dt, rep);
+  rep.secondsGridUpdate = secondsSince(t);
+
+  // 5-7. G2P, F/J update, advection.
+  t = Clock::now();
+  const ParticleBounds bounds = domainBounds();
+  const GridToParticleReport g2p = grid_.gridToParticle(particles_, materials_, dt, &bounds);
+  rep.maxSpeed = g2p.maxSpeed;
+  rep.clamped += g2p.clamped;
+  const std::size_t removedBefore = rep.removed;
+  if (g2p.outside + g2p.nonFinite > 0) rep.clamped += enforceDomain(rep.removed, rep.nonFinite);
+  ++substeps_;
+  ++stepsSinceSolve_;
+  if (settings_.reorderInterval > 0 && substeps_ % settings_.reorderInterval == 0 && rep.removed == removedBefore &&
+      grid_.binnedOrder().size() == particles_.size())
+    particles_.permute(grid_.binnedOrder());
+  rep.secondsG2P = secondsSince(t);
+
+  time_ += dt;
+  rep.time = time_;
+  rep.particles = particles_.size();
+  rep.secondsTotal = secondsSince(tStart);
+  return rep;
+}
+
+MpmFrameReport MpmSolver::advanceFrame(double frameDuration, const MpmProgressCallback& progress) {
+  require(std::isfinite(frameDuration) && frameDuration > 0,
+          "MPM frame: duration must be a positive finite time in s, got ", frameDuration);
+  MpmFrameReport fr;
+  const double t0 = time_;
+  const double tEnd = time_ + frameDuration;
+  frameStart_ = true;
+  bool first = true;
+  while (time_ < tEnd) {
+    double dt = suggestedDt();
+    if (settings_.fixedDt == 0 && dt <= settings_.dtMin) ++fr.dtAtMinimum;
+    const double remaining = tEnd - time_;
+    bool last = false;
+    if (remaining <= dt * (1 + 1e-9)) {
+      dt = remaining;
+      last = true;
+    } else if (settings_.fixedDt == 0 && remaining < 2 * dt) {
+      dt = 0.5 * remaining;  // two even substeps rather than a sliver
+    }
+    const MpmStepReport r = step(dt);
+    if (last) time_ = tEnd;
+    ++fr.substeps;
+    fr.minDt = first ? dt : std::min(fr.minDt, dt);
+    fr.maxDt = first ? dt : std::max(fr.maxDt, dt);
+    first = false;
+    fr.secondsP2G += r.secondsP2G;
+    fr.secondsMagnetic += r.secondsMagnetic;
+    fr.secondsGridUpdate += r.secondsGridUpdate;
+    fr.secondsG2P += r.secondsG2P;
+    fr.secondsTotal += r.secondsTotal;
+    fr.magneticImpulse += r.magneticImpulse;
+    fr.clamped += r.clamped;
+    fr.removed += r.removed;
+    fr.nonFinite += r.nonFinite;
+    if (r.magneticSolved) {
+      if (!r.magnetic.converged())
+        fr.warnings.push_back(
+            concat("field solve at t = ", time_ - dt, " s did not converge: ", r.magnetic.solve.message));
+      fr.magneticReports.push_back(r.magnetic);
+    }
+    if (progress) {
+      MpmProgress pr;
+      pr.substep = fr.substeps;
+      pr.time = time_;
+      pr.fraction = std::min(1.0, (time_ - t0) / frameDuration);
+      if (!progress(pr)) {
+        fr.cancelled = !last;
+        break;
+      }
+    }
+    if (last) break;
+  }
+  if (fr.dtAtMinimum > 0)
+    fr.warnings.push_back(concat(fr.dtAtMinimum, " substep(s) needed less than dtMin = ", settings_.dtMin,
+                                 " s and were taken at dtMin; the step may be unstable"));
+  if (fr.nonFinite > 0)
+    fr.warnings.push_back(concat(fr.nonFinite, " particle(s) with a non-finite state were removed"));
+  fr.time = time_;
+  fr.energies = energies();
+  return fr;
+}
+
+Vec3d MpmSolver::domainLower() const {
+  const GridSpec& g = settings_.grid;
+  const double w = settings_.wallNodes > 0 ? settings_.wallNodes - 0.5 : 1.0;
+  return g.origin + (w * g.dx) * Vec3d{1, 1, 1};
+}
+
+Vec3d MpmSolver::domainUpper() const {
+  const GridSpec& g = settings_.grid;
+  const double w = settings_.wallNodes > 0 ? settings_.wallNodes - 0.5 : 1.0;
+  return g.nodePosition(g.dims.i - 1, g.dims.j - 1, g.dims.k - 1) - (w * g.dx) * Vec3d{1, 1, 1};
+}
+
+MpmEnergies MpmSolver::energies() const {
+  struct Sum {
+    double k = 0, g = 0, e = 0;
+    Sum& operator+=(const Sum& o) {
+      k += o.k;
+      g += o.g;
+      e += o.e;
+      return *this;
+    }
+  };
+  const Vec3d grav = settings_.gravity;
+  const Sum s = deterministicSum<Sum>(particles_.size(), [&](std::size_t p) {
+    Sum t;
+    const double m = particles_.mass[p];
+    t.k = 0.5 * m * norm2(particles_.v[p]);
+    t.g = -m * dot(grav, particles_.x[p]);
+    const std::uint32_t id = particles_.material[p];
+    if (id < materials_.size()) {
+      const MpmMaterial& mat = materials_[id];
+      t.e = particles_.volume0[p] * (mat.model == MpmModel::ViscousFluid
+                                         ? fluidEnergyDensity(particles_.J[p], mat.bulkModulus)
+                                         : neoHookeanEnergyDensity(particles_.F[p], mat.mu, mat.lambda));
+    }
+    return t;
+  });
+  MpmEnergies e;
+  e.kinetic = s.k;
+  e.gravitational = s.g;
+  e.elastic = s.e;
+  return e;
+}
+
+}  // namespace lodestone

@@ -1,0 +1,170 @@
+// MPM step benchmark: the time of one MLS-MPM substep (P2G, grid update,
+// G2P) for an elastic (Neo-Hookean) block and a viscous-fluid block, without
+// magnetism, at 1e5 and 1e6 particles (8 per cell) on a 128^3 grid of the
+// paper's spacing (dx = 7.8 mm). The block falls under gravity onto the
+// floor with a small spin, so the particles move and the grid update has
+// work to do. Prints a table and writes CSV. Not a test: timings are
+// machine-dependent.
+//
+//   lodestone-bench-mpm-step [--particles 1e5,1e6] [--steps 20] [--grid 128] [--threads N]
+//                            [--reorder N] [--age N] [--csv FILE]
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <tbb/global_control.h>
+#include <tbb/info.h>
+
+#include "lodestone/core/error.h"
+#include "lodestone/core/mpm_solver.h"
+
+using namespace lodestone;
+
+namespace {
+
+std::vector<double> parseList(const std::string& s, const char* what) {
+  std::vector<double> v;
+  std::stringstream ss(s);
+  std::string item;
+  while (std::getline(ss, item, ',')) {
+    char* end = nullptr;
+    const double x = std::strtod(item.c_str(), &end);
+    if (item.empty() || *end != '\0' || !std::isfinite(x))
+      throw InvalidArgument(concat(what, ": bad value '", item, "'"));
+    v.push_back(x);
+  }
+  return v;
+}
+
+struct Timing {
+  std::size_t particles = 0;
+  int steps = 0;
+  double dt = 0, total = 0, p2g = 0, binning = 0, grid = 0, g2p = 0;  // mean seconds per step
+};
+
+Timing run(bool fluid, double targetParticles, int steps, int nodes, int reorder, int age) {
+  MpmSettings s;
+  s.reorderInterval = reorder;
+  s.grid.dx = 7.8e-3;
+  s.grid.dims = {nodes, nodes, nodes};
+  MpmSolver solver(s);
+  const std::uint32_t m = solver.addMaterial(fluid ? viscousFluid(1.0, 1e5, 1000) : neoHookeanSolid(1e5, 0.3, 1000));
+  // A cube of n cells per side at 8 particles per cell.
+  const int n = std::max(2, int(std::lround(std::cbrt(targetParticles / 8.0))));
+  const double half = 0.5 * n * s.grid.dx;
+  const Vec3d lo = solver.domainLower(), hi = solver.domainUpper();
+  require(2 * half < hi.z - lo.z, "bench: ", targetParticles, " particles do not fit a ", nodes, "^3 grid");
+  const Vec3d centre{0.5 * (lo.x + hi.x), 0.5 * (lo.y + hi.y), hi.z - half - 2 * s.grid.dx};
+  EmitterSettings e;
+  e.angularVelocity = {0, 0, 1.0};  // rad/s
+  e.velocity = {0, 0, -1.0};        // m/s
+  solver.emit(EmitterShape::box(Pose::at(centre), {half, half, half}), m, e);
+  Timing t;
+  t.particles = solver.particles().size();
+  const double dt = solver.suggestedDt();
+  // Warm-up (first-touch allocation, caches), then `age` more substeps so the
+  // particles have moved away from their emission order.
+  for (int w = 0; w < 2 + age; ++w) solver.step(dt);
+  for (int k = 0; k < steps; ++k) {
+    const MpmStepReport r = solver.step(dt);
+    t.total += r.secondsTotal;
+    t.p2g += r.secondsP2G;
+    t.binning += r.secondsBinning;
+    t.grid += r.secondsGridUpdate;
+    t.g2p += r.secondsG2P;
+  }
+  t.steps = steps;
+  t.dt = dt;
+  t.total /= steps;
+  t.p2g /= steps;
+  t.binning /= steps;
+  t.grid /= steps;
+  t.g2p /= steps;
+  return t;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  try {
+    std::vector<double> counts{1e5, 1e6};
+    int steps = 20, nodes = 128, threads = 0, reorder = MpmSettings{}.reorderInterval, age = 0;
+    std::string csvPath = "bench_mpm_step.csv";
+    for (int a = 1; a < argc; ++a) {
+      const std::string arg = argv[a];
+      const auto next = [&]() -> std::string {
+        if (a + 1 >= argc) throw InvalidArgument(concat(arg, " needs a value"));
+        return argv[++a];
+      };
+      if (arg == "--particles")
+        counts = parseList(next(), "--particles");
+      else if (arg == "--steps")
+        steps = int(parseList(next(), "--steps").at(0));
+      else if (arg == "--grid")
+        nodes = int(parseList(next(), "--grid").at(0));
+      else if (arg == "--reorder")
+        reorder = int(parseList(next(), "--reorder").at(0));
+      else if (arg == "--age")
+        age = int(parseList(next(), "--age").at(0));
+      else if (arg == "--threads")
+        threads = int(parseList(next(), "--threads").at(0));
+      else if (arg == "--csv")
+        csvPath = next();
+      else if (arg == "--help" || arg == "-h") {
+        std::printf(
+            "lodestone-bench-mpm-step: times one MLS-MPM substep (no magnetism)\n"
+            "  --particles LIST  target particle counts (default 1e5,1e6; 8 per cell)\n"
+            "  --steps N         timed substeps per case (default 20: one reorder amortized)\n"
+            "  --grid N          nodes per axis (default 128, dx = 7.8 mm)\n"
+            "  --threads N       worker threads (default: all cores)\n"
+            "  --reorder N       MpmSettings::reorderInterval (default 20; 0: never sort particles by cell)\n"
+            "  --age N           untimed substeps before timing (default 0: particles in emission order)\n"
+            "  --csv FILE        CSV output (default bench_mpm_step.csv)\n");
+        return 0;
+      } else {
+        throw InvalidArgument(concat("unknown option '", arg, "' (see --help)"));
+      }
+    }
+    require(steps >= 1 && steps <= 100000, "--steps: ", steps, " is not in 1..100000");
+    require(nodes >= 16 && nodes <= 1024, "--grid: ", nodes, " is not in 16..1024");
+    require(reorder >= 0 && age >= 0, "--reorder and --age must be >= 0");
+    for (double c : counts) require(c >= 8 && c <= 1e9, "--particles: ", c, " is not in 8..1e9");
+
+    std::ofstream csv(csvPath);
+    require(bool(csv), "cannot write ", csvPath);
+    csv << "material,particles,grid_nodes_per_axis,steps,age_steps,reorder_interval,dt_s,ms_per_step,ms_p2g,ms_binning,"
+           "ms_grid_update,ms_g2p,ns_per_particle_step,threads\n";
+    require(threads >= 0 && threads <= 1024, "--threads: ", threads, " is not in 0..1024");
+    if (threads == 0) threads = tbb::info::default_concurrency();
+    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, std::size_t(threads));
+    std::printf(
+        "Lodestone MPM step benchmark (%d threads, %d^3 grid, dx = 7.8 mm, %d timed substeps after %d, "
+        "reorder interval %d)\n",
+        threads, nodes, steps, age + 2, reorder);
+    std::printf("%-8s %10s %10s %9s %9s %9s %9s %9s %10s\n", "material", "particles", "dt s", "ms/step", "P2G",
+                "(binning)", "grid", "G2P", "ns/p/step");
+    for (double c : counts)
+      for (int fluid = 0; fluid < 2; ++fluid) {
+        const Timing t = run(fluid != 0, c, steps, nodes, reorder, age);
+        const char* name = fluid ? "fluid" : "elastic";
+        const double ns = 1e9 * t.total / double(t.particles);
+        std::printf("%-8s %10zu %10.3g %9.2f %9.2f %9.2f %9.2f %9.2f %10.1f\n", name, t.particles, t.dt, 1e3 * t.total,
+                    1e3 * t.p2g, 1e3 * t.binning, 1e3 * t.grid, 1e3 * t.g2p, ns);
+        std::fflush(stdout);
+        csv << name << ',' << t.particles << ',' << nodes << ',' << t.steps << ',' << age << ',' << reorder << ','
+            << t.dt << ',' << 1e3 * t.total << ',' << 1e3 * t.p2g << ',' << 1e3 * t.binning << ',' << 1e3 * t.grid
+            << ',' << 1e3 * t.g2p << ',' << ns << ',' << threads << '\n';
+      }
+    std::printf("CSV written to %s\n", csvPath.c_str());
+    return 0;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "lodestone-bench-mpm-step: %s\n", e.what());
+    return 1;
+  }
+}
