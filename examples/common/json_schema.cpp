@@ -312,7 +312,15 @@ const nlohmann::json* JsonReader::find(const std::string& key) {
 
 const nlohmann::json& JsonReader::require(const std::string& key, const std::string& expected) {
   const nlohmann::json* v = find(key);
-  if (v == nullptr) fail(concat("missing required key '", key, "' (", expected, ")"));
+  if (v == nullptr) {
+    // A misspelt key is the usual cause: name the present key it resembles.
+    std::vector<std::string> present;
+    for (auto it = value_->begin(); it != value_->end(); ++it)
+      if (!known_.count(it.key())) present.push_back(it.key());
+    const std::string guess = closestMatch(key, present);
+    fail(concat("missing required key '", key, "' (", expected, ")",
+                guess.empty() ? std::string() : concat("; did you mean '", key, "' instead of '", guess, "'?")));
+  }
   return *v;
 }
 

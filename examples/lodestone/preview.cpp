@@ -1,0 +1,79 @@
+#include "preview.h"
+
+#include <cmath>
+#include <vector>
+
+#include "lodestone/core/cuboid_magnet.h"
+#include "lodestone/core/cylinder_magnet.h"
+#include "lodestone/core/sphere_magnet.h"
+#include "particle_render.h"
+
+namespace lodestone::examples {
+
+namespace {
+const Rgb kMagneticColours[] = {{38, 40, 52}, {70, 48, 80}, {30, 60, 70}};
+const Rgb kPlainColours[] = {{90, 150, 210}, {220, 160, 70}, {110, 180, 120}, {200, 110, 140}};
+
+Primitive magnetPrimitive(const MagnetSource& m) {
+  const Rgb red{196, 52, 46};
+  if (const auto* s = dynamic_cast<const SphereMagnet*>(&m)) return Primitive::sphere(m.pose(), s->radius(), red);
+  if (const auto* c = dynamic_cast<const CylinderMagnet*>(&m))
+    return Primitive::cylinder(m.pose(), c->radius(), c->halfLength(), red);
+  const auto& b = dynamic_cast<const CuboidMagnet&>(m);
+  return Primitive::box(m.pose(), b.halfSize(), red);
+}
+}  // namespace
+
+RgbImage renderPreview(const Scene& scene, const MpmSolver& solver) {
+  const MpmParticles& p = solver.particles();
+  const GridSpec& g = scene.settings.grid;
+  std::vector<Rgb> colours(p.size());
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    const std::uint32_t m = p.material[i];
+    colours[i] = solver.materials()[m].isMagnetic() ? kMagneticColours[m % 3] : kPlainColours[m % 4];
+  }
+  std::vector<Primitive> shapes;
+  for (std::size_t i = 0; i < solver.magnetCount(); ++i) shapes.push_back(magnetPrimitive(solver.magnet(i)));
+  for (std::size_t i = 0; i < solver.colliderCount(); ++i) {
+    const MpmCollider& c = solver.collider(i);
+    const ColliderShape& s = c.shape();
+    const Pose pose = c.motion().poseAt(solver.time());
+    const Rgb grey{225, 225, 225};
+    if (s.kind == ColliderShapeKind::Box)
+      shapes.push_back(Primitive::box(pose, s.halfSize, grey, Primitive::Style::Wireframe));
+    else if (s.kind == ColliderShapeKind::Sphere)
+      shapes.push_back(Primitive::sphere(pose, s.radius, grey, Primitive::Style::Wireframe));
+    else if (s.kind == ColliderShapeKind::Cylinder)
+      shapes.push_back(Primitive::cylinder(pose, s.radius, s.halfLength, grey, Primitive::Style::Wireframe));
+  }
+  // The domain as a wireframe box.
+  const Vec3d lo = g.origin, hi = g.maxCorner();
+  shapes.push_back(Primitive::box(Pose::at(0.5 * (lo + hi)), 0.5 * (hi - lo), Rgb{160, 165, 175},
+                                  Primitive::Style::Wireframe));
+  Camera cam;
+  if (scene.output.autoCamera) {
+    Bounds3 box;
+    box.add(lo);
+    box.add(hi);
+    cam = frameCamera(box, {0.55, 1.0, -0.45}, {0, 0, 1}, scene.output.fovDegrees, scene.output.width,
+                      scene.output.height, 1.02);
+  } else {
+    cam.position = scene.output.cameraPosition;
+    cam.lookAt = scene.output.cameraLookAt;
+    cam.verticalFovDegrees = scene.output.fovDegrees;
+    cam.width = scene.output.width;
+    cam.height = scene.output.height;
+  }
+  ParticleView view;
+  view.positions = p.x.data();
+  view.count = p.size();
+  view.colours = colours.data();
+  // Sphere impostors about the particle spacing (dx / ppc^(1/3) for 8 ppc).
+  view.radius = 0.5 * g.dx * 0.62;
+  RenderSettings rs;
+  rs.groundHeight = lo.z;
+  rs.gridSpacing = 8 * g.dx;
+  return renderScene(cam, view, shapes, rs);
+}
+
+}  // namespace lodestone::examples

@@ -1,0 +1,17 @@
+#pragma once
+// Per-frame preview of a simulation state: particles shaded by material
+// (magnetic materials dark, like ferrofluid), magnets drawn as solid shapes
+// (red north half is not modelled: one colour), colliders as wireframes, over
+// a ground grid at the bottom of the domain.
+#include <string>
+
+#include "colormap.h"
+#include "lodestone/core/mpm_solver.h"
+#include "scene.h"
+
+namespace lodestone::examples {
+
+/// Renders the solver's current state as the scene's output settings ask.
+RgbImage renderPreview(const Scene& scene, const MpmSolver& solver);
+
+}  // namespace lodestone::examples

@@ -1,0 +1,115 @@
+// Scene files: every example scene validates and builds; malformed scenes
+// are rejected with the path of the bad entry and what was expected.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <string>
+
+#include "lodestone/core/error.h"
+#include "scene.h"
+
+using namespace lodestone;
+using namespace lodestone::examples;
+
+namespace {
+
+const char* kMinimal = R"({
+  "name": "minimal",
+  "domain": { "min": [0, 0, 0], "max": [0.2, 0.2, 0.2], "dx": 0.02 },
+  "time": { "frames": 2, "fps": 100, "dt": 1e-4 },
+  "materials": [ { "name": "jelly", "model": "solid", "density": 1000, "youngs_modulus": 1e4 } ],
+  "bodies": [ { "material": "jelly", "shape": "box", "center": [0.1, 0.1, 0.1], "half_size": [0.03, 0.03, 0.03] } ]
+})";
+
+std::string errorOf(const std::string& text) {
+  try {
+    parseScene(text, "test.json");
+  } catch (const InvalidArgument& e) {
+    return e.what();
+  }
+  return "";
+}
+
+std::string replaced(std::string s, const std::string& from, const std::string& to) {
+  const auto at = s.find(from);
+  EXPECT_NE(at, std::string::npos) << from;
+  return s.replace(at, from.size(), to);
+}
+
+}  // namespace
+
+TEST(Scene, EveryExampleSceneValidatesAndBuilds) {
+  int count = 0;
+  for (const auto& entry : std::filesystem::directory_iterator(LODESTONE_SCENES_DIR)) {
+    if (entry.path().extension() != ".json") continue;
+    ++count;
+    SCOPED_TRACE(entry.path().string());
+    const Scene scene = loadScene(entry.path().string());
+    EXPECT_FALSE(scene.description.empty());
+    EXPECT_GT(scene.fullDx, 0.0) << "every paper scene has a full-resolution variant";
+    EXPECT_LT(scene.fullDx, scene.settings.grid.dx);
+    const auto solver = buildSolver(scene);
+    EXPECT_GT(solver->particles().size(), 1000u);
+    bool magnetic = false;
+    for (const auto& m : solver->materials()) magnetic = magnetic || m.isMagnetic();
+    EXPECT_TRUE(magnetic);
+  }
+  EXPECT_GE(count, 8);
+}
+
+TEST(Scene, MinimalSceneReadsUnitsAndDefaults) {
+  const Scene s = parseScene(kMinimal, "minimal.json");
+  EXPECT_EQ(s.settings.grid.dims.i, 11);
+  EXPECT_DOUBLE_EQ(s.settings.grid.dx, 0.02);
+  EXPECT_DOUBLE_EQ(s.settings.fixedDt, 1e-4);
+  EXPECT_EQ(s.frames, 2);
+  EXPECT_DOUBLE_EQ(s.frameDuration(), 0.01);
+  EXPECT_EQ(s.bodies.size(), 1u);
+  EXPECT_EQ(s.bodies[0].emit.particlesPerCell, 8);
+  EXPECT_DOUBLE_EQ(s.settings.gravity.z, -9.81);
+  SceneOptions o;
+  o.dx = 0.01;
+  EXPECT_EQ(parseScene(kMinimal, "minimal.json", o).settings.grid.dims.i, 21);
+  o = {};
+  o.full = true;
+  EXPECT_EQ(errorOf(kMinimal), "");
+  try {
+    parseScene(kMinimal, "minimal.json", o);
+    FAIL() << "--full without full_dx was accepted";
+  } catch (const InvalidArgument& e) {
+    EXPECT_NE(std::string(e.what()).find("full_dx"), std::string::npos) << e.what();
+  }
+}
+
+TEST(Scene, MalformedScenesNameThePathAndTheExpectation) {
+  struct Case {
+    std::string from, to, expected;
+  };
+  const Case cases[] = {
+      {"\"density\": 1000", "\"densty\": 1000", "did you mean 'density'"},
+      {"\"density\": 1000", "\"density\": -5", "materials[0].density"},
+      {"\"dx\": 0.02", "\"dx\": \"fine\"", "domain.dx"},
+      {"\"frames\": 2", "\"frames\": 2.5", "time.frames"},
+      {"\"material\": \"jelly\"", "\"material\": \"jely\"", "bodies[0].material"},
+      {"\"shape\": \"box\"", "\"shape\": \"cone\"", "bodies[0].shape"},
+      {"\"max\": [0.2, 0.2, 0.2]", "\"max\": [0.2, -0.2, 0.2]", "max must exceed min"},
+      {"\"dx\": 0.02", "\"dx\": 0.00001", "too large"},
+      {"\"half_size\": [0.03, 0.03, 0.03]", "\"half_size\": [0.03, 0.03]", "bodies[0].half_size"},
+      {"\"name\": \"minimal\",", "", "missing required key 'name'"},
+      {"\"fps\": 100", "\"fps\": 100,", "test.json:"},  // syntax error: line and column
+  };
+  for (const Case& c : cases) {
+    const std::string err = errorOf(replaced(kMinimal, c.from, c.to));
+    EXPECT_NE(err.find(c.expected), std::string::npos) << c.to << " -> " << err;
+    EXPECT_NE(err.find("test.json"), std::string::npos) << err;
+  }
+}
+
+TEST(Scene, MissingFileIsNamed) {
+  try {
+    loadScene("/nonexistent/scene.json");
+    FAIL();
+  } catch (const InvalidArgument& e) {
+    EXPECT_NE(std::string(e.what()).find("/nonexistent/scene.json"), std::string::npos) << e.what();
+  }
+}
