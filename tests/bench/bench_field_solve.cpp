@@ -17,27 +17,16 @@
 
 #include <tbb/info.h>
 
+#include "bench_args.h"
 #include "lodestone/core/error.h"
 #include "lodestone/core/magnetic_stage.h"
 #include "lodestone/core/material.h"
 #include "lodestone/core/uniform_field.h"
 
 using namespace lodestone;
+using lodestone::bench::parseList;
 
 namespace {
-
-std::vector<double> parseList(const std::string& s, const char* what) {
-  std::vector<double> v;
-  std::stringstream ss(s);
-  std::string item;
-  while (std::getline(ss, item, ',')) {
-    char* end = nullptr;
-    const double x = std::strtod(item.c_str(), &end);
-    if (item.empty() || *end != '\0' || !std::isfinite(x)) throw InvalidArgument(concat(what, ": bad value '", item, "'"));
-    v.push_back(x);
-  }
-  return v;
-}
 
 // Density of a sphere (radius N/4 cells) or a cube (edge N/2 cells) centred
 // in an N^3 grid: n0 times the volume fraction of each node's dual cell.

@@ -21,26 +21,14 @@
 #include <tbb/global_control.h>
 #include <tbb/info.h>
 
+#include "bench_args.h"
 #include "lodestone/core/error.h"
 #include "lodestone/core/mpm_solver.h"
 
 using namespace lodestone;
+using lodestone::bench::parseList;
 
 namespace {
-
-std::vector<double> parseList(const std::string& s, const char* what) {
-  std::vector<double> v;
-  std::stringstream ss(s);
-  std::string item;
-  while (std::getline(ss, item, ',')) {
-    char* end = nullptr;
-    const double x = std::strtod(item.c_str(), &end);
-    if (item.empty() || *end != '\0' || !std::isfinite(x))
-      throw InvalidArgument(concat(what, ": bad value '", item, "'"));
-    v.push_back(x);
-  }
-  return v;
-}
 
 struct Timing {
   std::size_t particles = 0;
