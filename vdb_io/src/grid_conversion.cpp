@@ -1,0 +1,202 @@
+// core <-> OpenVDB grid conversion and typed grid reading.
+#include "lodestone/vdb_io/grid_conversion.h"
+
+#include <exception>
+#include <filesystem>
+#include <fstream>
+#include <mutex>
+
+#include <openvdb/io/Stream.h>
+#include <openvdb/tools/Interpolation.h>
+#include <openvdb/tools/Prune.h>
+
+#include "lodestone/core/error.h"
+
+namespace lodestone {
+
+void initializeVdb() {
+  static std::once_flag once;
+  std::call_once(once, [] { openvdb::initialize(); });
+}
+
+openvdb::math::Transform::Ptr nodeCentredTransform(const GridSpec& spec) {
+  spec.validate("VDB transform grid");
+  auto xf = openvdb::math::Transform::createLinearTransform(spec.dx);
+  xf->postTranslate(openvdb::Vec3d(spec.origin.x, spec.origin.y, spec.origin.z));
+  return xf;
+}
+
+namespace {
+
+double magnitude(double v) { return std::abs(v); }
+double magnitude(const Vec3d& v) { return std::sqrt(v.x * v.x + v.y * v.y + v.z * v.z); }
+
+template <typename VdbValue>
+VdbValue toVdbValue(double v) { return static_cast<VdbValue>(v); }
+template <typename VdbValue>
+VdbValue toVdbValue(const Vec3d& v) {
+  using C = typename VdbValue::value_type;
+  return VdbValue(static_cast<C>(v.x), static_cast<C>(v.y), static_cast<C>(v.z));
+}
+
+template <typename GridT, typename CoreT>
+typename GridT::Ptr toVdb(GridView<const CoreT> values, const std::string& name,
+                          const VdbConversionOptions& options) {
+  initializeVdb();
+  values.spec.validate(name.c_str());
+  require(values.data != nullptr, "VDB grid '", name, "': no data");
+  require(std::isfinite(options.tolerance) && options.tolerance >= 0, "VDB grid '", name,
+          "': tolerance must be a finite value >= 0, got ", options.tolerance);
+  using ValueT = typename GridT::ValueType;
+  auto grid = GridT::create(openvdb::zeroVal<ValueT>());
+  grid->setName(name);
+  grid->setTransform(options.transform ? options.transform : nodeCentredTransform(values.spec));
+  auto acc = grid->getAccessor();
+  const GridSpec& s = values.spec;
+  for (int k = 0; k < s.dims.k; ++k)
+    for (int j = 0; j < s.dims.j; ++j) {
+      const CoreT* row = values.data + s.index(0, j, k);
+      for (int i = 0; i < s.dims.i; ++i) {
+        const CoreT& v = row[i];
+        if (!(magnitude(v) <= options.tolerance)) acc.setValueOn(openvdb::Coord(i, j, k), toVdbValue<ValueT>(v));
+      }
+    }
+  openvdb::tools::prune(grid->tree());
+  return grid;
+}
+
+template <typename GridT>
+typename GridT::Ptr withVecType(typename GridT::Ptr grid, openvdb::VecType type) {
+  grid->setVectorType(type);
+  grid->setIsInWorldSpace(true);
+  return grid;
+}
+
+double toCore(float v) { return double(v); }
+double toCore(double v) { return v; }
+Vec3d toCore(const openvdb::Vec3f& v) { return {double(v[0]), double(v[1]), double(v[2])}; }
+Vec3d toCore(const openvdb::Vec3d& v) { return {v[0], v[1], v[2]}; }
+
+void requireUniformLinear(const openvdb::GridBase& grid) {
+  const auto& xf = grid.constTransform();
+  require(xf.isLinear() && xf.hasUniformScale(), "VDB grid '", grid.getName(),
+          "': transform must be a uniform-scale linear map, got ", xf.mapType(),
+          xf.isLinear() ? " with non-uniform scale" : " (not linear)");
+}
+
+template <typename CoreT, typename GridT>
+DenseGrid<CoreT> toDense(const GridT& grid, const GridSpec& spec) {
+  initializeVdb();
+  spec.validate(("target grid of VDB grid '" + grid.getName() + "'").c_str());
+  requireUniformLinear(grid);
+  DenseGrid<CoreT> out(spec);
+  if (transformMatches(grid.constTransform(), spec)) {
+    auto acc = grid.getConstAccessor();
+    for (int k = 0; k < spec.dims.k; ++k)
+      for (int j = 0; j < spec.dims.j; ++j)
+        for (int i = 0; i < spec.dims.i; ++i) out(i, j, k) = toCore(acc.getValue(openvdb::Coord(i, j, k)));
+  } else {
+    openvdb::tools::GridSampler<GridT, openvdb::tools::BoxSampler> sampler(grid);
+    for (int k = 0; k < spec.dims.k; ++k)
+      for (int j = 0; j < spec.dims.j; ++j)
+        for (int i = 0; i < spec.dims.i; ++i) {
+          const Vec3d x = spec.nodePosition(i, j, k);
+          out(i, j, k) = toCore(sampler.wsSample(openvdb::Vec3R(x.x, x.y, x.z)));
+        }
+  }
+  return out;
+}
+
+template <typename Accept>
+openvdb::GridBase::Ptr readChecked(const std::string& path, const std::string& gridName, const char* wanted,
+                                   Accept accept) {
+  initializeVdb();
+  const std::string where = "VDB file '" + path + "', grid '" + gridName + "'";
+  std::error_code ec;
+  require(std::filesystem::is_regular_file(path, ec), where, ": file not found or not a regular file");
+  openvdb::GridBase::Ptr grid;
+  try {
+    // io::Stream over an ifstream that throws on any short read: io::File
+    // silently accepts some truncated files, and its delayed loading maps the
+    // file, so a later access to a truncated page would crash.
+    std::ifstream in;
+    in.exceptions(std::ios::badbit | std::ios::failbit);
+    in.open(path, std::ios::in | std::ios::binary);
+    openvdb::io::Stream stream(in, /*delayLoad=*/false);
+    const auto grids = stream.getGrids();
+    std::string names;
+    for (const auto& g : *grids) {
+      if (g && g->getName() == gridName && !grid) grid = g;
+      if (g) names += (names.empty() ? "" : ", ") + g->getName();
+    }
+    if (!grid) throw InvalidArgument(concat(where, ": no such grid; the file holds [", names, "]"));
+  } catch (const InvalidArgument&) {
+    throw;
+  } catch (const std::exception& e) {
+    throw InvalidArgument(concat(where, ": cannot read (corrupt, truncated or not a VDB file): ", e.what()));
+  }
+  require(grid != nullptr, where, ": cannot read");
+  require(accept(*grid), where, ": expected ", wanted, ", found ", grid->type());
+  return grid;
+}
+
+}  // namespace
+
+openvdb::FloatGrid::Ptr toVdbFloatGrid(GridView<const double> values, const std::string& name,
+                                       const VdbConversionOptions& options) {
+  return toVdb<openvdb::FloatGrid>(values, name, options);
+}
+openvdb::DoubleGrid::Ptr toVdbDoubleGrid(GridView<const double> values, const std::string& name,
+                                         const VdbConversionOptions& options) {
+  return toVdb<openvdb::DoubleGrid>(values, name, options);
+}
+openvdb::Vec3fGrid::Ptr toVdbVec3fGrid(GridView<const Vec3d> values, const std::string& name,
+                                       const VdbConversionOptions& options) {
+  return withVecType<openvdb::Vec3fGrid>(toVdb<openvdb::Vec3fGrid>(values, name, options), options.vecType);
+}
+openvdb::Vec3dGrid::Ptr toVdbVec3dGrid(GridView<const Vec3d> values, const std::string& name,
+                                       const VdbConversionOptions& options) {
+  return withVecType<openvdb::Vec3dGrid>(toVdb<openvdb::Vec3dGrid>(values, name, options), options.vecType);
+}
+
+bool transformMatches(const openvdb::math::Transform& xf, const GridSpec& spec) {
+  const auto map = xf.baseMap();
+  const bool axisAligned = map->isType<openvdb::math::UniformScaleTranslateMap>() ||
+                           map->isType<openvdb::math::UniformScaleMap>() ||
+                           map->isType<openvdb::math::ScaleTranslateMap>() ||
+                           map->isType<openvdb::math::ScaleMap>() ||
+                           map->isType<openvdb::math::TranslationMap>();
+  if (!axisAligned || !xf.hasUniformScale()) return false;
+  const openvdb::Vec3d vs = xf.voxelSize();
+  const openvdb::Vec3d o = xf.indexToWorld(openvdb::Vec3d(0, 0, 0));
+  const openvdb::Vec3d one = xf.indexToWorld(openvdb::Vec3d(1, 1, 1));
+  const Vec3d n1 = spec.nodePosition(1, 1, 1);
+  return vs[0] == spec.dx && vs[1] == spec.dx && vs[2] == spec.dx && o[0] == spec.origin.x &&
+         o[1] == spec.origin.y && o[2] == spec.origin.z && one[0] == n1.x && one[1] == n1.y && one[2] == n1.z;
+}
+
+DenseGrid<double> toDenseGrid(const openvdb::FloatGrid& grid, const GridSpec& spec) {
+  return toDense<double>(grid, spec);
+}
+DenseGrid<double> toDenseGrid(const openvdb::DoubleGrid& grid, const GridSpec& spec) {
+  return toDense<double>(grid, spec);
+}
+DenseGrid<Vec3d> toDenseGrid(const openvdb::Vec3fGrid& grid, const GridSpec& spec) {
+  return toDense<Vec3d>(grid, spec);
+}
+DenseGrid<Vec3d> toDenseGrid(const openvdb::Vec3dGrid& grid, const GridSpec& spec) {
+  return toDense<Vec3d>(grid, spec);
+}
+
+openvdb::GridBase::Ptr readVdbScalarGrid(const std::string& path, const std::string& gridName) {
+  return readChecked(path, gridName, "a FloatGrid or DoubleGrid", [](const openvdb::GridBase& g) {
+    return g.isType<openvdb::FloatGrid>() || g.isType<openvdb::DoubleGrid>();
+  });
+}
+openvdb::GridBase::Ptr readVdbVec3Grid(const std::string& path, const std::string& gridName) {
+  return readChecked(path, gridName, "a Vec3fGrid or Vec3dGrid", [](const openvdb::GridBase& g) {
+    return g.isType<openvdb::Vec3fGrid>() || g.isType<openvdb::Vec3dGrid>();
+  });
+}
+
+}  // namespace lodestone
