@@ -294,6 +294,16 @@ Scene sceneFromJson(const nlohmann::json& doc, const std::string& sourceName, co
     scene.output.width = o.integer("width", 16, 4096, 640);
     scene.output.height = o.integer("height", 16, 4096, 480);
     scene.output.fovDegrees = o.number("fov", "degrees", Range::closed(5, 120), 35.0);
+    if (o.has("vdb")) {
+      const nlohmann::json& list = o.raw("vdb");
+      if (!list.is_array()) o.failAt("vdb", "expected an array of grid names (n, phi, H, M, B, force)");
+      for (std::size_t k = 0; k < list.size(); ++k) {
+        const std::vector<std::string> allowed{"n", "phi", "H", "M", "B", "force"};
+        if (!list[k].is_string() || std::find(allowed.begin(), allowed.end(), list[k].get<std::string>()) == allowed.end())
+          o.failAt("vdb", concat("element ", k, ": expected one of n, phi, H, M, B, force, found ", list[k].dump()));
+        scene.output.vdbFields.push_back(list[k].get<std::string>());
+      }
+    }
     if (o.has("camera")) {
       JsonReader cam = o.object("camera");
       scene.output.autoCamera = false;

@@ -32,6 +32,7 @@ struct SceneMagnet {
 struct SceneOutput {
   bool ply = true;           ///< per-frame particle files
   bool png = true;           ///< per-frame preview renders
+  std::vector<std::string> vdbFields;  ///< grids of the per-frame field file (n, phi, H, M, B, force); empty = none
   int width = 640, height = 480;  ///< preview size, pixels
   bool autoCamera = true;
   Vec3d cameraPosition, cameraLookAt;  ///< m (when not automatic)

@@ -97,6 +97,7 @@ TEST(Scene, MalformedScenesNameThePathAndTheExpectation) {
       {"\"half_size\": [0.03, 0.03, 0.03]", "\"half_size\": [0.03, 0.03]", "bodies[0].half_size"},
       {"\"name\": \"minimal\",", "", "missing required key 'name'"},
       {"\"fps\": 100", "\"fps\": 100,", "test.json:"},  // syntax error: line and column
+      {"\"bodies\"", "\"output\": { \"vdb\": [\"H\", \"X\"] }, \"bodies\"", "output.vdb"},
   };
   for (const Case& c : cases) {
     const std::string err = errorOf(replaced(kMinimal, c.from, c.to));
