@@ -20,6 +20,7 @@
 #include "lodestone/core/error.h"
 #if LODESTONE_HAVE_VDB
 #include "lodestone/vdb_io/field_file.h"
+#include "lodestone/vdb_io/point_file.h"
 #endif
 #include "ply_writer.h"
 #include "png_writer.h"
@@ -53,6 +54,7 @@ const char* kRunUsage =
     "  frame_NNNN.ply   particles (x y z in m, vx vy vz in m/s, n_p, material, J)\n"
     "  frame_NNNN.png   a preview render (magnetic materials dark, magnets red)\n"
     "  fields_NNNN.vdb  the grids listed in the scene's output.vdb (n, phi, H, M, B, force)\n"
+    "  particles_NNNN.vdb  the particles as OpenVDB points (when output.vdb_points is true)\n"
     "  stats.json       per-frame time split by stage, field-solve reports, particle\n"
     "                   count and energies (rewritten after every frame)\n"
     "\n"
@@ -213,6 +215,19 @@ void writeFields(const std::string& path, const Scene& scene, const MagneticForc
 #endif
 }
 
+void writeParticles(const std::string& path, const MpmSolver& solver, int frame) {
+#if LODESTONE_HAVE_VDB
+  PointFileOptions o;
+  o.voxelSize = solver.settings().grid.dx;
+  o.frame = frame;
+  o.time = solver.time();
+  writeParticlesVdb(path, solver.particles(), o);
+#else
+  (void)solver, (void)frame;
+  throw Error(concat("cannot write ", path, ": this lodestone was built without OpenVDB"));
+#endif
+}
+
 void writeFrameFiles(const Args& a, const Scene& scene, const MpmSolver& solver, int frame) {
   char name[64];
   const MpmParticles& p = solver.particles();
@@ -231,6 +246,10 @@ void writeFrameFiles(const Args& a, const Scene& scene, const MpmSolver& solver,
   if (!scene.output.vdbFields.empty() && solver.magneticStage()) {
     std::snprintf(name, sizeof name, "fields_%04d.vdb", frame);
     writeFields((std::filesystem::path(a.out) / name).string(), scene, *solver.magneticStage(), frame, solver.time());
+  }
+  if (scene.output.vdbPoints) {
+    std::snprintf(name, sizeof name, "particles_%04d.vdb", frame);
+    writeParticles((std::filesystem::path(a.out) / name).string(), solver, frame);
   }
   if (a.png && scene.output.png) {
     std::snprintf(name, sizeof name, "frame_%04d.png", frame);

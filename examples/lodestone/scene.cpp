@@ -304,6 +304,7 @@ Scene sceneFromJson(const nlohmann::json& doc, const std::string& sourceName, co
         scene.output.vdbFields.push_back(list[k].get<std::string>());
       }
     }
+    scene.output.vdbPoints = o.boolean("vdb_points", false);
     if (o.has("camera")) {
       JsonReader cam = o.object("camera");
       scene.output.autoCamera = false;

@@ -33,6 +33,7 @@ struct SceneOutput {
   bool ply = true;           ///< per-frame particle files
   bool png = true;           ///< per-frame preview renders
   std::vector<std::string> vdbFields;  ///< grids of the per-frame field file (n, phi, H, M, B, force); empty = none
+  bool vdbPoints = false;    ///< per-frame particles_NNNN.vdb (OpenVDB PointDataGrid)
   int width = 640, height = 480;  ///< preview size, pixels
   bool autoCamera = true;
   Vec3d cameraPosition, cameraLookAt;  ///< m (when not automatic)

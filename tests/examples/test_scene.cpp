@@ -98,12 +98,20 @@ TEST(Scene, MalformedScenesNameThePathAndTheExpectation) {
       {"\"name\": \"minimal\",", "", "missing required key 'name'"},
       {"\"fps\": 100", "\"fps\": 100,", "test.json:"},  // syntax error: line and column
       {"\"bodies\"", "\"output\": { \"vdb\": [\"H\", \"X\"] }, \"bodies\"", "output.vdb"},
+      {"\"bodies\"", "\"output\": { \"vdb_points\": 1 }, \"bodies\"", "output.vdb_points"},
   };
   for (const Case& c : cases) {
     const std::string err = errorOf(replaced(kMinimal, c.from, c.to));
     EXPECT_NE(err.find(c.expected), std::string::npos) << c.to << " -> " << err;
     EXPECT_NE(err.find("test.json"), std::string::npos) << err;
   }
+}
+
+TEST(Scene, VdbPointsOutputDefaultsToFalse) {
+  EXPECT_FALSE(parseScene(kMinimal, "test.json").output.vdbPoints);
+  const Scene on =
+      parseScene(replaced(kMinimal, "\"bodies\"", "\"output\": { \"vdb_points\": true }, \"bodies\""), "test.json");
+  EXPECT_TRUE(on.output.vdbPoints);
 }
 
 TEST(Scene, MissingFileIsNamed) {
