@@ -1,15 +1,14 @@
 // .vdb files of the magnetic stage's fields, and a FieldSource read from one.
 #include "lodestone/vdb_io/field_file.h"
 
-#include <atomic>
 #include <cstdio>
 #include <exception>
 #include <filesystem>
-#include <random>
 
 #include <openvdb/openvdb.h>
 
 #include "lodestone/core/error.h"
+#include "vdb_atomic_write.h"
 #include "lodestone/vdb_io/grid_conversion.h"
 
 namespace lodestone {
@@ -41,11 +40,6 @@ openvdb::GridBase::Ptr vectorGrid(GridView<const Vec3d> v, const char* name, dou
   return toVdbVec3fGrid(v, name, o);
 }
 
-std::string temporaryName(const std::filesystem::path& target) {
-  static std::atomic<unsigned> counter{0};
-  std::random_device rd;
-  return target.string() + ".tmp-" + std::to_string(rd()) + "-" + std::to_string(counter++);
-}
 
 }  // namespace
 
@@ -98,25 +92,7 @@ void writeFieldsVdb(const std::string& path, const MagneticForceStage& stage, co
                                                                                 : metadata.lawDescription));
   meta.insertMeta("solver_report", openvdb::StringMetadata(metadata.solverSummary));
 
-  const std::filesystem::path target(path);
-  const std::string tmp = temporaryName(target);
-  try {
-    openvdb::io::File file(tmp);
-    file.write(grids, meta);
-    file.close();
-  } catch (const std::exception& e) {
-    std::error_code ec;
-    std::filesystem::remove(tmp, ec);
-    throw InvalidArgument(concat("VDB file '", path, "': cannot write: ", e.what()));
-  }
-  std::error_code ec;
-  std::filesystem::rename(tmp, target, ec);
-  if (ec) {
-    std::error_code ec2;
-    std::filesystem::remove(tmp, ec2);
-    throw InvalidArgument(concat("VDB file '", path, "': cannot rename the temporary file into place: ",
-                                 ec.message()));
-  }
+  detail::writeVdbAtomically(path, grids, meta);
 }
 
 DenseGrid<double> readScalarField(const std::string& path, const std::string& gridName, const GridSpec& spec) {

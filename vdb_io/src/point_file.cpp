@@ -1,18 +1,17 @@
 // .vdb files of MPM material points (OpenVDB PointDataGrid).
 #include "lodestone/vdb_io/point_file.h"
 
-#include <atomic>
 #include <cmath>
 #include <exception>
 #include <filesystem>
 #include <memory>
-#include <random>
 
 #include <openvdb/openvdb.h>
 #include <openvdb/points/PointConversion.h>
 #include <openvdb/points/PointDataGrid.h>
 
 #include "lodestone/core/error.h"
+#include "vdb_atomic_write.h"
 #include "lodestone/vdb_io/grid_conversion.h"
 
 namespace lodestone {
@@ -23,11 +22,6 @@ namespace vp = openvdb::points;
 
 constexpr const char* kGridName = "points";  // Houdini's name (VDB_CONVENTIONS.md)
 
-std::string temporaryName(const std::filesystem::path& target) {
-  static std::atomic<unsigned> counter{0};
-  std::random_device rd;
-  return target.string() + ".tmp-" + std::to_string(rd()) + "-" + std::to_string(counter++);
-}
 
 // Appends attribute `name` (value type T, codec Codec) and fills it from
 // `values` (one per point, in the order of the positions).
@@ -121,25 +115,7 @@ void writeParticlesVdb(const std::string& path, const MpmParticles& p, const Poi
   meta.insertMeta("time_s", openvdb::DoubleMetadata(options.time));
   meta.insertMeta("voxel_size_m", openvdb::DoubleMetadata(options.voxelSize));
 
-  const std::filesystem::path target(path);
-  const std::string tmp = temporaryName(target);
-  try {
-    openvdb::io::File file(tmp);
-    file.write(grids, meta);
-    file.close();
-  } catch (const std::exception& e) {
-    std::error_code ec;
-    std::filesystem::remove(tmp, ec);
-    throw InvalidArgument(concat("VDB file '", path, "': cannot write: ", e.what()));
-  }
-  std::error_code ec;
-  std::filesystem::rename(tmp, target, ec);
-  if (ec) {
-    std::error_code ec2;
-    std::filesystem::remove(tmp, ec2);
-    throw InvalidArgument(concat("VDB file '", path, "': cannot rename the temporary file into place: ",
-                                 ec.message()));
-  }
+  detail::writeVdbAtomically(path, grids, meta);
 }
 
 ParticleVdbData readParticlesVdb(const std::string& path) {
