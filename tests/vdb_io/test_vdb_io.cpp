@@ -26,6 +26,27 @@ namespace {
 
 namespace fs = std::filesystem;
 
+// A Python interpreter that can import Debian's pyopenvdb, or "" when none
+// can. The binding is built for /usr/bin/python3, which may not be the first
+// python3 on PATH (pyenv, venvs).
+std::string pythonWithOpenVdb() {
+  for (const char* candidate : {"python3", "/usr/bin/python3"})
+    if (std::system((std::string(candidate) + " -c 'import pyopenvdb' > /dev/null 2>&1").c_str()) == 0)
+      return candidate;
+  return "";
+}
+
+// Runs `script` on `file` and returns what it printed (plus the exit status
+// when it failed).
+std::string runPythonCheck(const std::string& python, const std::string& script, const std::string& file) {
+  const std::string outFile = script + ".out";
+  const int rc = std::system((python + " '" + script + "' '" + file + "' > '" + outFile + "' 2>&1").c_str());
+  std::ifstream in(outFile);
+  std::string out((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  if (rc != 0) out += "\n(exit status " + std::to_string(rc) + ")";
+  return out;
+}
+
 fs::path tempDir() {
   const fs::path d = fs::path(::testing::TempDir()) /
                      ("lodestone_vdb_" + std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
@@ -339,14 +360,7 @@ TEST(VdbFieldSource, LinearFieldInsideBackgroundOutside) {
 }
 
 TEST(VdbFieldFile, PythonOpenVdbReadsTheFile) {
-  // Debian's binding is built for /usr/bin/python3, which may not be the
-  // first python3 on PATH (pyenv, venvs).
-  std::string python;
-  for (const char* candidate : {"python3", "/usr/bin/python3"})
-    if (std::system((std::string(candidate) + " -c 'import pyopenvdb' > /dev/null 2>&1").c_str()) == 0) {
-      python = candidate;
-      break;
-    }
+  const std::string python = pythonWithOpenVdb();
   if (python.empty())
     GTEST_SKIP() << "neither python3 nor /usr/bin/python3 can import pyopenvdb (Debian package "
                     "python3-openvdb): skipping the Python interoperability check";
@@ -370,10 +384,8 @@ TEST(VdbFieldFile, PythonOpenVdbReadsTheFile) {
           "print('value', repr(n.getConstAccessor().getValue(("
        << ci << "," << cj << "," << ck << "))))\n";
   }
-  const std::string outFile = (dir / "out.txt").string();
-  ASSERT_EQ(std::system((python + " '" + script + "' '" + file + "' > '" + outFile + "' 2>&1").c_str()), 0);
-  std::ifstream in(outFile);
-  const std::string out((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::string out = runPythonCheck(python, script, file);
+  ASSERT_EQ(out.find("(exit status"), std::string::npos) << out;
   EXPECT_NE(out.find("names B H M force n phi"), std::string::npos) << out;
   EXPECT_NE(out.find("frame 3"), std::string::npos) << out;
   EXPECT_NE(out.find("time_s 0.5"), std::string::npos) << out;
@@ -437,15 +449,6 @@ MpmParticles randomParticles(std::size_t n, unsigned seed) {
   // Large ids (beyond 32 bits) survive.
   for (std::size_t i = 0; i < n; i += 7) p.id[i] = (std::uint64_t(1) << 40) + i;
   return p;
-}
-
-std::string runPythonCheck(const std::string& python, const std::string& script, const std::string& file) {
-  const std::string outFile = script + ".out";
-  const int rc = std::system((python + " '" + script + "' '" + file + "' > '" + outFile + "' 2>&1").c_str());
-  std::ifstream in(outFile);
-  std::string out((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  if (rc != 0) out += "\n(exit status " + std::to_string(rc) + ")";
-  return out;
 }
 
 TEST(VdbPointFile, ParticlesRoundTrip) {
@@ -548,12 +551,7 @@ TEST(VdbPointFile, BadFilesThrowNamingTheFile) {
 }
 
 TEST(VdbPointFile, PythonOpenVdbSeesThePointGrid) {
-  std::string python;
-  for (const char* candidate : {"python3", "/usr/bin/python3"})
-    if (std::system((std::string(candidate) + " -c 'import pyopenvdb' > /dev/null 2>&1").c_str()) == 0) {
-      python = candidate;
-      break;
-    }
+  const std::string python = pythonWithOpenVdb();
   if (python.empty())
     GTEST_SKIP() << "neither python3 nor /usr/bin/python3 can import pyopenvdb (Debian package "
                     "python3-openvdb): skipping the Python interoperability check";
