@@ -18,7 +18,7 @@ namespace lodestone {
 
 namespace {
 
-constexpr int kPacked = 36;  // upper triangle of a symmetric 8x8 element matrix
+constexpr int kPacked = MagnetostaticProblem::kPacked;  // upper triangle of a symmetric 8x8 element matrix
 
 // Packed unit-cell element matrices of d_a N . d_b N (symmetrized for a != b),
 // integrated with 2x2x2 Gauss points: E(D) = dx * sum_ab D_ab basis_ab.
@@ -63,7 +63,8 @@ void forEach(std::size_t n, const Fn& fn) {
 // Trilinear prolongation (prolong = true) or its transpose along one axis
 // between grids that differ only in that axis: fine node 2I is coarse node I,
 // fine node 2I+1 the mean of coarse I and I+1.
-void resampleAxis(const double* src, const Index3& sd, double* dst, const Index3& dd, int axis, bool prolong) {
+template <typename T>
+void resampleAxis(const T* src, const Index3& sd, T* dst, const Index3& dd, int axis, bool prolong) {
   const int n0 = axis == 0 ? dd.j : dd.i;  // the two other axes, same size in src and dst
   const int n1 = axis == 2 ? dd.j : dd.k;
   const std::size_t sStride = axis == 0 ? 1 : (axis == 1 ? std::size_t(sd.i) : std::size_t(sd.i) * sd.j);
@@ -83,15 +84,15 @@ void resampleAxis(const double* src, const Index3& sd, double* dst, const Index3
           const int c = f / 2;
           dst[dBase + std::size_t(f) * dStride] =
               (f % 2 == 0) ? src[sBase + std::size_t(c) * sStride]
-                           : 0.5 * (src[sBase + std::size_t(c) * sStride] + src[sBase + std::size_t(c + 1) * sStride]);
+                           : T(0.5) * (src[sBase + std::size_t(c) * sStride] + src[sBase + std::size_t(c + 1) * sStride]);
         }
       } else {
         const int fn = sn;  // restriction: src is the fine axis
         for (int c = 0; c < dn; ++c) {
-          double v = 0;
+          T v = 0;
           if (2 * c < fn) v += src[sBase + std::size_t(2 * c) * sStride];
-          if (2 * c - 1 >= 0 && 2 * c - 1 < fn) v += 0.5 * src[sBase + std::size_t(2 * c - 1) * sStride];
-          if (2 * c + 1 < fn) v += 0.5 * src[sBase + std::size_t(2 * c + 1) * sStride];
+          if (2 * c - 1 >= 0 && 2 * c - 1 < fn) v += T(0.5) * src[sBase + std::size_t(2 * c - 1) * sStride];
+          if (2 * c + 1 < fn) v += T(0.5) * src[sBase + std::size_t(2 * c + 1) * sStride];
           dst[dBase + std::size_t(c) * dStride] = v;
         }
       }
@@ -99,70 +100,103 @@ void resampleAxis(const double* src, const Index3& sd, double* dst, const Index3
   });
 }
 
+
+constexpr int kFull = 64;  // a full 8x8 element matrix
+
+// Packed upper triangle -> full symmetric 8x8 (column-major) in T.
+template <typename T>
+void unpack(const double* packed, T* full) {
+  for (int c = 0, e = 0; c < 8; ++c)
+    for (int d = c; d < 8; ++d, ++e) full[8 * d + c] = full[8 * c + d] = T(packed[e]);
+}
+
 }  // namespace
 
-struct MultigridPreconditioner::Level {
-  GridSpec grid;
-  BoundaryKind boundary = BoundaryKind::Open;
-  // Correction cells (coefficient I + D with D != 0), grouped by colour.
-  std::vector<std::size_t> cellBase;
-  std::size_t colourStart[9] = {};
-  std::size_t offsets[8] = {};
-  std::vector<SymMat3d> tensor;         // D of each correction cell
-  std::vector<double> elem;             // packed E(D), kPacked per cell
-  std::vector<std::int32_t> slotOfCell; // per grid cell: correction slot or -1
-  std::vector<double> invDiagonal;      // 0 on fixed rows
-  Work* work = nullptr;
+template <typename T>
+class MultigridPreconditioner::Hierarchy {
+ public:
+  explicit Hierarchy(const MultigridSettings& settings) : settings_(settings) {}
+  void update(const MagnetostaticProblem& problem);
+  void apply(const double* r, double* z) const;
+  int levelCount() const { return int(levels_.size()); }
+
+ private:
+  struct Work {
+    std::vector<T> x, b, r, t1, t2;
+  };
+  struct Level {
+    GridSpec grid;
+    BoundaryKind boundary = BoundaryKind::Open;
+    // Correction cells (coefficient I + D with D != 0), grouped by colour.
+    std::vector<std::size_t> cellBase;
+    std::size_t colourStart[9] = {};
+    std::size_t offsets[8] = {};
+    std::vector<SymMat3d> tensor;         // D of each correction cell (to build the next level)
+    std::vector<T> elem;                  // element matrices, full 8x8 (column-major) per cell
+    std::vector<std::int32_t> slotOfCell; // per grid cell: correction slot or -1
+    std::vector<T> invDiagonal;           // 0 on fixed rows
+    Work* work = nullptr;
+  };
+  void cycle(std::size_t level, const T* b, T* x) const;
+  void applyLevel(std::size_t level, const T* v, T* out) const;
+  void finishLevel(Level& L, const std::vector<double>& diagonal);
+
+  MultigridSettings settings_;
+  std::vector<std::unique_ptr<Level>> levels_;
+  mutable std::vector<Work> workspace_;
+  mutable std::vector<double> coarseIn_, coarseOut_;  // double copies for the coarsest CG
 };
 
-void MultigridSettings::validate() const {
-  require(preSmoothing >= 1 && preSmoothing <= 20, "multigrid: preSmoothing must be 1..20, got ", preSmoothing);
-  require(postSmoothing == preSmoothing, "multigrid: postSmoothing must equal preSmoothing (",
-          preSmoothing, ") to keep the cycle symmetric, got ", postSmoothing);
-  require(std::isfinite(jacobiWeight) && jacobiWeight > 0 && jacobiWeight <= 1,
-          "multigrid: jacobiWeight must be in (0, 1], got ", jacobiWeight);
-  require(coarsestNodes >= 3, "multigrid: coarsestNodes must be >= 3, got ", coarsestNodes);
+template <typename T>
+void MultigridPreconditioner::Hierarchy<T>::finishLevel(Level& L, const std::vector<double>& diagonal) {
+  const std::size_t nodes = L.grid.nodeCount();
+  L.invDiagonal.assign(nodes, T(0));
+  forEach(nodes, [&](std::size_t m) { L.invDiagonal[m] = diagonal[m] > 0 ? T(1.0 / diagonal[m]) : T(0); });
+  zeroFixedNodes(L.grid, L.boundary, L.invDiagonal.data());
 }
 
-MultigridPreconditioner::MultigridPreconditioner(const MultigridSettings& settings) : settings_(settings) {
-  settings_.validate();
-}
-MultigridPreconditioner::~MultigridPreconditioner() = default;
-
-void MultigridPreconditioner::update(const MagnetostaticProblem& problem) {
-  problem_ = &problem;
+template <typename T>
+void MultigridPreconditioner::Hierarchy<T>::update(const MagnetostaticProblem& problem) {
   levels_.clear();
   const ElementBasis& basis = elementBasis();
 
-  // Level 0: the fine problem; its cell tensors seed the coarse coefficients.
+  // Level 0: the fine problem (a copy of its element matrices in T); its cell
+  // tensors seed the coarse coefficients.
   auto fine = std::make_unique<Level>();
   fine->grid = problem.grid();
   fine->boundary = problem.boundary();
-  const std::size_t fineCells = fine->grid.cellCount();
-  fine->slotOfCell.assign(fineCells, -1);
-  fine->tensor.resize(problem.materialCellCount());
+  const std::size_t materialCells = problem.materialCellCount();
+  std::copy(problem.materialColourStart(), problem.materialColourStart() + 9, fine->colourStart);
+  cornerOffsets(fine->grid, fine->offsets);
+  fine->cellBase.resize(materialCells);
+  fine->elem.resize(materialCells * kFull);
+  fine->tensor.resize(materialCells);
+  fine->slotOfCell.assign(fine->grid.cellCount(), -1);
   {
     const Index3 cd = fine->grid.cellDims();
     const std::size_t nx = std::size_t(fine->grid.dims.i), ny = std::size_t(fine->grid.dims.j);
-    for (std::size_t s = 0; s < problem.materialCellCount(); ++s) {
-      const std::size_t b = problem.materialCellBase(s);
-      const int i = int(b % nx), j = int((b / nx) % ny), k = int(b / (nx * ny));
-      fine->slotOfCell[std::size_t(i) + std::size_t(cd.i) * (std::size_t(j) + std::size_t(cd.j) * k)] =
-          std::int32_t(s);
-      fine->tensor[s] = problem.materialCellTensor(s);
-    }
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, materialCells, 1024),
+                      [&](const tbb::blocked_range<std::size_t>& r) {
+                        for (std::size_t s = r.begin(); s != r.end(); ++s) {
+                          const std::size_t b = problem.materialCellBase(s);
+                          fine->cellBase[s] = b;
+                          const int i = int(b % nx), j = int((b / nx) % ny), k = int(b / (nx * ny));
+                          fine->slotOfCell[std::size_t(i) + std::size_t(cd.i) * (std::size_t(j) + std::size_t(cd.j) * k)] =
+                              std::int32_t(s);
+                          fine->tensor[s] = problem.materialCellTensor(s);
+                          unpack(problem.materialElementMatrix(s), &fine->elem[s * kFull]);
+                        }
+                      });
   }
-  fine->invDiagonal.resize(fine->grid.nodeCount());
-  problem.jacobianDiagonal(fine->invDiagonal.data());
   {
-    double* d = fine->invDiagonal.data();
-    forEach(fine->grid.nodeCount(), [&](std::size_t m) { d[m] = d[m] > 0 ? 1.0 / d[m] : 0.0; });
-    zeroFixedNodes(fine->grid, fine->boundary, d);
+    std::vector<double> diagonal(fine->grid.nodeCount());
+    problem.jacobianDiagonal(diagonal.data());
+    finishLevel(*fine, diagonal);
   }
   levels_.push_back(std::move(fine));
 
   for (;;) {
-    const Level& f = *levels_.back();
+    Level& f = *levels_.back();
     const Index3 fd = f.grid.dims;
     if (std::min({fd.i, fd.j, fd.k}) <= settings_.coarsestNodes) break;
     auto c = std::make_unique<Level>();
@@ -211,7 +245,8 @@ void MultigridPreconditioner::update(const MagnetostaticProblem& problem) {
     c->colourStart[8] = c->cellBase.size();
     cornerOffsets(c->grid, c->offsets);
     c->slotOfCell.assign(c->grid.cellCount(), -1);
-    c->elem.assign(c->cellBase.size() * kPacked, 0.0);
+    c->elem.assign(c->cellBase.size() * kFull, T(0));
+    std::vector<double> elemD(c->cellBase.size() * kPacked);
     const double h = c->grid.dx;
     const std::size_t cnx = std::size_t(c->grid.dims.i), cny = std::size_t(c->grid.dims.j);
     tbb::parallel_for(std::size_t(0), c->cellBase.size(), [&](std::size_t s) {
@@ -220,23 +255,25 @@ void MultigridPreconditioner::update(const MagnetostaticProblem& problem) {
       c->slotOfCell[std::size_t(i) + std::size_t(ccd.i) * (std::size_t(j) + std::size_t(ccd.j) * k)] =
           std::int32_t(s);
       const SymMat3d& D = c->tensor[s];
-      double* E = &c->elem[s * kPacked];
       for (int e = 0; e < kPacked; ++e)
-        E[e] = h * (D.xx * basis.xx[e] + D.yy * basis.yy[e] + D.zz * basis.zz[e] + D.xy * basis.xy[e] +
-                    D.xz * basis.xz[e] + D.yz * basis.yz[e]);
+        elemD[s * kPacked + std::size_t(e)] = h * (D.xx * basis.xx[e] + D.yy * basis.yy[e] + D.zz * basis.zz[e] +
+                                                   D.xy * basis.xy[e] + D.xz * basis.xz[e] + D.yz * basis.yz[e]);
+      unpack(&elemD[s * kPacked], &c->elem[s * kFull]);
     });
-    // Diagonal.
-    const std::size_t nodes = c->grid.nodeCount();
-    c->invDiagonal.assign(nodes, 0.0);
-    const GridSpec cg = c->grid;
-    q1LaplacianDiagonalAll(cg, c->invDiagonal.data());
-    scatterByColour(c->cellBase.data(), c->colourStart, c->offsets, c->invDiagonal.data(),
+    // Diagonal (in double, then inverted into T).
+    std::vector<double> diagonal(c->grid.nodeCount());
+    q1LaplacianDiagonalAll(c->grid, diagonal.data());
+    scatterByColour(c->cellBase.data(), c->colourStart, c->offsets, diagonal.data(),
                     [&](std::size_t s, double local[8]) {
-                      const double* E = &c->elem[s * kPacked];
+                      const double* E = &elemD[s * kPacked];
                       for (int q = 0, e = 0; q < 8; e += 8 - q, ++q) local[q] += E[e];
                     });
-    forEach(nodes, [&](std::size_t m) { c->invDiagonal[m] = 1.0 / c->invDiagonal[m]; });
-    zeroFixedNodes(cg, c->boundary, c->invDiagonal.data());
+    finishLevel(*c, diagonal);
+    // The finer level's tensors and map were only needed to build this one.
+    f.tensor.clear();
+    f.tensor.shrink_to_fit();
+    f.slotOfCell.clear();
+    f.slotOfCell.shrink_to_fit();
     levels_.push_back(std::move(c));
   }
   // Work vectors persist across updates on the same grid (no page faults
@@ -248,46 +285,39 @@ void MultigridPreconditioner::update(const MagnetostaticProblem& problem) {
     for (auto* v : {&w.x, &w.b, &w.r, &w.t1, &w.t2}) v->resize(nodes);
     levels_[l]->work = &w;
   }
-  // The fine level's tensors and map are only needed to build level 1.
-  levels_.front()->tensor.clear();
-  levels_.front()->slotOfCell.clear();
+  coarseIn_.resize(levels_.back()->grid.nodeCount());
+  coarseOut_.resize(levels_.back()->grid.nodeCount());
 }
 
-void MultigridPreconditioner::applyLevel(std::size_t level, const double* v, double* out) const {
-  if (level == 0) {
-    problem_->applyJacobian(v, out);
-    return;
-  }
+template <typename T>
+void MultigridPreconditioner::Hierarchy<T>::applyLevel(std::size_t level, const T* v, T* out) const {
   const Level& L = *levels_[level];
   applyQ1Laplacian(L.grid, L.boundary, v, out);
-  scatterByColour(L.cellBase.data(), L.colourStart, L.offsets, out, [&](std::size_t s, double local[8]) {
-    double vc[8];
-    for (int c = 0; c < 8; ++c) vc[c] = v[L.cellBase[s] + L.offsets[c]];
-    const double* E = &L.elem[s * kPacked];
-    for (int c = 0, e = 0; c < 8; ++c) {
-      local[c] += E[e++] * vc[c];
-      for (int d = c + 1; d < 8; ++d, ++e) {
-        local[c] += E[e] * vc[d];
-        local[d] += E[e] * vc[c];
-      }
+  scatterByColour(L.cellBase.data(), L.colourStart, L.offsets, out, [&](std::size_t s, T local[8]) {
+    // Dense 8x8 times 8: column by column, which vectorizes.
+    const T* E = &L.elem[s * kFull];
+    for (int d = 0; d < 8; ++d) {
+      const T vd = v[L.cellBase[s] + L.offsets[d]];
+      for (int c = 0; c < 8; ++c) local[c] += E[8 * d + c] * vd;
     }
   });
   zeroFixedNodes(L.grid, L.boundary, out);
 }
 
-void MultigridPreconditioner::cycle(std::size_t level, const double* b, double* x) const {
+template <typename T>
+void MultigridPreconditioner::Hierarchy<T>::cycle(std::size_t level, const T* b, T* x) const {
   const Level& L = *levels_[level];
   const std::size_t n = L.grid.nodeCount();
-  const double* dinv = L.invDiagonal.data();
-  double* r = L.work->r.data();
+  const T* dinv = L.invDiagonal.data();
+  T* r = L.work->r.data();
   if (level + 1 == levels_.size()) {
-    // Coarsest grid: CG to a tight tolerance (a few hundred unknowns).
+    // Coarsest grid: CG to a tight tolerance (a few hundred unknowns), in double.
     struct Diagonal final : Preconditioner {
-      const double* d;
+      const T* d;
       std::size_t n;
       void update(const MagnetostaticProblem&) override {}
       void apply(const double* in, double* out) const override {
-        for (std::size_t m = 0; m < n; ++m) out[m] = d[m] * in[m];
+        for (std::size_t m = 0; m < n; ++m) out[m] = double(d[m]) * in[m];
       }
       std::string name() const override { return "diagonal"; }
     } diag;
@@ -301,12 +331,21 @@ void MultigridPreconditioner::cycle(std::size_t level, const double* b, double* 
         mean /= double(n);
         for (std::size_t m = 0; m < n; ++m) v[m] -= mean;
       };
+    for (std::size_t m = 0; m < n; ++m) coarseIn_[m] = double(b[m]);
+    T* tv = L.work->t1.data();
+    T* tout = L.work->t2.data();
     solvePcg(
-        n, [&](const double* v, double* out) { applyLevel(level, v, out); }, diag, b, x, 1e-10, 10 * int(n),
-        project);
+        n,
+        [&](const double* v, double* out) {
+          for (std::size_t m = 0; m < n; ++m) tv[m] = T(v[m]);
+          applyLevel(level, tv, tout);
+          for (std::size_t m = 0; m < n; ++m) out[m] = double(tout[m]);
+        },
+        diag, coarseIn_.data(), coarseOut_.data(), 1e-10, 10 * int(n), project);
+    for (std::size_t m = 0; m < n; ++m) x[m] = T(coarseOut_[m]);
     return;
   }
-  const double w = settings_.jacobiWeight;
+  const T w = T(settings_.jacobiWeight);
   // Pre-smoothing from x = 0.
   forEach(n, [&](std::size_t m) { x[m] = w * dinv[m] * b[m]; });
   for (int s = 1; s < settings_.preSmoothing; ++s) {
@@ -319,8 +358,8 @@ void MultigridPreconditioner::cycle(std::size_t level, const double* b, double* 
   const Level& C = *levels_[level + 1];
   const Index3 fd = L.grid.dims, cd = C.grid.dims;
   const Index3 s1{cd.i, fd.j, fd.k}, s2{cd.i, cd.j, fd.k};
-  std::vector<double>& a = L.work->t1;  // sized for the fine grid, large enough for partial shapes
-  std::vector<double>& bb = L.work->t2;
+  std::vector<T>& a = L.work->t1;  // sized for the fine grid, large enough for partial shapes
+  std::vector<T>& bb = L.work->t2;
   resampleAxis(r, fd, a.data(), s1, 0, false);
   resampleAxis(a.data(), s1, bb.data(), s2, 1, false);
   resampleAxis(bb.data(), s2, C.work->b.data(), cd, 2, false);
@@ -338,9 +377,54 @@ void MultigridPreconditioner::cycle(std::size_t level, const double* b, double* 
   }
 }
 
+template <typename T>
+void MultigridPreconditioner::Hierarchy<T>::apply(const double* r, double* z) const {
+  require(!levels_.empty(), "multigrid: apply() before update()");
+  const std::size_t n = levels_.front()->grid.nodeCount();
+  T* b = levels_.front()->work->b.data();
+  T* x = levels_.front()->work->x.data();
+  forEach(n, [&](std::size_t m) { b[m] = T(r[m]); });
+  cycle(0, b, x);
+  forEach(n, [&](std::size_t m) { z[m] = double(x[m]); });
+}
+
+void MultigridSettings::validate() const {
+  require(preSmoothing >= 1 && preSmoothing <= 20, "multigrid: preSmoothing must be 1..20, got ", preSmoothing);
+  require(postSmoothing == preSmoothing, "multigrid: postSmoothing must equal preSmoothing (",
+          preSmoothing, ") to keep the cycle symmetric, got ", postSmoothing);
+  require(std::isfinite(jacobiWeight) && jacobiWeight > 0 && jacobiWeight <= 1,
+          "multigrid: jacobiWeight must be in (0, 1], got ", jacobiWeight);
+  require(coarsestNodes >= 3, "multigrid: coarsestNodes must be >= 3, got ", coarsestNodes);
+}
+
+MultigridPreconditioner::MultigridPreconditioner(const MultigridSettings& settings) : settings_(settings) {
+  settings_.validate();
+}
+MultigridPreconditioner::~MultigridPreconditioner() = default;
+
+void MultigridPreconditioner::update(const MagnetostaticProblem& problem) {
+  if (settings_.singlePrecision) {
+    if (!single_) single_ = std::make_unique<Hierarchy<float>>(settings_);
+    single_->update(problem);
+  } else {
+    if (!double_) double_ = std::make_unique<Hierarchy<double>>(settings_);
+    double_->update(problem);
+  }
+}
+
 void MultigridPreconditioner::apply(const double* r, double* z) const {
-  require(problem_ != nullptr && !levels_.empty(), "multigrid: apply() before update()");
-  cycle(0, r, z);
+  if (settings_.singlePrecision) {
+    require(bool(single_), "multigrid: apply() before update()");
+    single_->apply(r, z);
+  } else {
+    require(bool(double_), "multigrid: apply() before update()");
+    double_->apply(r, z);
+  }
+}
+
+int MultigridPreconditioner::levelCount() const {
+  if (settings_.singlePrecision) return single_ ? single_->levelCount() : 0;
+  return double_ ? double_->levelCount() : 0;
 }
 
 }  // namespace lodestone

@@ -38,7 +38,8 @@ double q1LaplacianDiagonal(const GridSpec& grid, int i, int j, int k) {
   return grid.dx * (x.k[1] * y.m[1] * z.m[1] + x.m[1] * y.k[1] * z.m[1] + x.m[1] * y.m[1] * z.k[1]);
 }
 
-double q1LaplacianRow(const GridSpec& grid, int i, int j, int k, const double* v) {
+template <typename T>
+double q1LaplacianRowT(const GridSpec& grid, int i, int j, int k, const T* v) {
   const Axis1D x = axisWeights(i, grid.dims.i), y = axisWeights(j, grid.dims.j), z = axisWeights(k, grid.dims.k);
   double s = 0;
   for (int c = -1; c <= 1; ++c) {
@@ -49,17 +50,23 @@ double q1LaplacianRow(const GridSpec& grid, int i, int j, int k, const double* v
         if (x.m[a + 1] == 0) continue;
         const double wgt = x.k[a + 1] * y.m[b + 1] * z.m[c + 1] + x.m[a + 1] * y.k[b + 1] * z.m[c + 1] +
                            x.m[a + 1] * y.m[b + 1] * z.k[c + 1];
-        s += wgt * v[grid.index(i + a, j + b, k + c)];
+        s += wgt * double(v[grid.index(i + a, j + b, k + c)]);
       }
     }
   }
   return grid.dx * s;
 }
 
-void applyQ1Laplacian(const GridSpec& grid, BoundaryKind boundary, const double* v, double* out) {
+double q1LaplacianRow(const GridSpec& grid, int i, int j, int k, const double* v) {
+  return q1LaplacianRowT(grid, i, j, k, v);
+}
+
+namespace {
+template <typename T>
+void applyQ1LaplacianT(const GridSpec& grid, BoundaryKind boundary, const T* v, T* out) {
   const int nx = grid.dims.i, ny = grid.dims.j, nz = grid.dims.k;
   const std::ptrdiff_t sy = nx, sz = std::ptrdiff_t(nx) * ny;
-  const double h = grid.dx, cC = h * 8.0 / 3.0, cE = -h / 6.0, cK = -h / 12.0;
+  const T h = T(grid.dx), cC = h * T(8.0 / 3.0), cE = -h / T(6), cK = -h / T(12);
   const bool shield = boundary == BoundaryKind::Shield;
   tbb::parallel_for(tbb::blocked_range<int>(0, nz, 1), [&](const tbb::blocked_range<int>& kr) {
     for (int k = kr.begin(); k != kr.end(); ++k)
@@ -67,35 +74,46 @@ void applyQ1Laplacian(const GridSpec& grid, BoundaryKind boundary, const double*
         const std::size_t row = grid.index(0, j, k);
         const bool wallRow = k == 0 || k == nz - 1 || j == 0 || j == ny - 1;
         if (wallRow) {
-          for (int i = 0; i < nx; ++i) out[row + std::size_t(i)] = shield ? q1LaplacianRow(grid, i, j, k, v) : 0.0;
+          for (int i = 0; i < nx; ++i) out[row + std::size_t(i)] = shield ? T(q1LaplacianRowT(grid, i, j, k, v)) : T(0);
           continue;
         }
-        out[row] = shield ? q1LaplacianRow(grid, 0, j, k, v) : 0.0;
-        out[row + std::size_t(nx - 1)] = shield ? q1LaplacianRow(grid, nx - 1, j, k, v) : 0.0;
+        out[row] = shield ? T(q1LaplacianRowT(grid, 0, j, k, v)) : T(0);
+        out[row + std::size_t(nx - 1)] = shield ? T(q1LaplacianRowT(grid, nx - 1, j, k, v)) : T(0);
         // Per x position, the 4 in-plane face neighbours A and the 4 in-plane
         // diagonal neighbours D in (y, z); then edges(i) = A(i-1) + A(i+1) + D(i)
         // and corners(i) = D(i-1) + D(i+1). Face neighbours weigh 0.
-        const double* p = v + row;
-        thread_local std::vector<double> A, D;
+        const T* p = v + row;
+        thread_local std::vector<T> A, D;
         A.resize(std::size_t(nx));
         D.resize(std::size_t(nx));
         for (int i = 0; i < nx; ++i) {
-          const double* c = p + i;
+          const T* c = p + i;
           A[std::size_t(i)] = c[sy] + c[-sy] + c[sz] + c[-sz];
           D[std::size_t(i)] = c[sy + sz] + c[sy - sz] + c[-sy + sz] + c[-sy - sz];
         }
         for (int i = 1; i < nx - 1; ++i) {
           const std::size_t u = std::size_t(i);
-          const double edges = A[u - 1] + A[u + 1] + D[u];
-          const double corners = D[u - 1] + D[u + 1];
+          const T edges = A[u - 1] + A[u + 1] + D[u];
+          const T corners = D[u - 1] + D[u + 1];
           out[row + u] = cC * p[i] + cE * edges + cK * corners;
         }
       }
   });
 }
+}  // namespace
+
+void applyQ1Laplacian(const GridSpec& grid, BoundaryKind boundary, const double* v, double* out) {
+  applyQ1LaplacianT(grid, boundary, v, out);
+}
+void applyQ1Laplacian(const GridSpec& grid, BoundaryKind boundary, const float* v, float* out) {
+  applyQ1LaplacianT(grid, boundary, v, out);
+}
 
 void zeroFixedNodes(const GridSpec& grid, BoundaryKind boundary, double* v) {
   setFixedNodes(grid, boundary, 0.0, v);
+}
+void zeroFixedNodes(const GridSpec& grid, BoundaryKind boundary, float* v) {
+  setFixedNodes(grid, boundary, 0.0f, v);
 }
 
 void q1LaplacianDiagonalAll(const GridSpec& grid, double* out) {
@@ -110,7 +128,9 @@ void q1LaplacianDiagonalAll(const GridSpec& grid, double* out) {
   });
 }
 
-void setFixedNodes(const GridSpec& grid, BoundaryKind boundary, double value, double* v) {
+namespace {
+template <typename T>
+void setFixedNodesT(const GridSpec& grid, BoundaryKind boundary, T value, T* v) {
   if (boundary == BoundaryKind::Shield) return;
   const int nx = grid.dims.i, ny = grid.dims.j, nz = grid.dims.k;
   tbb::parallel_for(0, nz, [&](int k) {
@@ -124,6 +144,14 @@ void setFixedNodes(const GridSpec& grid, BoundaryKind boundary, double value, do
       }
     }
   });
+}
+}  // namespace
+
+void setFixedNodes(const GridSpec& grid, BoundaryKind boundary, double value, double* v) {
+  setFixedNodesT(grid, boundary, value, v);
+}
+void setFixedNodes(const GridSpec& grid, BoundaryKind boundary, float value, float* v) {
+  setFixedNodesT(grid, boundary, value, v);
 }
 
 }  // namespace lodestone

@@ -59,6 +59,7 @@ int main(int argc, char** argv) {
     std::vector<double> sizes{64, 128}, fields{1e4, 1e5};
     std::string csvPath = "bench_field_solve.csv";
     MagneticStageSettings settings;
+    bool history = false;
     for (int a = 1; a < argc; ++a) {
       const std::string arg = argv[a];
       const auto next = [&]() -> std::string {
@@ -68,6 +69,7 @@ int main(int argc, char** argv) {
       if (arg == "--sizes") sizes = parseList(next(), "--sizes");
       else if (arg == "--fields") fields = parseList(next(), "--fields");
       else if (arg == "--csv") csvPath = next();
+      else if (arg == "--history") history = true;
       else if (arg == "--preconditioner") {
         const std::string p = next();
         if (p == "jacobi") settings.solve.preconditioner = PreconditionerKind::Jacobi;
@@ -81,7 +83,8 @@ int main(int argc, char** argv) {
             "  --fields LIST     applied field H0 in A/m (default 1e4,1e5)\n"
             "  --preconditioner P  multigrid (default) or jacobi\n"
             "  --tolerance X     relative Newton residual (default 1e-8)\n"
-            "  --csv FILE        CSV output (default bench_field_solve.csv)\n");
+            "  --csv FILE        CSV output (default bench_field_solve.csv)\n"
+            "  --history         print every Newton iteration\n");
         return 0;
       } else {
         throw InvalidArgument(concat("unknown option '", arg, "' (see --help)"));
@@ -117,6 +120,11 @@ int main(int argc, char** argv) {
                         r.solve.newtonIterations, r.solve.cgIterations, r.solve.lineSearchCuts,
                         r.solve.relativeResidual, r.secondsSolve, r.secondsTotal,
                         r.converged() ? "" : "  NOT CONVERGED");
+            if (history)
+              for (const NewtonIterationRecord& h : r.solve.history)
+                std::printf("    newton %2d  residual %9.2e  eta %8.1e  cg %3d (%8.1e)  step %5.3f  cuts %d  %.3f s\n",
+                            h.iteration, h.relativeResidual, h.forcing, h.cgIterations, h.cgRelativeResidual, h.step,
+                            h.lineSearchCuts, h.seconds);
             std::fflush(stdout);
             csv << body << ',' << N << ',' << H0 << ',' << (warm ? "warm" : "cold") << ',' << r.solve.newtonIterations
                 << ',' << r.solve.cgIterations << ',' << r.solve.lineSearchCuts << ',' << r.solve.relativeResidual

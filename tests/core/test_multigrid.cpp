@@ -61,10 +61,13 @@ int pcgIterations(const MagnetostaticProblem& p, const Preconditioner& pre, doub
 }  // namespace
 
 TEST(Multigrid, CycleIsSymmetricPositiveDefinite) {
+  for (bool single : {false, true})
   for (BoundaryKind b : {BoundaryKind::Open, BoundaryKind::Shield})
     for (int N : {20, 21}) {  // even sizes exercise the ghost node of the coarse grids
       SphereProblem sp(N, b, 1e5, N + 3);
-      MultigridPreconditioner mg;
+      MultigridSettings settings;
+      settings.singlePrecision = single;
+      MultigridPreconditioner mg(settings);
       mg.update(*sp.problem);
       EXPECT_GE(mg.levelCount(), 3);
       const std::size_t n = sp.grid.nodeCount();
@@ -84,51 +87,66 @@ TEST(Multigrid, CycleIsSymmetricPositiveDefinite) {
       mg.apply(u.data(), Mu.data());
       mg.apply(v.data(), Mv.data());
       const double vMu = deterministicDot(v.data(), Mu.data(), n), uMv = deterministicDot(u.data(), Mv.data(), n);
-      SCOPED_TRACE(::testing::Message() << toString(b) << " N = " << N);
-      EXPECT_NEAR(vMu, uMv, 1e-9 * std::fabs(vMu));
+      SCOPED_TRACE(::testing::Message() << toString(b) << " N = " << N << (single ? " float" : " double"));
+      // Exactly symmetric in exact arithmetic; to round-off of the storage precision.
+      EXPECT_NEAR(vMu, uMv, (single ? 1e-5 : 1e-9) * std::fabs(vMu));
       EXPECT_GT(deterministicDot(u.data(), Mu.data(), n), 0.0);
       EXPECT_GT(deterministicDot(v.data(), Mv.data(), n), 0.0);
     }
 }
 
 TEST(Multigrid, IterationsDoNotGrowWithResolution) {
-  std::vector<int> mgIts, jacobiIts;
-  for (int N : {17, 33, 65}) {
+  // Sphere of radius N/4 cells at 33^3, 65^3 and 129^3 nodes (32, 64, 128 cells).
+  std::vector<int> mgIts, mgDoubleIts, jacobiIts;
+  for (int N : {33, 65, 129}) {
     SphereProblem sp(N, BoundaryKind::Open);
     MultigridPreconditioner mg;
     mg.update(*sp.problem);
-    JacobiPreconditioner jacobi;
-    jacobi.update(*sp.problem);
     mgIts.push_back(pcgIterations(*sp.problem, mg, 1e-8));
-    jacobiIts.push_back(pcgIterations(*sp.problem, jacobi, 1e-8));
+    MultigridSettings ds;
+    ds.singlePrecision = false;
+    MultigridPreconditioner mgDouble(ds);
+    mgDouble.update(*sp.problem);
+    mgDoubleIts.push_back(pcgIterations(*sp.problem, mgDouble, 1e-8));
+    if (N < 129) {  // Jacobi at 129^3 takes hundreds of iterations
+      JacobiPreconditioner jacobi;
+      jacobi.update(*sp.problem);
+      jacobiIts.push_back(pcgIterations(*sp.problem, jacobi, 1e-8));
+    }
   }
-  SCOPED_TRACE(::testing::Message() << "multigrid " << mgIts[0] << " " << mgIts[1] << " " << mgIts[2] << ", jacobi "
-                                    << jacobiIts[0] << " " << jacobiIts[1] << " " << jacobiIts[2]);
-  std::printf("PCG iterations to 1e-8 at N = 17, 33, 65: multigrid %d %d %d, jacobi %d %d %d\n", mgIts[0], mgIts[1],
-              mgIts[2], jacobiIts[0], jacobiIts[1], jacobiIts[2]);
-  EXPECT_LE(mgIts[2], 20);
-  EXPECT_LE(mgIts[2], mgIts[0] + 4);
-  EXPECT_GT(jacobiIts[2], 3 * jacobiIts[0] / 2);  // Jacobi grows with N
-  EXPECT_GT(jacobiIts[2], 4 * mgIts[2]);
+  std::printf("PCG iterations to 1e-8 at 32^3, 64^3, 128^3 cells: multigrid (float) %d %d %d, (double) %d %d %d; "
+              "jacobi %d %d\n",
+              mgIts[0], mgIts[1], mgIts[2], mgDoubleIts[0], mgDoubleIts[1], mgDoubleIts[2], jacobiIts[0],
+              jacobiIts[1]);
+  for (int l = 0; l < 3; ++l) {
+    EXPECT_LE(mgIts[std::size_t(l)], 20);
+    EXPECT_LE(std::abs(mgIts[std::size_t(l)] - mgDoubleIts[std::size_t(l)]), 1);  // float storage costs no iterations
+  }
+  EXPECT_LE(mgIts[2], mgIts[0] + 3);
+  EXPECT_GT(jacobiIts[1], 3 * jacobiIts[0] / 2);  // Jacobi grows with N
+  EXPECT_GT(jacobiIts[1], 4 * mgIts[1]);
 }
 
 TEST(Multigrid, SameFieldAsJacobi) {
   for (BoundaryKind b : {BoundaryKind::Open, BoundaryKind::Shield}) {
     const GridSpec g = cubeGrid(29, 0.1);
     const DenseGrid<double> n = rasterize(g, paperMaterial().numberDensity, ball({0, 0, 0}, 0.05), 3);
-    std::vector<Vec3d> H[2];
-    for (int k = 0; k < 2; ++k) {
+    std::vector<Vec3d> H[3];  // Jacobi, multigrid (float), multigrid (double)
+    for (int k = 0; k < 3; ++k) {
       MagneticStageSettings s;
       s.boundary = b;
       s.solve.tolerance = 1e-11;
       s.solve.preconditioner = k ? PreconditionerKind::Multigrid : PreconditionerKind::Jacobi;
+      s.solve.multigrid.singlePrecision = k == 1;
       MagneticForceStage stage(g, paperMaterial(), s);
       const auto rep = stage.runOnDensity(n.view(), UniformField({0, 0, 1e5}), 0.0);
       ASSERT_TRUE(rep.converged()) << rep.solve.message;
       H[k].assign(stage.field().data, stage.field().data + g.nodeCount());
     }
-    double err = 0;
-    for (std::size_t m = 0; m < g.nodeCount(); ++m) err = std::max(err, norm(H[0][m] - H[1][m]));
-    EXPECT_LT(err, 1e-6 * 1e5) << toString(b);
+    for (int k = 1; k < 3; ++k) {
+      double err = 0;
+      for (std::size_t m = 0; m < g.nodeCount(); ++m) err = std::max(err, norm(H[0][m] - H[k][m]));
+      EXPECT_LT(err, 1e-6 * 1e5) << toString(b) << (k == 1 ? " float" : " double");
+    }
   }
 }

@@ -22,16 +22,16 @@ inline void cornerOffsets(const GridSpec& grid, std::size_t offsets[8]) {
 }
 
 /// For cells [colourStart[c], colourStart[c+1]) of each colour c in turn,
-/// calls cellFn(slot, local[8]) and adds local to out at the slot's corners.
+/// calls cellFn(slot, local[8]) (T local[8]) and adds local to out at the slot's corners.
 /// base[slot] is the flat index of the cell's base node.
-template <typename CellFn>
+template <typename T, typename CellFn>
 void scatterByColour(const std::size_t* base, const std::size_t colourStart[9], const std::size_t offsets[8],
-                     double* out, const CellFn& cellFn) {
+                     T* out, const CellFn& cellFn) {
   for (int colour = 0; colour < 8; ++colour) {
     tbb::parallel_for(tbb::blocked_range<std::size_t>(colourStart[colour], colourStart[colour + 1], 128),
                       [&](const tbb::blocked_range<std::size_t>& r) {
                         for (std::size_t s = r.begin(); s != r.end(); ++s) {
-                          double local[8] = {0, 0, 0, 0, 0, 0, 0, 0};
+                          T local[8] = {0, 0, 0, 0, 0, 0, 0, 0};
                           cellFn(s, local);
                           for (int c = 0; c < 8; ++c) out[base[s] + offsets[c]] += local[c];
                         }

@@ -95,6 +95,14 @@ class MagnetostaticProblem {
   /// Mean dM/dH over the Gauss points of material cell `slot` at the last
   /// evaluate(..., true): the coefficient coarse multigrid levels use.
   const SymMat3d& materialCellTensor(std::size_t slot) const { return cellTensor_[slot]; }
+  /// Values in the packed upper triangle of a symmetric 8x8 element matrix.
+  static constexpr int kPacked = 36;
+  /// Packed material element matrix of cell `slot` (m) at the last
+  /// evaluate(..., true): applyJacobian adds it to the vacuum stencil.
+  const double* materialElementMatrix(std::size_t slot) const { return &elem_[slot * kPacked]; }
+  /// Material cells are grouped by colour (cell parity): slots
+  /// [materialColourStart()[c], materialColourStart()[c + 1]) have colour c.
+  const std::size_t* materialColourStart() const { return colourStart_; }
 
   /// Open boundary: writes the summed block-multipole potential into the
   /// fixed nodes of phi.
@@ -129,8 +137,7 @@ class MagnetostaticProblem {
   std::vector<double> nq_;             // density at Gauss points, 8 per cell, 1/m^3
   std::vector<Vec3d> hext_;            // applied field at Gauss points, A/m
   // Material element matrices sum_q w dN_q^T dM/dH_q dN_q / dx^2 (packed upper
-  // triangle of the symmetric 8x8, 36 values per cell), rebuilt by evaluate().
-  static constexpr int kPacked = 36;
+  // triangle of the symmetric 8x8, kPacked values per cell), rebuilt by evaluate().
   std::vector<double> elem_;
   std::vector<SymMat3d> cellTensor_;
   int wallClearance_ = 1 << 30;

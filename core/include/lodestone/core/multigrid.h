@@ -7,6 +7,13 @@
 // constant vacuum stencil. Damped-Jacobi smoothing before and after, full
 // weighting R = P^T with trilinear P, CG on the coarsest grid: the cycle is a
 // fixed symmetric positive definite operator, as PCG requires.
+//
+// Storage precision: by default every level, the fine one included (a copy
+// of the Jacobian's element matrices), is stored and cycled in single
+// precision. The preconditioner only shapes the CG search directions; the
+// Newton residual and the CG operator stay in double, so the solution is
+// unchanged (tests/core/test_multigrid.cpp compares both) while the cycle
+// moves half the bytes. The cycle is then symmetric to float round-off.
 #include <memory>
 #include <string>
 #include <vector>
@@ -20,6 +27,7 @@ struct MultigridSettings {
   int postSmoothing = 2;        ///< and after (same count keeps the cycle symmetric)
   double jacobiWeight = 0.7;    ///< smoother damping in (0, 1]
   int coarsestNodes = 5;        ///< stop coarsening when an axis has this many nodes or fewer
+  bool singlePrecision = true;  ///< store and cycle the levels in float (false: double)
 
   void validate() const;
 };
@@ -32,20 +40,15 @@ class MultigridPreconditioner final : public Preconditioner {
   void apply(const double* r, double* z) const override;
   std::string name() const override { return "multigrid"; }
   /// Number of levels including the fine grid (after update()).
-  int levelCount() const { return int(levels_.size()); }
+  int levelCount() const;
+
+  template <typename T>
+  class Hierarchy;  // the levels in one storage precision (multigrid.cpp)
 
  private:
-  struct Level;
-  struct Work {
-    std::vector<double> x, b, r, t1, t2;
-  };
-  void cycle(std::size_t level, const double* b, double* x) const;
-  void applyLevel(std::size_t level, const double* v, double* out) const;
-
   MultigridSettings settings_;
-  const MagnetostaticProblem* problem_ = nullptr;
-  std::vector<std::unique_ptr<Level>> levels_;
-  mutable std::vector<Work> workspace_;
+  std::unique_ptr<Hierarchy<float>> single_;
+  std::unique_ptr<Hierarchy<double>> double_;
 };
 
 }  // namespace lodestone

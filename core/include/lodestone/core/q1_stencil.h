@@ -13,6 +13,8 @@ namespace lodestone {
 /// out = K v on free rows (all rows for Shield; interior rows for Open, whose
 /// wall rows are set to 0). Values of v on wall nodes enter the rows next to them.
 void applyQ1Laplacian(const GridSpec& grid, BoundaryKind boundary, const double* v, double* out);
+/// The same in single precision (the multigrid preconditioner's storage).
+void applyQ1Laplacian(const GridSpec& grid, BoundaryKind boundary, const float* v, float* out);
 
 /// Row (i,j,k) of K times v, for any node including the walls.
 double q1LaplacianRow(const GridSpec& grid, int i, int j, int k, const double* v);
@@ -25,8 +27,10 @@ void q1LaplacianDiagonalAll(const GridSpec& grid, double* out);
 
 /// Sets the fixed (wall) nodes of v to 0 for Open; nothing for Shield.
 void zeroFixedNodes(const GridSpec& grid, BoundaryKind boundary, double* v);
+void zeroFixedNodes(const GridSpec& grid, BoundaryKind boundary, float* v);
 
 /// Sets the fixed (wall) nodes of v to `value` for Open; nothing for Shield.
 void setFixedNodes(const GridSpec& grid, BoundaryKind boundary, double value, double* v);
+void setFixedNodes(const GridSpec& grid, BoundaryKind boundary, float value, float* v);
 
 }  // namespace lodestone
