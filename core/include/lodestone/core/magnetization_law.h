@@ -29,7 +29,11 @@ struct MagnetizationLaw {
   /// Saturation magnetization Ms = n m, A/m (infinite for Linear, 0 for None).
   LODESTONE_HOSTDEV T saturation(T n) const {
     if (kind == LawKind::Langevin) return n * moment;
+#if defined(__CUDA_ARCH__)
+    return kind == LawKind::Linear ? T(HUGE_VAL) : T(0);  // +inf; numeric_limits is host-only in device code
+#else
     return kind == LawKind::Linear ? std::numeric_limits<T>::infinity() : T(0);
+#endif
   }
   /// Low-field susceptibility chi0 at density n (dimensionless).
   LODESTONE_HOSTDEV T lowFieldSusceptibility(T n) const {
