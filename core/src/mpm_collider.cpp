@@ -112,6 +112,8 @@ const char* toString(ColliderShapeKind kind) {
       return "sphere";
     case ColliderShapeKind::Cylinder:
       return "cylinder";
+    case ColliderShapeKind::LevelSet:
+      return "level set";
   }
   return "unknown";
 }
@@ -150,6 +152,14 @@ ColliderShape ColliderShape::cylinder(double radius, double halfLength) {
   return s;
 }
 
+ColliderShape ColliderShape::levelSetShape(std::shared_ptr<const SampledSdf> sdf) {
+  ColliderShape s;
+  s.kind = ColliderShapeKind::LevelSet;
+  s.levelSet = std::move(sdf);
+  s.validate("level-set collider");
+  return s;
+}
+
 ColliderShape ColliderShape::invertedShape() const {
   ColliderShape s = *this;
   s.inverted = !inverted;
@@ -172,6 +182,9 @@ void ColliderShape::validate(const char* who) const {
       require(std::isfinite(radius) && radius > 0, who, ": radius must be a positive finite length in m, got ", radius);
       require(std::isfinite(halfLength) && halfLength > 0, who,
               ": half-length must be a positive finite length in m, got ", halfLength);
+      return;
+    case ColliderShapeKind::LevelSet:
+      require(levelSet != nullptr, who, ": level-set shape without a signed-distance grid");
       return;
   }
   throw InvalidArgument(concat(who, ": unknown shape kind ", int(kind)));

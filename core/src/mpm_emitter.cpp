@@ -61,6 +61,15 @@ EmitterShape EmitterShape::cylinder(const Pose& pose, double radius, double half
   return s;
 }
 
+EmitterShape EmitterShape::levelSetShape(const Pose& pose, std::shared_ptr<const SampledSdf> sdf) {
+  EmitterShape s;
+  s.kind = EmitterShapeKind::LevelSet;
+  s.pose = pose;
+  s.levelSet = std::move(sdf);
+  s.validate();
+  return s;
+}
+
 double EmitterShape::volume() const {
   switch (kind) {
     case EmitterShapeKind::Box:
@@ -69,6 +78,8 @@ double EmitterShape::volume() const {
       return 4.0 / 3.0 * kPi * radius * radius * radius;
     case EmitterShapeKind::Cylinder:
       return 2 * kPi * radius * radius * halfLength;
+    case EmitterShapeKind::LevelSet:
+      return levelSet->volume();
   }
   return 0;
 }
@@ -81,6 +92,8 @@ bool EmitterShape::containsBody(const Vec3d& xb) const {
       return norm2(xb) <= radius * radius;
     case EmitterShapeKind::Cylinder:
       return xb.x * xb.x + xb.y * xb.y <= radius * radius && std::fabs(xb.z) <= halfLength;
+    case EmitterShapeKind::LevelSet:
+      return levelSet->signedDistance(xb) <= 0;
   }
   return false;
 }
@@ -102,6 +115,9 @@ void EmitterShape::validate() const {
               "emitter cylinder: radius must be a positive finite length in m, got ", radius);
       require(std::isfinite(halfLength) && halfLength > 0,
               "emitter cylinder: half-length must be a positive finite length in m, got ", halfLength);
+      return;
+    case EmitterShapeKind::LevelSet:
+      require(levelSet != nullptr, "emitter level set: no signed-distance grid");
       return;
   }
   throw InvalidArgument(concat("emitter shape: unknown kind ", int(kind)));
@@ -155,6 +171,15 @@ EmitReport emitParticles(MpmParticles& particles, const EmitterShape& shape, con
         n[2] = fittedCells(2 * shape.halfLength, h);
         hs[2] = 2 * shape.halfLength / n[2];
         first[2] = -shape.halfLength + 0.5 * hs[2];
+      }
+      break;
+    }
+    case EmitterShapeKind::LevelSet: {
+      Vec3d lo, hi;
+      shape.levelSet->interiorBounds(lo, hi);
+      for (int a = 0; a < 3; ++a) {
+        n[a] = std::max(1, int(std::ceil((hi[a] - lo[a]) / h)));
+        first[a] = lo[a] + 0.5 * h;
       }
       break;
     }

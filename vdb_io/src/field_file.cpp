@@ -81,6 +81,34 @@ void writeFieldsVdb(const std::string& path, const MagneticForceStage& stage, co
                                openvdb::VEC_CONTRAVARIANT_RELATIVE));
     setUnits(*grids.back(), "N/m^3", "magnetic force density t = div T");
   }
+  if (options.displayAliases) {
+    grids.push_back(scalarGrid(stage.density(), "density", options.toleranceDensity, dbl, xf));
+    setUnits(*grids.back(), "1/m^3", "micro-particle number density n (display name of n)");
+  }
+  const VdbMpmGrids& mpm = options.mpm;
+  require(!c.mass || mpm.mass.data, "VDB file '", path, "': the mass grid was asked for but not given");
+  require(!c.velocity || mpm.velocity.data, "VDB file '", path, "': the velocity grid was asked for but not given");
+  openvdb::math::Transform::Ptr mpmXf;  // one transform for the MPM grids, shared with the fields when equal
+  const auto mpmTransform = [&](const GridSpec& s) {
+    if (s == spec) return xf;
+    if (!mpmXf) mpmXf = nodeCentredTransform(s);
+    return mpmXf;
+  };
+  if (c.mass) {
+    grids.push_back(scalarGrid(mpm.mass, "mass", 0, dbl, mpmTransform(mpm.mass.spec)));
+    setUnits(*grids.back(), "kg", "MPM node mass");
+  }
+  if (c.velocity || (options.displayAliases && mpm.velocity.data)) {
+    const auto vxf = mpmTransform(mpm.velocity.spec);
+    if (c.velocity) {
+      grids.push_back(vectorGrid(mpm.velocity, "velocity", 0, dbl, vxf, openvdb::VEC_CONTRAVARIANT_RELATIVE));
+      setUnits(*grids.back(), "m/s", "MPM node velocity");
+    }
+    if (options.displayAliases) {
+      grids.push_back(vectorGrid(mpm.velocity, "vel", 0, dbl, vxf, openvdb::VEC_CONTRAVARIANT_RELATIVE));
+      setUnits(*grids.back(), "m/s", "MPM node velocity (display name of velocity)");
+    }
+  }
 
   openvdb::MetaMap meta;
   meta.insertMeta("creator", openvdb::StringMetadata("Lodestone " LODESTONE_VERSION_STRING));
@@ -103,6 +131,19 @@ DenseGrid<double> readScalarField(const std::string& path, const std::string& gr
   } catch (const InvalidArgument& e) {
     throw InvalidArgument(concat("VDB file '", path, "': ", e.what()));
   }
+}
+
+DenseGrid<double> readDensityVdb(const std::string& path, const GridSpec& spec, const std::string& gridName) {
+  DenseGrid<double> n = readScalarField(path, gridName, spec);
+  for (int k = 0; k < spec.dims.k; ++k)
+    for (int j = 0; j < spec.dims.j; ++j)
+      for (int i = 0; i < spec.dims.i; ++i) {
+        const double v = n(i, j, k);
+        require(std::isfinite(v) && v >= 0, "VDB file '", path, "', grid '", gridName,
+                "': micro-particle density must be finite and >= 0 (1/m^3), got ", v, " at node (", i, ", ", j, ", ",
+                k, ")");
+      }
+  return n;
 }
 
 DenseGrid<Vec3d> readVec3Field(const std::string& path, const std::string& gridName, const GridSpec& spec) {

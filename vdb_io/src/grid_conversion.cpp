@@ -7,6 +7,7 @@
 #include <mutex>
 
 #include <openvdb/io/Stream.h>
+#include <openvdb/tools/Dense.h>
 #include <openvdb/tools/Interpolation.h>
 #include <openvdb/tools/Prune.h>
 
@@ -197,6 +198,38 @@ openvdb::GridBase::Ptr readVdbVec3Grid(const std::string& path, const std::strin
   return readChecked(path, gridName, "a Vec3fGrid or Vec3dGrid", [](const openvdb::GridBase& g) {
     return g.isType<openvdb::Vec3fGrid>() || g.isType<openvdb::Vec3dGrid>();
   });
+}
+
+openvdb::FloatGrid::Ptr readVdbFloatGrid(const std::string& path, const std::string& gridName) {
+  return openvdb::gridPtrCast<openvdb::FloatGrid>(readChecked(
+      path, gridName, "a FloatGrid", [](const openvdb::GridBase& g) { return g.isType<openvdb::FloatGrid>(); }));
+}
+
+SampledSdf toSampledSdf(const openvdb::FloatGrid& grid, const std::string& who) {
+  initializeVdb();
+  require(grid.getGridClass() == openvdb::GRID_LEVEL_SET, who, ": grid class must be 'level set', got '",
+          openvdb::GridBase::gridClassToString(grid.getGridClass()), "'");
+  const auto& xf = grid.constTransform();
+  const auto map = xf.baseMap();
+  const bool axisAligned = map->isType<openvdb::math::UniformScaleTranslateMap>() ||
+                           map->isType<openvdb::math::UniformScaleMap>() ||
+                           map->isType<openvdb::math::ScaleTranslateMap>() ||
+                           map->isType<openvdb::math::ScaleMap>() || map->isType<openvdb::math::TranslationMap>();
+  require(axisAligned && xf.hasUniformScale(), who,
+          ": transform must be a uniform scale and a translation (no rotation, shear or frustum), got ",
+          xf.mapType(), xf.hasUniformScale() ? "" : " with non-uniform scale");
+  openvdb::CoordBBox box = grid.evalActiveVoxelBoundingBox();
+  require(!box.empty(), who, ": the level set has no active voxel");
+  box.expand(2);  // nodes outside the narrow band, so the box's rim is outside the shape
+  GridSpec spec;
+  spec.dx = xf.voxelSize()[0];
+  const openvdb::Vec3d o = xf.indexToWorld(box.min());
+  spec.origin = {o[0], o[1], o[2]};
+  spec.dims = {box.dim()[0], box.dim()[1], box.dim()[2]};
+  openvdb::tools::Dense<float, openvdb::tools::LayoutXYZ> dense(box);  // x fastest, as GridSpec::index
+  openvdb::tools::copyToDense(grid, dense);
+  std::vector<float> values(dense.data(), dense.data() + dense.valueCount());
+  return SampledSdf(spec, std::move(values), who);
 }
 
 }  // namespace lodestone

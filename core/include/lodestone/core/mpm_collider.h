@@ -9,11 +9,15 @@
 //   plane:    the half-space z_body <= 0, phi = z_body, outward normal +z_body;
 //   box:      |x_body| <= halfSize per axis;
 //   sphere:   |x_body| <= radius;
-//   cylinder: sqrt(x^2 + y^2) <= radius and |z| <= halfLength (axis = body z).
+//   cylinder: sqrt(x^2 + y^2) <= radius and |z| <= halfLength (axis = body z);
+//   level set: phi <= 0 of a SampledSdf (sampled_sdf.h) in the body frame,
+//              e.g. a VDB level set or a mesh converted by vdb_io; host only
+//              (its samples live in host memory; device code must not use it).
 // An inverted shape is solid outside (a container): phi and the normal flip.
 // Distances are exact Euclidean distances for plane, sphere and (outside)
 // box and cylinder; inside a box or cylinder phi is minus the distance to the
-// nearest face, exact as well.
+// nearest face, exact as well. A level set gives the trilinear interpolant of
+// its samples and the normalised gradient of that interpolant.
 //
 // Boundary conditions (Stomakhin et al. 2013, Sec. 8), applied to the
 // velocity relative to the collider, v_rel = v - v_c, with outward normal n
@@ -24,10 +28,12 @@
 // Coulomb friction mu (Slip and Separate, when v_n < 0): the tangential speed
 // |v_t| shrinks by mu |v_n|, and to zero if that exceeds it.
 #include <cmath>
+#include <memory>
 #include <vector>
 
 #include "lodestone/core/hostdev.h"
 #include "lodestone/core/pose.h"
+#include "lodestone/core/sampled_sdf.h"
 #include "lodestone/core/vec3.h"
 
 namespace lodestone {
@@ -61,7 +67,7 @@ LODESTONE_HOSTDEV inline Vec3d applyBoundaryCondition(const Vec3d& v, const Vec3
   return wallVelocity + vt;
 }
 
-enum class ColliderShapeKind : int { Plane = 0, Box = 1, Sphere = 2, Cylinder = 3 };
+enum class ColliderShapeKind : int { Plane = 0, Box = 1, Sphere = 2, Cylinder = 3, LevelSet = 4 };
 const char* toString(ColliderShapeKind kind);
 
 /// A collider shape in its body frame. Plain data; use the factories.
@@ -71,11 +77,15 @@ struct ColliderShape {
   double radius = 0;      ///< sphere / cylinder radius, m
   double halfLength = 0;  ///< cylinder half-length along body z, m
   bool inverted = false;  ///< solid outside the shape (a container)
+  /// Level set: the sampled signed distance (body frame), shared, immutable.
+  std::shared_ptr<const SampledSdf> levelSet;
 
   static ColliderShape plane();
   static ColliderShape box(const Vec3d& halfSize);
   static ColliderShape sphere(double radius);
   static ColliderShape cylinder(double radius, double halfLength);
+  /// Throws InvalidArgument when `sdf` is null.
+  static ColliderShape levelSetShape(std::shared_ptr<const SampledSdf> sdf);
   /// The same shape, solid on the other side.
   ColliderShape invertedShape() const;
   void validate(const char* who) const;
@@ -114,6 +124,11 @@ LODESTONE_HOSTDEV inline double ColliderShape::signedDistance(const Vec3d& xb) c
       d = sqrt(orr * orr + oz * oz) + fmin(fmax(qr, qz), 0.0);
       break;
     }
+    case ColliderShapeKind::LevelSet:
+#if !defined(__CUDA_ARCH__)  // a sampled SDF lives in host memory only
+      d = levelSet->signedDistance(xb);
+#endif
+      break;
   }
   return inverted ? -d : d;
 }
@@ -159,6 +174,11 @@ LODESTONE_HOSTDEV inline Vec3d ColliderShape::normal(const Vec3d& xb) const {
       }
       break;
     }
+    case ColliderShapeKind::LevelSet:
+#if !defined(__CUDA_ARCH__)  // a sampled SDF lives in host memory only
+      n = levelSet->normal(xb);
+#endif
+      break;
   }
   return inverted ? -n : n;
 }

@@ -1,5 +1,6 @@
 #pragma once
-// Seeding material points in a box, a sphere or a capped cylinder.
+// Seeding material points in a box, a sphere, a capped cylinder or a level
+// set (a SampledSdf, e.g. read from a VDB file or converted from a mesh).
 //
 // Points are placed on a lattice of spacing h = dx / ppc^(1/3) (dx the MPM
 // cell size, ppc the particles per cell, e.g. 8 -> h = dx/2), in the shape's
@@ -12,20 +13,26 @@
 // For a box the lattice is fitted to the box: round(2 a_k / h) cells along
 // axis k, so the points' volumes sum to the box volume exactly. For spheres
 // and cylinders the lattice is centred on the body origin and the volumes sum
-// to the shape's volume up to the staircase error O(h / size).
+// to the shape's volume up to the staircase error O(h / size). For a level
+// set the lattice starts at the low corner of the SDF's interior bounds
+// (SampledSdf::interiorBounds) and a point is kept where the trilinear
+// signed distance is <= 0; volume() is then the SDF's smoothed-Heaviside
+// estimate, and the points' volumes match it up to the same staircase error.
 //
 // Jitter is reproducible: the offsets come from a 64-bit SplitMix generator
 // seeded with `seed`, so a given seed gives the same points on every platform.
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 
 #include "lodestone/core/mpm_material.h"
 #include "lodestone/core/mpm_particles.h"
 #include "lodestone/core/pose.h"
+#include "lodestone/core/sampled_sdf.h"
 
 namespace lodestone {
 
-enum class EmitterShapeKind : int { Box = 0, Sphere = 1, Cylinder = 2 };
+enum class EmitterShapeKind : int { Box = 0, Sphere = 1, Cylinder = 2, LevelSet = 3 };
 
 struct EmitterShape {
   EmitterShapeKind kind = EmitterShapeKind::Box;
@@ -33,11 +40,15 @@ struct EmitterShape {
   Vec3d halfSize;         ///< box half-sizes, m
   double radius = 0;      ///< sphere / cylinder radius, m
   double halfLength = 0;  ///< cylinder half-length along body z, m
+  std::shared_ptr<const SampledSdf> levelSet;  ///< level set (body frame), shared, immutable
 
   static EmitterShape box(const Pose& pose, const Vec3d& halfSize);
   static EmitterShape sphere(const Pose& pose, double radius);
   static EmitterShape cylinder(const Pose& pose, double radius, double halfLength);
-  /// Exact volume of the shape, m^3.
+  /// The inside (phi <= 0) of `sdf`, placed by `pose` (body frame = the SDF's frame).
+  static EmitterShape levelSetShape(const Pose& pose, std::shared_ptr<const SampledSdf> sdf);
+  /// Volume of the shape, m^3: exact for the analytic shapes, the SDF's
+  /// estimate SampledSdf::volume() for a level set.
   double volume() const;
   /// True when the body-frame point xb (m) is inside (closed).
   bool containsBody(const Vec3d& xb) const;

@@ -20,6 +20,16 @@ struct VdbFieldChoice {
   bool magnetization = true;  ///< [M]     magnetization, A/m
   bool induction = true;      ///< [B]     magnetic induction, T
   bool force = true;          ///< [force] force density t = div T, N/m^3
+  bool mass = false;          ///< [mass]  MPM node mass, kg (needs VdbWriteOptions::mpm.mass)
+  bool velocity = false;      ///< [velocity] MPM node velocity, m/s (needs VdbWriteOptions::mpm.velocity)
+};
+
+/// MPM grid data a host adds to a field file. They live on the MPM grid,
+/// which need not be the field grid (each grid of a file has its own
+/// transform). A null `data` means absent.
+struct VdbMpmGrids {
+  GridView<const double> mass;     ///< node mass, kg
+  GridView<const Vec3d> velocity;  ///< node velocity, m/s
 };
 
 /// Options of writeFieldsVdb.
@@ -30,6 +40,12 @@ struct VdbWriteOptions {
   /// zeros stay inactive).
   double toleranceDensity = 0, tolerancePotential = 0, toleranceField = 0,
          toleranceMagnetization = 0, toleranceInduction = 0, toleranceForce = 0;
+  /// Also write the names other tools look for: [density] (= n, fog volume;
+  /// Blender shows the alphabetically first grid, Houdini's Volume SOPs
+  /// default to it) and [vel] (= velocity, when given; Blender's and
+  /// Houdini's velocity name). The copies share their source's transform.
+  bool displayAliases = false;
+  VdbMpmGrids mpm;  ///< source of the mass and velocity grids
 };
 
 /// File-level metadata written with the grids.
@@ -50,6 +66,12 @@ void writeFieldsVdb(const std::string& path, const MagneticForceStage& stage,
 /// (exact by index when the file's transform matches spec, else trilinear).
 DenseGrid<double> readScalarField(const std::string& path, const std::string& gridName,
                                   const GridSpec& spec);
+/// The micro-particle density n (1/m^3) of grid `gridName` (FloatGrid or
+/// DoubleGrid) on `spec`, as readScalarField, for hosts that do their own
+/// particle-to-grid transfer and call MagneticForceStage::runOnDensity.
+/// Throws InvalidArgument naming the file, the grid and the node when a value
+/// is negative or not finite.
+DenseGrid<double> readDensityVdb(const std::string& path, const GridSpec& spec, const std::string& gridName = "n");
 /// Reads grid `gridName` (Vec3fGrid or Vec3dGrid) into a dense grid on `spec`.
 DenseGrid<Vec3d> readVec3Field(const std::string& path, const std::string& gridName,
                                const GridSpec& spec);

@@ -18,6 +18,7 @@
 #include <openvdb/openvdb.h>
 
 #include "lodestone/core/grid.h"
+#include "lodestone/core/sampled_sdf.h"
 #include "lodestone/core/vec3.h"
 
 namespace lodestone {
@@ -66,5 +67,15 @@ DenseGrid<Vec3d> toDenseGrid(const openvdb::Vec3dGrid& grid, const GridSpec& spe
 /// unreadable or corrupt, or the grid is absent or of another type.
 openvdb::GridBase::Ptr readVdbScalarGrid(const std::string& path, const std::string& gridName);
 openvdb::GridBase::Ptr readVdbVec3Grid(const std::string& path, const std::string& gridName);
+/// Reads FloatGrid `gridName` (of any class); errors as the readers above.
+openvdb::FloatGrid::Ptr readVdbFloatGrid(const std::string& path, const std::string& gridName);
+
+/// A level set as a dense SampledSdf over its active voxels' bounding box
+/// grown by two voxels (node (i,j,k) = voxel (i,j,k), world frame; inactive
+/// voxels give the tree's value, +-background). Throws InvalidArgument,
+/// prefixed with `who`, when the grid class is not GRID_LEVEL_SET, the
+/// transform is not a uniform scale plus translation, the grid has no active
+/// voxel, or no voxel is inside.
+SampledSdf toSampledSdf(const openvdb::FloatGrid& levelSet, const std::string& who);
 
 }  // namespace lodestone
