@@ -1,0 +1,24 @@
+#pragma once
+// Exceptions of the node layer; the C ABI maps them to status codes.
+#include "lodestone/core/error.h"
+
+namespace lodestone::plugin {
+
+/// A feature needs a component this build lacks (e.g. OpenVDB).
+class NotBuilt : public Error {
+ public:
+  using Error::Error;
+};
+
+/// A node's cook failed; the message names the node and the cause.
+class CookFailed : public Error {
+ public:
+  CookFailed(const std::string& message, bool notBuilt) : Error(message), notBuilt_(notBuilt) {}
+  /// The cause was NotBuilt.
+  bool notBuilt() const { return notBuilt_; }
+
+ private:
+  bool notBuilt_ = false;
+};
+
+}  // namespace lodestone::plugin

@@ -1,0 +1,63 @@
+#pragma once
+// Core objects built from node parameter values: the shared glue between the
+// nodes' cooks and scene files (whose entries are nodes' parameters).
+#include <memory>
+
+#include "lodestone/core/field_source.h"
+#include "lodestone/core/magnet_source.h"
+#include "lodestone/core/mpm_collider.h"
+#include "lodestone/core/mpm_emitter.h"
+#include "lodestone/core/mpm_solver.h"
+#include "lodestone/core/pose.h"
+#include "lodestone/core/sampled_sdf.h"
+#include "lodestone/plugin/param.h"
+
+namespace lodestone::plugin {
+
+/// A pose at `centre` (m) whose body z axis points along the unit vector `axis`.
+Pose poseAlong(const Vec3d& centre, const Vec3d& axis);
+
+/// Whether a shape choice is stored in a file ("level_set": a VDB level set,
+/// "mesh": an OBJ mesh).
+bool isFileShape(const std::string& shape);
+
+/// The level set of a file shape: grid `grid` of a .vdb file, or an OBJ mesh
+/// sampled at `voxelSize` (m). Throws NotBuilt without OpenVDB.
+std::shared_ptr<const SampledSdf> loadShapeFile(const std::string& shape, const std::string& path,
+                                                const std::string& grid, double voxelSize);
+
+/// The emitter shape of particle_source parameters (shape, center, axis, sizes,
+/// file). File shapes are placed by their own frame, turned by `axis`.
+EmitterShape shapeFrom(const ParamSet& params);
+
+/// The MPM material of material parameters (model, density, moduli, magnetic.*).
+MpmMaterial materialFrom(const ParamSet& params);
+
+/// The applied field of applied_field parameters (type, H, position, moment, file, grid, ramp).
+std::unique_ptr<FieldSource> appliedFieldFrom(const ParamSet& params);
+
+/// The collider shape and rest pose of collider parameters (shape, point, normal, center, axis, sizes, file, inverted).
+ColliderShape colliderShapeFrom(const ParamSet& params, Pose& pose);
+
+/// The boundary condition of `boundary` and `friction` parameters.
+BoundaryCondition boundaryFrom(const ParamSet& params);
+
+/// The magnet of magnet parameters (shape, sizes, magnetization or remanence) at `pose`.
+std::unique_ptr<MagnetSource> makeMagnet(const ParamSet& params, const Pose& pose);
+
+/// MPM settings of mpm_solver parameters (domain.*, time.*, gravity, magnetic.*):
+/// the grid covers [domain.min, domain.max] at domain.dx, the field solve's
+/// grid adds magnetic.padding cells of free space on every side. Throws
+/// InvalidArgument for an empty box or a grid too large for memory.
+MpmSettings mpmSettingsFrom(const ParamSet& params);
+
+/// Adds the vector grid `gridName` (A/m) of a .vdb file to `set`; throws
+/// NotBuilt without OpenVDB, InvalidArgument when the file cannot be read.
+void addVdbField(FieldSourceSet& set, const std::string& path, const std::string& gridName);
+
+/// Writes all fields of the stage's last run to one .vdb file (atomically);
+/// throws NotBuilt without OpenVDB, InvalidArgument when it cannot be written.
+void writeStageVdb(const std::string& path, const MagneticForceStage& stage, const std::string& solverSummary,
+                   bool doublePrecision = false);
+
+}  // namespace lodestone::plugin

@@ -1,0 +1,105 @@
+#pragma once
+// What flows along a node network's connections. Each port has one of these
+// types; values are immutable once a node has cooked them (shared, never
+// copied on the way downstream).
+#include <memory>
+#include <string>
+#include <variant>
+#include <vector>
+
+#include "lodestone/core/field_source_set.h"
+#include "lodestone/core/magnet_source.h"
+#include "lodestone/core/magnetic_stage.h"
+#include "lodestone/core/mpm_collider.h"
+#include "lodestone/core/mpm_emitter.h"
+#include "lodestone/core/mpm_material.h"
+#include "lodestone/core/mpm_particles.h"
+
+namespace lodestone {
+class MpmSolver;
+}
+
+namespace lodestone::plugin {
+
+enum class PortType : int { Particles, Material, Sources, Colliders, Density, Field, Forces, Simulation };
+const char* toString(PortType type);
+
+/// A named MPM material.
+struct MaterialData {
+  std::string name;
+  MpmMaterial material;
+};
+
+/// One body of material points: where they come from (shape, emission) and
+/// the points themselves (emitted with the material index 0; an MPM solver
+/// node renumbers materials when it merges bodies).
+struct ParticlesData {
+  struct Body {
+    std::string name;
+    MaterialData material;
+    EmitterShape shape;
+    EmitterSettings emit;
+  };
+  std::vector<Body> bodies;
+  MpmParticles particles;
+  std::vector<MpmMaterial> materials;  ///< indexed by particles.material
+};
+
+/// Applied-field sources: fields (uniform, dipole, VDB...) and magnets, which
+/// may also be colliders of the MPM.
+struct SourcesData {
+  struct Magnet {
+    std::shared_ptr<const MagnetSource> magnet;
+    ColliderMotion motion;
+    BoundaryCondition boundary{BoundaryMode::Sticky, 0.0};
+    bool collider = true;
+  };
+  FieldSourceSet fields;
+  std::vector<Magnet> magnets;
+  /// Fields plus magnets, as one source.
+  FieldSourceSet all() const;
+};
+
+struct CollidersData {
+  std::vector<MpmCollider> colliders;
+};
+
+/// Nodal micro-particle density n (1/m^3) on a grid.
+struct DensityData {
+  DenseGrid<double> density;
+  MagneticMaterial material;  ///< the law shared by the deposited particles
+  double totalCount = 0;      ///< micro-particles deposited
+};
+
+/// A solved field: the stage holds phi, H, M, B, forces of its last run.
+struct FieldData {
+  std::shared_ptr<MagneticForceStage> stage;
+  MagneticStageReport report;
+};
+
+/// Magnetic forces on material points (N), in the order of the particles.
+struct ForcesData {
+  std::vector<Vec3d> particleForces;
+  Vec3d total;  ///< N
+  MagneticStageReport report;
+};
+
+/// A reference MLS-MPM after some frames.
+struct SimulationData {
+  std::shared_ptr<MpmSolver> solver;
+  int frames = 0;
+  double time = 0;                  ///< s
+  std::vector<double> frameTimes;   ///< s
+  std::vector<Vec3d> centreOfMass;  ///< of the magnetic material per frame, m
+};
+
+using NodeValue =
+    std::variant<std::monostate, std::shared_ptr<const ParticlesData>, std::shared_ptr<const MaterialData>,
+                 std::shared_ptr<const SourcesData>, std::shared_ptr<const CollidersData>,
+                 std::shared_ptr<const DensityData>, std::shared_ptr<const FieldData>,
+                 std::shared_ptr<const ForcesData>, std::shared_ptr<const SimulationData>>;
+
+/// The port type a value carries (throws for an empty value).
+PortType typeOf(const NodeValue& value);
+
+}  // namespace lodestone::plugin

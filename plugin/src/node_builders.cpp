@@ -1,0 +1,197 @@
+#include "lodestone/plugin/node_builders.h"
+
+#include <cmath>
+
+#include "lodestone/core/constants.h"
+#include "lodestone/core/cuboid_magnet.h"
+#include "lodestone/core/cylinder_magnet.h"
+#include "lodestone/core/error.h"
+#include "lodestone/core/material.h"
+#include "lodestone/core/point_dipole.h"
+#include "lodestone/core/sphere_magnet.h"
+#include "lodestone/core/uniform_field.h"
+#include "lodestone/plugin/errors.h"
+#include "lodestone/plugin/node_registry.h"
+
+#if LODESTONE_PLUGIN_HAVE_VDB
+#include "lodestone/vdb_io/field_file.h"
+#include "lodestone/vdb_io/level_set_file.h"
+#endif
+
+namespace lodestone::plugin {
+
+Pose poseAlong(const Vec3d& centre, const Vec3d& axis) {
+  const Vec3d z{0, 0, 1};
+  const Vec3d k = cross(z, axis);
+  const double s = norm(k), c = dot(z, axis);
+  if (s < 1e-12) return c > 0 ? Pose::at(centre) : Pose::fromAxisAngle(centre, {1, 0, 0}, kPi);
+  return Pose::fromAxisAngle(centre, k / s, std::atan2(s, c));
+}
+
+bool isFileShape(const std::string& shape) { return shape == "level_set" || shape == "mesh"; }
+
+std::shared_ptr<const SampledSdf> loadShapeFile(const std::string& shape, const std::string& path,
+                                                const std::string& grid, double voxelSize) {
+#if LODESTONE_PLUGIN_HAVE_VDB
+  if (shape == "level_set") return std::make_shared<const SampledSdf>(readLevelSetVdb(path, grid));
+  return std::make_shared<const SampledSdf>(levelSetFromObj(path, voxelSize));
+#else
+  (void)grid;
+  (void)voxelSize;
+  throw NotBuilt(concat("shape '", shape, "' (", path, ") needs OpenVDB, which this build of Lodestone lacks"));
+#endif
+}
+
+EmitterShape shapeFrom(const ParamSet& p) {
+  const std::string& shape = p.getString("shape");
+  if (isFileShape(shape)) {
+    const double voxel = p.getFloat("voxel_size") > 0 ? p.getFloat("voxel_size") : p.getFloat("cell_size");
+    return EmitterShape::levelSetShape(poseAlong({}, p.getVec3("axis")),
+                                       loadShapeFile(shape, p.getString("file"), p.getString("grid"), voxel));
+  }
+  const Pose pose = poseAlong(p.getVec3("center"), p.getVec3("axis"));
+  if (shape == "box") return EmitterShape::box(pose, p.getVec3("half_size"));
+  if (shape == "sphere") return EmitterShape::sphere(pose, p.getFloat("radius"));
+  return EmitterShape::cylinder(pose, p.getFloat("radius"), p.getFloat("half_length"));
+}
+
+std::unique_ptr<MagnetSource> makeMagnet(const ParamSet& p, const Pose& pose) {
+  const double M =
+      p.given("remanence") ? magnetizationFromRemanence(p.getFloat("remanence")) : p.getFloat("magnetization");
+  const Vec3d body{0, 0, M};  // along the magnet's axis
+  const std::string& shape = p.getString("shape");
+  if (shape == "sphere") return std::make_unique<SphereMagnet>(pose, p.getFloat("radius"), body);
+  if (shape == "box") return std::make_unique<CuboidMagnet>(pose, p.getVec3("half_size"), body);
+  return std::make_unique<CylinderMagnet>(pose, p.getFloat("radius"), p.getFloat("half_length"), body);
+}
+
+MpmMaterial materialFrom(const ParamSet& p) {
+  const std::string& law = p.getString("magnetic.law");
+  const double n0 = p.given("magnetic.per_cell")
+                        ? p.getFloat("magnetic.per_cell") / std::pow(p.getFloat("magnetic.cell_size"), 3)
+                        : p.getFloat("magnetic.number_density");
+  MagneticMaterial mag = nonMagneticMaterial();
+  if (law == "paper") mag = paperMaterial();
+  if (law == "paper-linear") mag = linearized(paperMaterial());
+  if (law == "langevin") mag = langevinMaterial(p.getFloat("magnetic.moment"), p.getFloat("magnetic.temperature"), n0);
+  if (law == "linear") mag = linearMaterial(p.getFloat("magnetic.chi"), n0);
+  const double rho = p.getFloat("density");
+  return p.getString("model") == "solid"
+             ? neoHookeanSolid(p.getFloat("youngs_modulus"), p.getFloat("poisson_ratio"), rho, mag)
+             : viscousFluid(p.getFloat("viscosity"), p.getFloat("bulk_modulus"), rho, mag);
+}
+
+std::unique_ptr<FieldSource> appliedFieldFrom(const ParamSet& p) {
+  TimeProfile profile;
+  if (p.given("ramp")) profile = TimeProfile::ramp(p.getFloats("ramp")[0], p.getFloats("ramp")[1]);
+  const std::string& type = p.getString("type");
+  if (type == "uniform") return std::make_unique<UniformField>(p.getVec3("H"), profile);
+  if (type == "dipole") return std::make_unique<PointDipole>(p.getVec3("position"), p.getVec3("moment"), profile);
+  require(!p.given("ramp"), "a VDB field takes no ramp");
+  FieldSourceSet set;
+  addVdbField(set, p.getString("file"), p.getString("grid"));
+  return set.source(0).clone();
+}
+
+ColliderShape colliderShapeFrom(const ParamSet& p, Pose& pose) {
+  const std::string& shape = p.getString("shape");
+  ColliderShape cs;
+  if (shape == "plane") {
+    pose = poseAlong(p.getVec3("point"), p.getVec3("normal"));
+    return ColliderShape::plane();
+  }
+  if (isFileShape(shape)) {
+    pose = Pose();
+    const double voxel = p.getFloat("voxel_size");
+    require(shape != "mesh" || voxel > 0, "a mesh collider needs voxel_size > 0 m");
+    cs = ColliderShape::levelSetShape(loadShapeFile(shape, p.getString("file"), p.getString("grid"), voxel));
+  } else {
+    pose = poseAlong(p.getVec3("center"), p.getVec3("axis"));
+    if (shape == "box") cs = ColliderShape::box(p.getVec3("half_size"));
+    if (shape == "sphere") cs = ColliderShape::sphere(p.getFloat("radius"));
+    if (shape == "cylinder") cs = ColliderShape::cylinder(p.getFloat("radius"), p.getFloat("half_length"));
+  }
+  if (p.getBool("inverted")) cs = cs.invertedShape();
+  return cs;
+}
+
+BoundaryCondition boundaryFrom(const ParamSet& p) {
+  const std::string& mode = p.getString("boundary");
+  BoundaryCondition bc;
+  bc.mode = mode == "sticky" ? BoundaryMode::Sticky : mode == "slip" ? BoundaryMode::Slip : BoundaryMode::Separate;
+  bc.friction = p.getFloat("friction");
+  return bc;
+}
+
+MpmSettings mpmSettingsFrom(const ParamSet& p) {
+  MpmSettings s;
+  const Vec3d lo = p.getVec3("domain.min"), hi = p.getVec3("domain.max");
+  for (int a = 0; a < 3; ++a)
+    require(hi[a] > lo[a], "domain: max must exceed min on every axis; axis ", a, " has min ", lo[a], " m and max ",
+            hi[a], " m");
+  const double dx = p.getFloat("domain.dx");
+  GridSpec g;
+  g.origin = lo;
+  g.dx = dx;
+  g.dims = {int(std::ceil((hi.x - lo.x) / dx - 1e-9)) + 1, int(std::ceil((hi.y - lo.y) / dx - 1e-9)) + 1,
+            int(std::ceil((hi.z - lo.z) / dx - 1e-9)) + 1};
+  const double nodes = double(g.dims.i) * g.dims.j * g.dims.k;
+  require(nodes <= 4.5e7, "domain: a grid of ", g.dims.i, " x ", g.dims.j, " x ", g.dims.k, " nodes at dx = ", dx,
+          " m is too large (needs about ", nodes * 600 / 1e9, " GB)");
+  s.grid = g;
+  const std::string& mode = p.getString("domain.boundary");
+  s.walls.mode = mode == "sticky" ? BoundaryMode::Sticky : mode == "slip" ? BoundaryMode::Slip : BoundaryMode::Separate;
+  s.walls.friction = p.getFloat("domain.friction");
+  s.fixedDt = p.getFloat("time.dt");
+  s.cfl = p.getFloat("time.cfl");
+  s.dtMax = p.getFloat("time.dt_max");
+  s.magneticSolveInterval = int(p.getInt("time.field_solve_every"));
+  s.gravity = p.getVec3("gravity");
+  auto& m = s.magnetic;
+  m.boundary = p.getString("magnetic.boundary") == "open" ? BoundaryKind::Open : BoundaryKind::Shield;
+  m.solve.tolerance = p.getFloat("magnetic.tolerance");
+  m.solve.preconditioner = p.getString("magnetic.preconditioner") == "multigrid" ? PreconditionerKind::Multigrid
+                                                                                 : PreconditionerKind::Jacobi;
+  m.solve.maxNewtonIterations = int(p.getInt("magnetic.max_newton_iterations"));
+  const int padding = int(p.getInt("magnetic.padding"));
+  if (padding > 0) {
+    // The field solve sees free space beyond the MPM walls: material resting
+    // on the floor is not at the magnetic grid's edge.
+    GridSpec mg = g;
+    mg.origin = mg.origin - double(padding) * Vec3d{dx, dx, dx};
+    mg.dims = {mg.dims.i + 2 * padding, mg.dims.j + 2 * padding, mg.dims.k + 2 * padding};
+    s.magneticGrid = mg;
+  }
+  s.validate();
+  return s;
+}
+
+bool vdbBuilt() { return LODESTONE_PLUGIN_HAVE_VDB != 0; }
+
+void addVdbField(FieldSourceSet& set, const std::string& path, const std::string& gridName) {
+#if LODESTONE_PLUGIN_HAVE_VDB
+  set.add(std::make_unique<VdbFieldSource>(path, gridName));
+#else
+  (void)set;
+  throw NotBuilt(concat("cannot read grid '", gridName, "' of '", path,
+                        "': VDB support is not built into this library (no OpenVDB)"));
+#endif
+}
+
+void writeStageVdb(const std::string& path, const MagneticForceStage& stage, const std::string& solverSummary,
+                   bool doublePrecision) {
+#if LODESTONE_PLUGIN_HAVE_VDB
+  VdbFrameMetadata meta;
+  meta.solverSummary = solverSummary;
+  VdbWriteOptions options;
+  options.doublePrecision = doublePrecision;
+  writeFieldsVdb(path, stage, meta, options);
+#else
+  (void)stage;
+  (void)solverSummary;
+  (void)doublePrecision;
+  throw NotBuilt(concat("cannot write '", path, "': VDB support is not built into this library (no OpenVDB)"));
+#endif
+}
+
+}  // namespace lodestone::plugin

@@ -1,0 +1,558 @@
+// The node library: declarations and cooks. Each cook reads its parameters
+// and inputs and calls core (or vdb_io) functions that know nothing of nodes.
+#include <algorithm>
+#include <cmath>
+
+#include "lodestone/core/constants.h"
+#include "lodestone/core/cuboid_magnet.h"
+#include "lodestone/core/cylinder_magnet.h"
+#include "lodestone/core/error.h"
+#include "lodestone/core/material.h"
+#include "lodestone/core/mpm_solver.h"
+#include "lodestone/core/point_dipole.h"
+#include "lodestone/core/sphere_magnet.h"
+#include "lodestone/core/uniform_field.h"
+#include "lodestone/plugin/errors.h"
+#include "lodestone/plugin/node_builders.h"
+#include "lodestone/plugin/node_registry.h"
+
+namespace lodestone::plugin {
+
+namespace {
+
+const std::vector<std::string> kBoundaryModes{"sticky", "slip", "separate"};
+
+void addBoundaryParams(std::vector<ParamDecl>& params, const std::string& def) {
+  params.push_back(choiceParam("boundary", "Boundary", kBoundaryModes, def,
+                               "Velocity condition where material meets it: sticky (no relative motion), slip "
+                               "(no normal motion), separate (may leave)."));
+  params.push_back(
+      range(floatParam("friction", "Friction", 0.0, "", "Coulomb friction coefficient (slip, separate)."), 0, 10));
+}
+
+void addMotionParams(std::vector<ParamDecl>& params) {
+  params.push_back(vec3Param("motion.velocity", "Velocity", {}, "m/s", "Constant linear velocity of the body."));
+  params.push_back(vec3Param("motion.angular_velocity", "Angular velocity", {}, "rad/s",
+                             "Constant angular velocity about the body origin (world frame)."));
+}
+
+ColliderMotion motionFrom(const ParamSet& p, const Pose& rest) {
+  const Vec3d v = p.getVec3("motion.velocity"), w = p.getVec3("motion.angular_velocity");
+  if (norm2(v) == 0 && norm2(w) == 0) return ColliderMotion::fixed(rest);
+  return ColliderMotion::constantVelocity(rest, v, w);
+}
+
+template <typename T>
+NodeValue value(T&& data) {
+  return std::shared_ptr<const std::decay_t<T>>(std::make_shared<std::decay_t<T>>(std::forward<T>(data)));
+}
+
+/// Merges particle inputs into one set (materials renumbered).
+ParticlesData mergeParticles(const std::vector<NodeValue>& inputs) {
+  ParticlesData out;
+  for (const NodeValue& v : inputs) {
+    const auto& in = *std::get<std::shared_ptr<const ParticlesData>>(v);
+    const std::uint32_t offset = std::uint32_t(out.materials.size());
+    out.materials.insert(out.materials.end(), in.materials.begin(), in.materials.end());
+    out.bodies.insert(out.bodies.end(), in.bodies.begin(), in.bodies.end());
+    const MpmParticles& p = in.particles;
+    for (std::size_t k = 0; k < p.size(); ++k) {
+      const std::size_t q =
+          out.particles.add(p.x[k], p.v[k], p.mass[k], p.volume0[k], p.count[k], p.material[k] + offset);
+      out.particles.F[q] = p.F[k];
+      out.particles.J[q] = p.J[k];
+      out.particles.C[q] = p.C[k];
+    }
+  }
+  return out;
+}
+
+SourcesData mergeSources(const std::vector<NodeValue>& inputs) {
+  SourcesData out;
+  for (const NodeValue& v : inputs) {
+    const auto& in = *std::get<std::shared_ptr<const SourcesData>>(v);
+    for (std::size_t k = 0; k < in.fields.size(); ++k) out.fields.add(in.fields.source(k));
+    out.magnets.insert(out.magnets.end(), in.magnets.begin(), in.magnets.end());
+  }
+  return out;
+}
+
+/// The magnetic material shared by the magnetic particles (one law per solve).
+MagneticMaterial sharedMagnetic(const ParticlesData& p) {
+  const MagneticMaterial* found = nullptr;
+  for (const MpmMaterial& m : p.materials) {
+    if (!m.isMagnetic()) continue;
+    if (found && (found->law.kind != m.magnetic.law.kind || found->law.k2 != m.magnetic.law.k2 ||
+                  found->law.chiPerDensity != m.magnetic.law.chiPerDensity))
+      throw InvalidArgument("the magnetic materials differ in their magnetization law; one field solve needs one law");
+    if (!found) found = &m.magnetic;
+  }
+  return found ? *found : nonMagneticMaterial();
+}
+
+// ---- material ------------------------------------------------------------
+NodeDecl materialNode() {
+  NodeDecl d;
+  d.type = "material";
+  d.label = "Material";
+  d.category = "material";
+  d.help = "An MPM material (Neo-Hookean solid or viscous fluid) with an optional magnetization law.";
+  auto& q = d.params;
+  q.push_back(required(stringParam("name", "Name", "material", "Name by which bodies refer to the material.")));
+  q.push_back(required(choiceParam("model", "Model", {"solid", "fluid"}, "solid",
+                                   "Constitutive model: Neo-Hookean solid or viscous (J-based) fluid.")));
+  q.push_back(required(positive(floatParam("density", "Density", 1000.0, "kg/m^3", "Rest mass density."))));
+  q.push_back(
+      when(required(positive(floatParam("youngs_modulus", "Young's modulus", 1e5, "Pa", "Stiffness of the solid."))),
+           "model", {"solid"}));
+  q.push_back(
+      when(range(floatParam("poisson_ratio", "Poisson's ratio", 0.3, "", "Compressibility of the solid."), 0, 0.49),
+           "model", {"solid"}));
+  q.push_back(
+      when(required(nonNegative(floatParam("viscosity", "Viscosity", 1.0, "Pa*s", "Dynamic viscosity of the fluid."))),
+           "model", {"fluid"}));
+  q.push_back(
+      when(required(positive(floatParam("bulk_modulus", "Bulk modulus", 1e5, "Pa", "Bulk modulus of the fluid."))),
+           "model", {"fluid"}));
+  q.push_back(required(choiceParam("magnetic.law", "Magnetization law",
+                                   {"none", "paper", "paper-linear", "langevin", "linear"}, "none",
+                                   "none; paper (Langevin, Table 2 of Sun et al. 2021); paper-linear (its low-field "
+                                   "linearisation); langevin (moment, temperature); linear (chi).")));
+  q.push_back(when(
+      required(positive(floatParam("magnetic.moment", "Moment", 1.09e-19, "A*m^2", "Moment of one micro-particle."))),
+      "magnetic.law", {"langevin"}));
+  q.push_back(when(positive(floatParam("magnetic.temperature", "Temperature", 300.0, "K", "Temperature.")),
+                   "magnetic.law", {"langevin"}));
+  q.push_back(
+      when(required(range(
+               floatParam("magnetic.chi", "Susceptibility", 0.91, "", "Susceptibility of the bulk material."), 0, 1e4)),
+           "magnetic.law", {"linear"}));
+  q.push_back(when(positive(floatParam("magnetic.number_density", "Number density", paperMaterial().numberDensity,
+                                       "1/m^3", "Micro-particles per m^3 of bulk material (default: the paper's).")),
+                   "magnetic.law", {"langevin", "linear"}));
+  q.push_back(when(positive(floatParam("magnetic.per_cell", "Per cell", 3.6e17, "micro-particles",
+                                       "Micro-particles per filled cell of size cell_size; with cell_size, "
+                                       "replaces number_density.")),
+                   "magnetic.law", {"langevin", "linear"}));
+  q.push_back(when(positive(floatParam("magnetic.cell_size", "Cell size", 7.8e-3, "m", "Cell size of per_cell.")),
+                   "magnetic.law", {"langevin", "linear"}));
+  d.outputs = {{"material", PortType::Material, "The material."}};
+  d.cook = [](const CookContext& c) {
+    MaterialData m;
+    m.name = c.params().getString("name");
+    m.material = materialFrom(c.params());
+    return CookOutputs{{"material", value(std::move(m))}};
+  };
+  return d;
+}
+
+// ---- particle source -------------------------------------------------------
+void addShapeParams(std::vector<ParamDecl>& q, const std::vector<std::string>& shapes, const std::string& def) {
+  q.push_back(required(choiceParam("shape", "Shape", shapes, def,
+                                   "Shape of the body; level_set and mesh are read from a file (need OpenVDB).")));
+}
+
+void addFileShapeParams(std::vector<ParamDecl>& q) {
+  q.push_back(when(required(stringParam("file", "File", "shape.vdb",
+                                        "VDB level set (level_set) or OBJ mesh (mesh); in scene files relative "
+                                        "to the scene file. Placed in its own frame (scene files: center, axis).")),
+                   "shape", {"level_set", "mesh"}));
+  q.push_back(when(stringParam("grid", "Grid", "surface", "Name of the level-set grid."), "shape", {"level_set"}));
+  q.push_back(when(nonNegative(floatParam("voxel_size", "Voxel size", 0.0, "m",
+                                          "Voxel size the mesh is sampled at; 0: the MPM grid spacing.")),
+                   "shape", {"mesh"}));
+}
+
+NodeDecl particleSourceNode() {
+  NodeDecl d;
+  d.type = "particle_source";
+  d.label = "Particle Source";
+  d.category = "particles";
+  d.help =
+      "Fills a shape with material points on a lattice (particles per cell of the MPM grid), each with its "
+      "volume, mass and micro-particle count n_p = n0 V_p.";
+  auto& q = d.params;
+  q.push_back(stringParam("name", "Name", "body", "Name of the body."));
+  addShapeParams(q, {"box", "sphere", "cylinder", "level_set", "mesh"}, "box");
+  q.push_back(when(required(vec3Param("center", "Center", {}, "m", "Centre of the shape.")), "shape",
+                   {"box", "sphere", "cylinder"}));
+  q.push_back(directionParam("axis", "Axis", {0, 0, 1},
+                             "Body z axis (the cylinder's axis); a file shape's z axis is turned onto it."));
+  addFileShapeParams(q);
+  q.push_back(when(required(positive(vec3Param("half_size", "Half size", {0.02, 0.02, 0.02}, "m", "Box half-sizes."))),
+                   "shape", {"box"}));
+  q.push_back(when(required(positive(floatParam("radius", "Radius", 0.02, "m", "Sphere or cylinder radius."))), "shape",
+                   {"sphere", "cylinder"}));
+  q.push_back(when(required(positive(floatParam("half_length", "Half length", 0.02, "m", "Cylinder half-length."))),
+                   "shape", {"cylinder"}));
+  q.push_back(
+      positive(floatParam("cell_size", "Cell size", 0.01, "m",
+                          "MPM grid spacing dx the lattice is fitted to (scene files: domain.dx, not a key).")));
+  q.push_back(intParam("particles_per_cell", "Particles per cell", 8, 1, 1000, "Lattice points per MPM cell."));
+  q.push_back(
+      range(floatParam("jitter", "Jitter", 0.0, "", "Random offset as a fraction of the lattice spacing."), 0, 1));
+  q.push_back(intParam("seed", "Seed", 1, 0, std::int64_t(1) << 62, "Jitter seed."));
+  q.push_back(vec3Param("velocity", "Velocity", {}, "m/s", "Initial velocity."));
+  d.inputs = {{"material", PortType::Material, "The body's material (default: a non-magnetic solid).", true, false}};
+  d.outputs = {{"particles", PortType::Particles, "The material points."}};
+  d.cook = [](const CookContext& c) {
+    const ParamSet& p = c.params();
+    ParticlesData out;
+    ParticlesData::Body body;
+    body.name = p.getString("name");
+    const auto material = c.input<MaterialData>("material");
+    body.material = material ? *material : MaterialData{"default", neoHookeanSolid(1e5, 0.3, 1000.0)};
+    body.shape = shapeFrom(p);
+    body.emit.cellSize = p.getFloat("cell_size");
+    body.emit.particlesPerCell = int(p.getInt("particles_per_cell"));
+    body.emit.jitter = p.getFloat("jitter");
+    body.emit.seed = std::uint64_t(p.getInt("seed"));
+    body.emit.velocity = p.getVec3("velocity");
+    emitParticles(out.particles, body.shape, body.material.material, 0, body.emit);
+    out.materials.push_back(body.material.material);
+    out.bodies.push_back(std::move(body));
+    return CookOutputs{{"particles", value(std::move(out))}};
+  };
+  return d;
+}
+
+// ---- magnet -----------------------------------------------------------------
+NodeDecl magnetNode() {
+  NodeDecl d;
+  d.type = "magnet";
+  d.label = "Magnet";
+  d.category = "sources";
+  d.help =
+      "A uniformly magnetized permanent magnet (sphere, box or cylinder) with a closed-form field; "
+      "optionally also a collider of the MPM.";
+  auto& q = d.params;
+  addShapeParams(q, {"sphere", "box", "cylinder"}, "cylinder");
+  q.push_back(required(vec3Param("center", "Center", {0, 0, -0.05}, "m", "Centre of the magnet.")));
+  q.push_back(directionParam("axis", "Axis", {0, 0, 1}, "Magnetization direction (the body z axis)."));
+  q.push_back(
+      range(floatParam("magnetization", "Magnetization", 1e6, "A/m", "Magnetization along the axis."), -3e6, 3e6));
+  q.push_back(range(floatParam("remanence", "Remanence", 1.2, "T",
+                               "Remanent induction Br; when given, replaces magnetization (M = Br/mu0)."),
+                    -3, 3));
+  q.push_back(when(required(positive(floatParam("radius", "Radius", 0.02, "m", "Sphere or cylinder radius."))), "shape",
+                   {"sphere", "cylinder"}));
+  q.push_back(when(required(positive(vec3Param("half_size", "Half size", {0.02, 0.02, 0.02}, "m", "Box half-sizes."))),
+                   "shape", {"box"}));
+  q.push_back(when(required(positive(floatParam("half_length", "Half length", 0.01, "m", "Cylinder half-length."))),
+                   "shape", {"cylinder"}));
+  q.push_back(boolParam("collider", "Collider", true, "Also an obstacle for the material."));
+  addBoundaryParams(q, "sticky");
+  addMotionParams(q);
+  d.inputs = {{"sources", PortType::Sources, "Sources to add this magnet to.", true, true}};
+  d.outputs = {{"sources", PortType::Sources, "The input sources plus this magnet."}};
+  d.cook = [](const CookContext& c) {
+    const ParamSet& p = c.params();
+    SourcesData out = mergeSources(c.inputs("sources"));
+    SourcesData::Magnet m;
+    const Pose pose = poseAlong(p.getVec3("center"), p.getVec3("axis"));
+    m.magnet = makeMagnet(p, pose);
+    m.motion = motionFrom(p, pose);
+    m.collider = p.getBool("collider");
+    m.boundary = boundaryFrom(p);
+    out.magnets.push_back(std::move(m));
+    return CookOutputs{{"sources", value(std::move(out))}};
+  };
+  return d;
+}
+
+// ---- applied field ---------------------------------------------------------
+NodeDecl appliedFieldNode() {
+  NodeDecl d;
+  d.type = "applied_field";
+  d.label = "Applied Field";
+  d.category = "sources";
+  d.help =
+      "An applied field H_ext: uniform, a point dipole, or a vector grid of a VDB file (needs OpenVDB); "
+      "optionally switched on by a linear ramp.";
+  auto& q = d.params;
+  q.push_back(required(choiceParam("type", "Type", {"uniform", "dipole", "vdb"}, "uniform", "Kind of field.")));
+  q.push_back(when(required(range(vec3Param("H", "Field", {0, 0, 1e4}, "A/m", "Uniform field."), -1e8, 1e8)), "type",
+                   {"uniform"}));
+  q.push_back(
+      when(required(vec3Param("position", "Position", {0, 0, -0.1}, "m", "Dipole position.")), "type", {"dipole"}));
+  q.push_back(when(required(vec3Param("moment", "Moment", {0, 0, 1}, "A*m^2", "Dipole moment.")), "type", {"dipole"}));
+  q.push_back(when(required(stringParam("file", "File", "field.vdb", "VDB file holding the field.")), "type", {"vdb"}));
+  q.push_back(when(stringParam("grid", "Grid", "H", "Name of the vector grid (A/m)."), "type", {"vdb"}));
+  q.push_back(nonNegative(floatListParam("ramp", "Ramp", {0.0, 0.0}, "s", 2, 2,
+                                         "[t0, t1]: the field is off before t0 and on after t1, linear between.")));
+  d.inputs = {{"sources", PortType::Sources, "Sources to add this field to.", true, true}};
+  d.outputs = {{"sources", PortType::Sources, "The input sources plus this field."}};
+  d.cook = [](const CookContext& c) {
+    const ParamSet& p = c.params();
+    SourcesData out = mergeSources(c.inputs("sources"));
+    out.fields.add(appliedFieldFrom(p));
+    return CookOutputs{{"sources", value(std::move(out))}};
+  };
+  return d;
+}
+
+// ---- collider ------------------------------------------------------------------
+NodeDecl colliderNode() {
+  NodeDecl d;
+  d.type = "collider";
+  d.label = "Collider";
+  d.category = "mpm";
+  d.help = "An analytic obstacle of the MPM (plane, box, sphere, cylinder; inverted for containers), static or moving.";
+  auto& q = d.params;
+  addShapeParams(q, {"plane", "box", "sphere", "cylinder", "level_set", "mesh"}, "plane");
+  q.push_back(
+      when(required(vec3Param("point", "Point", {0, 0, -0.08}, "m", "A point of the plane.")), "shape", {"plane"}));
+  q.push_back(when(required(directionParam("normal", "Normal", {0, 0, 1}, "Plane normal (into the free side).")),
+                   "shape", {"plane"}));
+  q.push_back(when(required(vec3Param("center", "Center", {}, "m", "Centre of the shape.")), "shape",
+                   {"box", "sphere", "cylinder"}));
+  q.push_back(when(directionParam("axis", "Axis", {0, 0, 1}, "Body z axis."), "shape", {"box", "sphere", "cylinder"}));
+  addFileShapeParams(q);
+  q.push_back(when(required(positive(vec3Param("half_size", "Half size", {0.05, 0.05, 0.05}, "m", "Box half-sizes."))),
+                   "shape", {"box"}));
+  q.push_back(when(required(positive(floatParam("radius", "Radius", 0.05, "m", "Sphere or cylinder radius."))), "shape",
+                   {"sphere", "cylinder"}));
+  q.push_back(when(required(positive(floatParam("half_length", "Half length", 0.05, "m", "Cylinder half-length."))),
+                   "shape", {"cylinder"}));
+  q.push_back(when(boolParam("inverted", "Inverted", false, "Solid outside the shape (a container)."), "shape",
+                   {"box", "sphere", "cylinder", "level_set", "mesh"}));
+  addBoundaryParams(q, "sticky");
+  addMotionParams(q);
+  d.inputs = {{"colliders", PortType::Colliders, "Colliders to add this one to.", true, true}};
+  d.outputs = {{"colliders", PortType::Colliders, "The input colliders plus this one."}};
+  d.cook = [](const CookContext& c) {
+    const ParamSet& p = c.params();
+    CollidersData out;
+    for (const NodeValue& v : c.inputs("colliders")) {
+      const auto& in = *std::get<std::shared_ptr<const CollidersData>>(v);
+      out.colliders.insert(out.colliders.end(), in.colliders.begin(), in.colliders.end());
+    }
+    Pose pose;
+    const ColliderShape cs = colliderShapeFrom(p, pose);
+    out.colliders.emplace_back(cs, motionFrom(p, pose), boundaryFrom(p));
+    return CookOutputs{{"colliders", value(std::move(out))}};
+  };
+  return d;
+}
+
+// ---- magnetization transfer ------------------------------------------------------
+NodeDecl transferNode() {
+  NodeDecl d;
+  d.type = "magnetization_transfer";
+  d.label = "Magnetization Transfer";
+  d.category = "magnetism";
+  d.help =
+      "Deposits the micro-particle density n_i = sum_p w_ip n_p / dx^3 (quadratic B-splines) on a grid "
+      "enclosing the magnetic particles plus a margin of free space.";
+  auto& q = d.params;
+  q.push_back(positive(floatParam("dx", "Grid spacing", 0.01, "m", "Spacing of the field-solve grid.")));
+  q.push_back(intParam("padding", "Padding", 4, 0, 64, "Cells of free space around the particles' bounding box."));
+  d.inputs = {{"particles", PortType::Particles, "Material points (only magnetic ones deposit).", false, true}};
+  d.outputs = {{"density", PortType::Density, "Nodal micro-particle density, 1/m^3."}};
+  d.cook = [](const CookContext& c) {
+    const ParamSet& p = c.params();
+    const ParticlesData all = mergeParticles(c.inputs("particles"));
+    const double dx = p.getFloat("dx");
+    const int pad = int(p.getInt("padding")) + 2;  // +2: the stencil's reach
+    Vec3d lo{1e300, 1e300, 1e300}, hi{-1e300, -1e300, -1e300};
+    for (std::size_t k = 0; k < all.particles.size(); ++k)
+      for (int a = 0; a < 3; ++a) {
+        lo[a] = std::min(lo[a], all.particles.x[k][a]);
+        hi[a] = std::max(hi[a], all.particles.x[k][a]);
+      }
+    require(!all.particles.empty(), "no particles to transfer");
+    GridSpec g;
+    g.dx = dx;
+    for (int a = 0; a < 3; ++a) {
+      const double o = std::floor(lo[a] / dx) * dx - pad * dx;
+      (a == 0 ? g.origin.x : a == 1 ? g.origin.y : g.origin.z) = o;
+    }
+    g.dims = {int(std::ceil((hi.x - g.origin.x) / dx)) + pad + 1, int(std::ceil((hi.y - g.origin.y) / dx)) + pad + 1,
+              int(std::ceil((hi.z - g.origin.z) / dx)) + pad + 1};
+    DensityData out;
+    out.density.reset(g);
+    ParticleView view{all.particles.x.data(), all.particles.count.data(), all.particles.size()};
+    out.totalCount = depositNumberDensity(view, out.density.view()).totalCount;
+    out.material = sharedMagnetic(all);
+    return CookOutputs{{"density", value(std::move(out))}};
+  };
+  return d;
+}
+
+// ---- field solve -----------------------------------------------------------------------
+void addSolveParams(std::vector<ParamDecl>& q, const std::string& prefix) {
+  q.push_back(choiceParam(prefix + "boundary", "Field boundary", {"open", "shield"}, "open",
+                          "open: far-field potential on the outer nodes; shield: the paper's Neumann wall."));
+  q.push_back(range(floatParam(prefix + "tolerance", "Tolerance", 1e-6, "", "Relative Newton residual to reach."),
+                    1e-14, 1e-1));
+  q.push_back(choiceParam(prefix + "preconditioner", "Preconditioner", {"multigrid", "jacobi"}, "multigrid",
+                          "Preconditioner of the inner CG."));
+  q.push_back(intParam(prefix + "max_newton_iterations", "Newton iterations", 40, 1, 1000, "Newton iteration cap."));
+}
+
+MagneticStageSettings solveSettingsFrom(const ParamSet& p, const std::string& prefix) {
+  MagneticStageSettings s;
+  s.boundary = p.getString(prefix + "boundary") == "open" ? BoundaryKind::Open : BoundaryKind::Shield;
+  s.solve.tolerance = p.getFloat(prefix + "tolerance");
+  s.solve.preconditioner = p.getString(prefix + "preconditioner") == "multigrid" ? PreconditionerKind::Multigrid
+                                                                                 : PreconditionerKind::Jacobi;
+  s.solve.maxNewtonIterations = int(p.getInt(prefix + "max_newton_iterations"));
+  return s;
+}
+
+NodeDecl fieldSolveNode() {
+  NodeDecl d;
+  d.type = "field_solve";
+  d.label = "Field Solve";
+  d.category = "magnetism";
+  d.help =
+      "Solves the nonlinear magnetostatic problem for phi on the density's grid (Newton-PCG) and recovers "
+      "H, M, B and the Einstein-Laub force at the nodes.";
+  addSolveParams(d.params, "");
+  d.params.push_back(floatParam("time", "Time", 0.0, "s", "Time at which the sources are evaluated."));
+  d.inputs = {{"density", PortType::Density, "Micro-particle density and its material."},
+              {"sources", PortType::Sources, "Applied-field sources (none: no field).", true, true}};
+  d.outputs = {{"field", PortType::Field, "The solved stage: phi, H, M, B, force density and nodal force."}};
+  d.cook = [](const CookContext& c) {
+    const auto density = c.input<DensityData>("density");
+    const SourcesData sources = mergeSources(c.inputs("sources"));
+    FieldData out;
+    out.stage = std::make_shared<MagneticForceStage>(density->density.spec(), density->material,
+                                                     solveSettingsFrom(c.params(), ""));
+    out.report = out.stage->runOnDensity(density->density.view(), sources.all(), c.params().getFloat("time"));
+    return CookOutputs{{"field", value(std::move(out))}};
+  };
+  return d;
+}
+
+// ---- magnetic force --------------------------------------------------------------------
+NodeDecl magneticForceNode() {
+  NodeDecl d;
+  d.type = "magnetic_force";
+  d.label = "Magnetic Force";
+  d.category = "magnetism";
+  d.help =
+      "Conservative magnetic force on each material point (N): the nodal Einstein-Laub forces shared among "
+      "the particles whose deposit made the density (sum over particles = sum over nodes).";
+  d.inputs = {{"field", PortType::Field, "A solved field."},
+              {"particles", PortType::Particles, "The particles that were transferred.", false, true}};
+  d.outputs = {{"forces", PortType::Forces, "Per-particle forces, N."}};
+  d.cook = [](const CookContext& c) {
+    const auto field = c.input<FieldData>("field");
+    const ParticlesData all = mergeParticles(c.inputs("particles"));
+    ForcesData out;
+    out.particleForces.resize(all.particles.size());
+    field->stage->particleForces({all.particles.x.data(), all.particles.count.data(), all.particles.size()},
+                                 out.particleForces.data());
+    for (const Vec3d& f : out.particleForces) out.total += f;
+    out.report = field->report;
+    return CookOutputs{{"forces", value(std::move(out))}};
+  };
+  return d;
+}
+
+// ---- MPM solver ------------------------------------------------------------------------
+NodeDecl mpmSolverNode() {
+  NodeDecl d;
+  d.type = "mpm_solver";
+  d.label = "MPM Solver";
+  d.category = "mpm";
+  d.help =
+      "The reference MLS-MPM with the magnetic-force stage: steps the particles for a number of frames in a "
+      "box domain with walls, gravity, colliders and magnets.";
+  auto& q = d.params;
+  q.push_back(required(vec3Param("domain.min", "Domain min", {-0.1, -0.1, -0.1}, "m", "Lower corner of the MPM box.")));
+  q.push_back(required(vec3Param("domain.max", "Domain max", {0.1, 0.1, 0.1}, "m", "Upper corner of the MPM box.")));
+  q.push_back(required(positive(floatParam("domain.dx", "Grid spacing", 0.02, "m", "MPM grid spacing."))));
+  q.push_back(choiceParam("domain.boundary", "Walls", kBoundaryModes, "separate", "Velocity condition at the walls."));
+  q.push_back(range(floatParam("domain.friction", "Wall friction", 0.0, "", "Coulomb friction at the walls."), 0, 10));
+  q.push_back(required(intParam("time.frames", "Frames", 1, 1, 100000, "Frames to simulate.")));
+  q.push_back(range(floatParam("time.fps", "Frame rate", 24.0, "1/s", "Frames per second."), 1, 10000));
+  q.push_back(range(floatParam("time.dt", "Time step", 0.0, "s", "Fixed substep; 0: CFL-adaptive."), 0, 1));
+  q.push_back(range(floatParam("time.cfl", "CFL", 0.4, "", "Fraction of a cell crossed per substep."), 0.01, 1));
+  q.push_back(positive(floatParam("time.dt_max", "Largest step", 1e-3, "s", "Largest CFL substep.")));
+  q.push_back(intParam("time.field_solve_every", "Solve interval", 0, 0, 1000000,
+                       "Substeps between field solves; 0: once per frame."));
+  q.push_back(vec3Param("gravity", "Gravity", {0, 0, -9.81}, "m/s^2", "Gravitational acceleration."));
+  addSolveParams(q, "magnetic.");
+  q.push_back(intParam("magnetic.padding", "Field padding", 4, 0, 64,
+                       "Cells of free space added around the MPM box for the field solve."));
+  d.inputs = {{"particles", PortType::Particles, "Material points to simulate.", false, true},
+              {"sources", PortType::Sources, "Applied fields and magnets.", true, true},
+              {"colliders", PortType::Colliders, "Obstacles.", true, true}};
+  d.outputs = {{"simulation", PortType::Simulation, "The solver after the frames, with per-frame statistics."}};
+  d.cook = [](const CookContext& c) {
+    const ParamSet& p = c.params();
+    MpmSettings s = mpmSettingsFrom(p);
+    auto solver = std::make_shared<MpmSolver>(s);
+    const ParticlesData all = mergeParticles(c.inputs("particles"));
+    for (const MpmMaterial& m : all.materials) solver->addMaterial(m);
+    solver->particles() = all.particles;
+    const SourcesData sources = mergeSources(c.inputs("sources"));
+    solver->setSources(sources.fields);
+    for (const SourcesData::Magnet& m : sources.magnets) {
+      if (m.collider)
+        solver->addMagnet(*m.magnet, m.motion, m.boundary);
+      else
+        solver->sources().add(*m.magnet);
+    }
+    for (const NodeValue& v : c.inputs("colliders"))
+      for (const MpmCollider& col : std::get<std::shared_ptr<const CollidersData>>(v)->colliders)
+        solver->addCollider(col);
+    SimulationData out;
+    const auto comMagnetic = [&]() {
+      const MpmParticles& pts = solver->particles();
+      Vec3d sum;
+      double w = 0;
+      for (std::size_t k = 0; k < pts.size(); ++k) {
+        const double m = pts.count[k] > 0 ? pts.mass[k] : 0.0;
+        sum += m * pts.x[k];
+        w += m;
+      }
+      return w > 0 ? sum / w : pts.centreOfMass();
+    };
+    out.frameTimes.push_back(solver->time());
+    out.centreOfMass.push_back(comMagnetic());
+    const int frames = int(p.getInt("time.frames"));
+    for (int f = 0; f < frames; ++f) {
+      solver->advanceFrame(1.0 / p.getFloat("time.fps"));
+      out.frameTimes.push_back(solver->time());
+      out.centreOfMass.push_back(comMagnetic());
+    }
+    out.frames = frames;
+    out.time = solver->time();
+    out.solver = std::move(solver);
+    return CookOutputs{{"simulation", value(std::move(out))}};
+  };
+  return d;
+}
+
+// ---- VDB export ------------------------------------------------------------------------
+NodeDecl vdbExportNode() {
+  NodeDecl d;
+  d.type = "vdb_export";
+  d.label = "VDB Export";
+  d.category = "io";
+  d.help = "Writes the fields of a solve (n, phi, H, M, B, force) to one .vdb file (docs/vdb.md); needs OpenVDB.";
+  auto& q = d.params;
+  q.push_back(required(stringParam("path", "Path", "fields.vdb", "File to write (atomically).")));
+  q.push_back(boolParam("double_precision", "Double precision", false, "Write DoubleGrid/Vec3dGrid instead of float."));
+  d.inputs = {{"field", PortType::Field, "A solved field."}};
+  d.outputs = {{"field", PortType::Field, "The input, unchanged (after the file is written)."}};
+  d.cook = [](const CookContext& c) {
+    const auto field = c.input<FieldData>("field");
+    writeStageVdb(c.params().getString("path"), *field->stage, field->report.summary(),
+                  c.params().getBool("double_precision"));
+    return CookOutputs{{"field", NodeValue(field)}};
+  };
+  return d;
+}
+
+}  // namespace
+
+std::vector<NodeDecl> buildRegistry() {
+  return {particleSourceNode(), materialNode(),      magnetNode(),    appliedFieldNode(), transferNode(),
+          fieldSolveNode(),     magneticForceNode(), mpmSolverNode(), colliderNode(),     vdbExportNode()};
+}
+
+}  // namespace lodestone::plugin

@@ -1,0 +1,20 @@
+# The external host uses Lodestone only through the C header and dlopen: its
+# source includes no other Lodestone header and its binary needs no Lodestone
+# library (nothing of ours in its NEEDED entries or undefined symbols).
+file(STRINGS ${SOURCE} includes REGEX "^#include")
+foreach(line IN LISTS includes)
+  if(line MATCHES "lodestone/" AND NOT line MATCHES "lodestone/plugin/lodestone\\.h")
+    message(FATAL_ERROR "the external host includes a Lodestone C++ header: ${line}")
+  endif()
+endforeach()
+find_program(READELF readelf REQUIRED)
+find_program(NM nm REQUIRED)
+execute_process(COMMAND ${READELF} -d ${BINARY} OUTPUT_VARIABLE dynamic)
+if(dynamic MATCHES "lodestone")
+  message(FATAL_ERROR "the external host links a Lodestone library:\n${dynamic}")
+endif()
+execute_process(COMMAND ${NM} -u ${BINARY} OUTPUT_VARIABLE undefined)
+if(undefined MATCHES "lodestone")
+  message(FATAL_ERROR "the external host refers to Lodestone symbols:\n${undefined}")
+endif()
+message(STATUS "independent: only lodestone.h, no Lodestone library")

@@ -1,0 +1,317 @@
+// The node library: every node cooks with its defaults, validation names the
+// node and the parameter, a throwing cook becomes a status, the generated
+// docs are up to date, and a network built through the C ABI gives the
+// stage's numbers.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <fstream>
+#include <functional>
+#include <map>
+#include <sstream>
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include "lodestone/plugin/errors.h"
+#include "lodestone/plugin/lodestone.h"
+#include "lodestone/plugin/network.h"
+#include "lodestone/plugin/node_registry.h"
+
+using namespace lodestone;
+using namespace lodestone::plugin;
+
+namespace {
+
+/// Adds a node of `type` named `name` and, recursively, a default provider
+/// for each of its required inputs.
+void addWithProviders(Network& net, const std::string& type, const std::string& name) {
+  static const std::map<PortType, std::string> provider = {{PortType::Particles, "particle_source"},
+                                                           {PortType::Material, "material"},
+                                                           {PortType::Sources, "magnet"},
+                                                           {PortType::Colliders, "collider"},
+                                                           {PortType::Density, "magnetization_transfer"},
+                                                           {PortType::Field, "field_solve"}};
+  net.addNode(type, name);
+  for (const PortDecl& in : requireNode(type).inputs) {
+    if (in.optional) continue;
+    const std::string up = name + "_" + in.name;
+    addWithProviders(net, provider.at(in.type), up);
+    net.connect(up, requireNode(provider.at(in.type)).outputs.front().name, name, in.name);
+  }
+}
+
+TEST(PluginNodes, RegistryHasTheNodeLibrary) {
+  const char* expected[] = {
+      "particle_source", "material",       "magnet",     "applied_field", "magnetization_transfer",
+      "field_solve",     "magnetic_force", "mpm_solver", "collider",      "vdb_export"};
+  for (const char* t : expected) EXPECT_NE(findNode(t), nullptr) << t;
+  for (const NodeDecl& d : nodeRegistry()) {
+    EXPECT_FALSE(d.outputs.empty()) << d.type;
+    for (const ParamDecl& p : d.params) {
+      EXPECT_FALSE(p.help.empty()) << d.type << "." << p.name;
+      EXPECT_NO_THROW(p.check(p.defaultValue, d.type)) << d.type << "." << p.name << " default out of range";
+      if (!p.when.param.empty()) {
+        EXPECT_NE(d.param(p.when.param), nullptr) << d.type << "." << p.name;
+      }
+    }
+  }
+}
+
+TEST(PluginNodes, EveryNodeCooksWithItsDefaults) {
+  for (const NodeDecl& d : nodeRegistry()) {
+    Network net;
+    addWithProviders(net, d.type, "node");
+    if (d.type == "vdb_export") net.setParam("node", "path", ::testing::TempDir() + "defaults.vdb");
+    if (d.type == "vdb_export" && !vdbBuilt()) {
+      try {
+        net.cook("node");
+        ADD_FAILURE() << "vdb_export cooked without OpenVDB";
+      } catch (const CookFailed& e) {
+        EXPECT_TRUE(e.notBuilt()) << e.what();
+      }
+      continue;
+    }
+    try {
+      const CookOutputs& out = net.cook("node");
+      for (const PortDecl& p : d.outputs) EXPECT_EQ(typeOf(out.at(p.name)), p.type) << d.type << "." << p.name;
+    } catch (const std::exception& e) {
+      ADD_FAILURE() << d.type << ": " << e.what();
+    }
+  }
+}
+
+std::string errorOf(const std::function<void()>& f);
+
+TEST(PluginNodes, ParticleSourceFillsAMeshWhenVdbIsBuilt) {
+  // A cube of side 4 cm as an OBJ mesh (outward, counter-clockwise faces).
+  const std::string path = ::testing::TempDir() + "cube.obj";
+  {
+    std::ofstream obj(path);
+    obj << "v -0.02 -0.02 -0.02\nv 0.02 -0.02 -0.02\nv 0.02 0.02 -0.02\nv -0.02 0.02 -0.02\n"
+           "v -0.02 -0.02 0.02\nv 0.02 -0.02 0.02\nv 0.02 0.02 0.02\nv -0.02 0.02 0.02\n"
+           "f 1 4 3 2\nf 5 6 7 8\nf 1 2 6 5\nf 2 3 7 6\nf 3 4 8 7\nf 4 1 5 8\n";
+  }
+  Network net;
+  net.addNode("particle_source", "cube");
+  net.setParam("cube", "shape", std::string("mesh"));
+  net.setParam("cube", "file", path);
+  net.setParam("cube", "voxel_size", 0.004);
+  net.setParam("cube", "cell_size", 0.008);
+  if (!vdbBuilt()) {
+    EXPECT_NE(errorOf([&] { net.cook("cube"); }).find("needs OpenVDB"), std::string::npos);
+    return;
+  }
+  const auto p = std::get<std::shared_ptr<const ParticlesData>>(net.cook("cube").at("particles"));
+  double volume = 0;
+  for (double v : p->particles.volume0) volume += v;
+  // The lattice of spacing 4 mm inside the level set: the cube's 64 cm^3 up
+  // to the staircase error of one lattice layer (4 mm on 4 cm: < 30%).
+  EXPECT_NEAR(volume, 6.4e-5, 0.3 * 6.4e-5);
+  EXPECT_GT(p->particles.size(), 500u);
+  const Vec3d c = p->particles.centreOfMass();
+  EXPECT_LT(norm(c), 1e-3);
+}
+
+std::string errorOf(const std::function<void()>& f) {
+  try {
+    f();
+  } catch (const std::exception& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(PluginNodes, ValidationErrorsNameTheNodeAndTheParameter) {
+  Network net;
+  net.addNode("material", "ferro");
+  net.addNode("particle_source", "blob");
+  struct Case {
+    std::function<void()> call;
+    std::vector<std::string> expected;
+  };
+  const std::vector<Case> cases = {
+      {[&] { net.setParam("ferro", "density", -5.0); }, {"node 'ferro' (material)", "density", "kg/m^3", "> 0", "-5"}},
+      {[&] { net.setParam("ferro", "densty", 1.0); }, {"node 'ferro' (material)", "densty", "did you mean 'density'"}},
+      {[&] { net.setParam("ferro", "model", std::string("gel")); }, {"ferro", "model", "one of solid, fluid"}},
+      {[&] { net.setParam("ferro", "poisson_ratio", 0.6); }, {"ferro", "poisson_ratio", "in [0, 0.49]"}},
+      {[&] { net.setParam("blob", "particles_per_cell", 2.5); },
+       {"node 'blob' (particle_source)", "particles_per_cell", "integer"}},
+      {[&] {
+         net.setParam("blob", "half_size", Vec3d{0.1, -0.1, 0.1});
+       },
+       {"blob", "half_size", "m"}},
+      {[&] {
+         net.setParam("blob", "axis", Vec3d{0, 0, 0});
+       },
+       {"blob", "axis", "non-zero"}},
+      {[&] { net.setParam("blob", "center", 1.0); }, {"blob", "center", "3-vector"}},
+      {[&] { net.addNode("magnett", "m"); }, {"unknown node type 'magnett'"}},
+      {[&] { net.connect("ferro", "material", "blob", "materal"); }, {"blob", "materal", "did you mean 'material'"}},
+      {[&] { net.connect("blob", "particles", "ferro", "x"); }, {"ferro", "no input named 'x'"}},
+  };
+  for (const Case& c : cases) {
+    const std::string e = errorOf(c.call);
+    for (const std::string& s : c.expected) EXPECT_NE(e.find(s), std::string::npos) << "'" << s << "' not in: " << e;
+  }
+  // Type mismatch and cycles.
+  net.addNode("magnetization_transfer", "n");
+  EXPECT_NE(errorOf([&] { net.connect("ferro", "material", "n", "particles"); }).find("takes particles"),
+            std::string::npos);
+  net.connect("ferro", "material", "blob", "material");
+  EXPECT_NE(errorOf([&] { net.connect("ferro", "material", "blob", "material"); }).find("already has one"),
+            std::string::npos);
+}
+
+TEST(PluginNodes, AThrowingCookIsReportedNotPropagated) {
+  NodeDecl bad;
+  bad.type = "throws";
+  bad.outputs = {{"sources", PortType::Sources, "never"}};
+  int which = 0;
+  bad.cook = [&which](const CookContext&) -> CookOutputs {
+    if (which == 0) throw std::runtime_error("boom inside the cook");
+    if (which == 1) throw 42;  // not even a std::exception
+    return {};                 // no outputs at all
+  };
+  for (which = 0; which < 3; ++which) {
+    Network net;
+    net.addNode(bad, "b");
+    net.addNode("applied_field", "f");
+    net.connect("b", "sources", "f", "sources");
+    const std::string e = errorOf([&] { net.cook("f"); });
+    EXPECT_NE(e.find("node 'b' (throws)"), std::string::npos) << e;
+    if (which == 0) {
+      EXPECT_NE(e.find("boom inside the cook"), std::string::npos) << e;
+    }
+  }
+  // Through the C ABI: a cook throwing (mpm_solver with an empty domain) is a status and a message.
+  const lodestone_api* a = nullptr;
+  ASSERT_EQ(lodestone_get_api(1, 0, &a), LODESTONE_OK);
+  lodestone_context* ctx = nullptr;
+  ASSERT_EQ(a->context_create(&ctx), LODESTONE_OK);
+  lodestone_network* n = nullptr;
+  ASSERT_EQ(a->network_create(ctx, &n), LODESTONE_OK);
+  ASSERT_EQ(a->network_add_node(n, "particle_source", "p"), LODESTONE_OK);
+  ASSERT_EQ(a->network_add_node(n, "mpm_solver", "sim"), LODESTONE_OK);
+  ASSERT_EQ(a->network_connect(n, "p", "particles", "sim", "particles"), LODESTONE_OK);
+  const double lo[3] = {0.1, -0.1, -0.1};
+  ASSERT_EQ(a->network_set_vec3(n, "sim", "domain.min", lo), LODESTONE_OK);
+  EXPECT_EQ(a->network_cook(n, "sim"), LODESTONE_ERROR_COOK_FAILED);
+  const std::string msg = a->context_last_error(ctx);
+  EXPECT_NE(msg.find("node 'sim' (mpm_solver)"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("max must exceed min"), std::string::npos) << msg;
+  size_t needed = 0;
+  EXPECT_EQ(a->network_output_json(n, "sim", "simulation", nullptr, 0, &needed), LODESTONE_ERROR_NOT_READY);
+  EXPECT_EQ(a->network_destroy(n), LODESTONE_OK);
+  EXPECT_EQ(a->context_destroy(ctx), LODESTONE_OK);
+}
+
+TEST(PluginNodes, DocsNodesMdIsUpToDate) {
+  std::ifstream in(LODESTONE_DOCS_DIR "/nodes.md");
+  ASSERT_TRUE(in) << "cannot read docs/nodes.md";
+  std::stringstream ss;
+  ss << in.rdbuf();
+  EXPECT_TRUE(ss.str() == nodesMarkdown()) << "docs/nodes.md differs from the node declarations; regenerate it with "
+                                              "`lodestone nodes --markdown > docs/nodes.md`";
+}
+
+std::string outputJson(const lodestone_api* a, lodestone_network* n, const char* node, const char* out) {
+  size_t needed = 0;
+  EXPECT_EQ(a->network_output_json(n, node, out, nullptr, 0, &needed), LODESTONE_OK);
+  std::string s(needed, '\0');
+  EXPECT_EQ(a->network_output_json(n, node, out, s.data(), s.size(), &needed), LODESTONE_OK);
+  s.resize(needed - 1);
+  return s;
+}
+
+TEST(PluginNodes, ANetworkBuiltThroughTheCAbiGivesConservativeForces) {
+  const lodestone_api* a = nullptr;
+  ASSERT_EQ(lodestone_get_api(1, 0, &a), LODESTONE_OK);
+  // Metadata: every node's parameters are listed with their defaults.
+  ASSERT_EQ(a->node_type_count(), nodeRegistry().size());
+  for (uint32_t k = 0; k < a->node_type_count(); ++k) {
+    lodestone_node_info info{};
+    info.struct_size = sizeof info;
+    ASSERT_EQ(a->node_type_info(k, &info), LODESTONE_OK);
+    for (uint32_t q = 0; q < info.param_count; ++q) {
+      lodestone_param_info p{};
+      p.struct_size = sizeof p;
+      ASSERT_EQ(a->node_param_info(info.type, q, &p), LODESTONE_OK);
+      EXPECT_GT(std::strlen(p.default_text), 0u) << info.type << "." << p.name;
+    }
+    lodestone_param_info p{};
+    p.struct_size = sizeof p;
+    EXPECT_EQ(a->node_param_info(info.type, info.param_count, &p), LODESTONE_ERROR_NOT_FOUND);
+  }
+
+  lodestone_context* ctx = nullptr;
+  ASSERT_EQ(a->context_create(&ctx), LODESTONE_OK);
+  lodestone_network* n = nullptr;
+  ASSERT_EQ(a->network_create(ctx, &n), LODESTONE_OK);
+  const auto ok = [&](lodestone_status s) { EXPECT_EQ(s, LODESTONE_OK) << a->context_last_error(ctx); };
+  ok(a->network_add_node(n, "material", "ferro"));
+  ok(a->network_set_json(n, "ferro", R"({"name": "ferro", "density": 1200, "magnetic": {"law": "paper"}})"));
+  ok(a->network_add_node(n, "particle_source", "ball"));
+  ok(a->network_set_string(n, "ball", "shape", "sphere"));
+  ok(a->network_set_float(n, "ball", "radius", 0.015));
+  const double centre[3] = {0, 0, 0.02};
+  ok(a->network_set_vec3(n, "ball", "center", centre));
+  ok(a->network_set_float(n, "ball", "cell_size", 0.006));
+  ok(a->network_connect(n, "ferro", "material", "ball", "material"));
+  ok(a->network_add_node(n, "magnet", "magnet"));
+  ok(a->network_set_json(n, "magnet", R"({"shape": "cylinder", "center": [0, 0, -0.03], "radius": 0.02,
+                                          "half_length": 0.01, "magnetization": 8e5})"));
+  ok(a->network_add_node(n, "magnetization_transfer", "n"));
+  ok(a->network_set_float(n, "n", "dx", 0.005));
+  ok(a->network_connect(n, "ball", "particles", "n", "particles"));
+  ok(a->network_add_node(n, "field_solve", "solve"));
+  ok(a->network_connect(n, "n", "density", "solve", "density"));
+  ok(a->network_connect(n, "magnet", "sources", "solve", "sources"));
+  ok(a->network_add_node(n, "magnetic_force", "force"));
+  ok(a->network_connect(n, "solve", "field", "force", "field"));
+  ok(a->network_connect(n, "ball", "particles", "force", "particles"));
+  // Wrong values through the ABI: statuses naming node and parameter.
+  EXPECT_EQ(a->network_set_float(n, "ball", "radius", -1), LODESTONE_ERROR_INVALID_ARGUMENT);
+  EXPECT_NE(std::string(a->context_last_error(ctx)).find("node 'ball' (particle_source): radius"), std::string::npos)
+      << a->context_last_error(ctx);
+  EXPECT_EQ(a->network_set_float(n, "ball", "radius_m", 1), LODESTONE_ERROR_NOT_FOUND);
+  EXPECT_EQ(a->network_set_json(n, "ferro", R"({"magnetic": {"lw": "paper"}})"), LODESTONE_ERROR_INVALID_ARGUMENT);
+  EXPECT_NE(std::string(a->context_last_error(ctx)).find("did you mean 'magnetic.law'"), std::string::npos)
+      << a->context_last_error(ctx);
+  EXPECT_EQ(a->network_add_node(n, "nonsense", "x"), LODESTONE_ERROR_NOT_FOUND);
+
+  ok(a->network_cook(n, "force"));
+  const nlohmann::json field = nlohmann::json::parse(outputJson(a, n, "solve", "field"));
+  const nlohmann::json force = nlohmann::json::parse(outputJson(a, n, "force", "forces"));
+  const nlohmann::json ball = nlohmann::json::parse(outputJson(a, n, "ball", "particles"));
+  EXPECT_TRUE(field["report"]["converged"].get<bool>()) << field.dump();
+  const double fz = force["total_force_N"][2].get<double>(), nz = field["report"]["total_force_N"][2].get<double>();
+  EXPECT_LT(fz, 0);                           // pulled toward the magnet below
+  EXPECT_NEAR(fz, nz, 1e-9 * std::fabs(nz));  // sum over particles = sum over nodes
+  EXPECT_EQ(force["particles"], ball["particles"]);
+  // Ball mass: 1200 kg/m^3 times the emitted volume, within the staircase error of a sphere.
+  const double volume = 4.0 / 3.0 * M_PI * std::pow(0.015, 3);
+  EXPECT_NEAR(ball["mass_kg"].get<double>(), 1200 * volume, 0.1 * 1200 * volume);
+
+  // Positions through a strided float output.
+  const std::size_t count = ball["particles"].get<std::size_t>();
+  std::vector<float> pos(4 * count);
+  lodestone_vec3_out out{sizeof(lodestone_vec3_out), LODESTONE_FLOAT32, pos.data(), 4 * sizeof(float), count};
+  size_t got = 0;
+  ok(a->network_read_positions(n, "ball", "particles", &out, &got));
+  EXPECT_EQ(got, count);
+  double meanZ = 0;
+  for (std::size_t k = 0; k < count; ++k) meanZ += pos[4 * k + 2] / double(count);
+  EXPECT_NEAR(meanZ, 0.02, 1e-3);
+  EXPECT_EQ(a->network_read_positions(n, "solve", "field", &out, &got), LODESTONE_ERROR_INVALID_ARGUMENT);
+
+  // A change upstream re-cooks: a stronger magnet, a larger pull.
+  ok(a->network_set_float(n, "magnet", "magnetization", 1.6e6));
+  ok(a->network_cook(n, "force"));
+  const nlohmann::json stronger = nlohmann::json::parse(outputJson(a, n, "force", "forces"));
+  EXPECT_LT(stronger["total_force_N"][2].get<double>(), 1.5 * fz);
+  ok(a->network_destroy(n));
+  ok(a->context_destroy(ctx));
+}
+
+}  // namespace

@@ -1,0 +1,128 @@
+// One format: the entries of scene files are nodes. Every entry of every
+// example scene, given to the node of its kind, sets only declared
+// parameters and cooks to what the scene reader builds; scene errors name the
+// entry's path and suggest declared parameter names.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include "lodestone/core/error.h"
+#include "lodestone/plugin/network.h"
+#include "lodestone/plugin/param_json.h"
+#include "scene.h"
+
+using namespace lodestone;
+using namespace lodestone::plugin;
+
+namespace {
+
+/// The node an entry of `list` is, and the scene-only keys it may carry.
+struct Kind {
+  const char* list;
+  const char* node;
+  std::vector<std::string> sceneOnly;
+};
+const Kind kKinds[] = {{"materials", "material", {}},
+                       {"bodies", "particle_source", {"material"}},
+                       {"magnets", "magnet", {"motion"}},
+                       {"fields", "applied_field", {}},
+                       {"colliders", "collider", {"motion"}}};
+
+TEST(SceneNodes, EveryExampleSceneEntryIsANodeThatCooks) {
+  int entries = 0;
+  for (const auto& file : std::filesystem::directory_iterator(LODESTONE_SCENES_DIR)) {
+    if (file.path().extension() != ".json") continue;
+    SCOPED_TRACE(file.path().string());
+    std::ifstream in(file.path());
+    const nlohmann::json doc = nlohmann::json::parse(in);
+    const examples::Scene scene = examples::loadScene(file.path().string());
+    for (const Kind& kind : kKinds) {
+      if (!doc.contains(kind.list)) continue;
+      for (std::size_t k = 0; k < doc[kind.list].size(); ++k) {
+        nlohmann::json entry = doc[kind.list][k];
+        for (const std::string& key : kind.sceneOnly) entry.erase(key);
+        Network net;
+        net.addNode(kind.node, "n");
+        if (std::string(kind.node) == "particle_source") net.setParam("n", "cell_size", scene.settings.grid.dx);
+        ASSERT_NO_THROW(setParamsFromJson(net, "n", entry, concat(kind.list, "[", k, "]")))
+            << kind.list << "[" << k << "]";
+        const CookOutputs& out = net.cook("n");
+        ++entries;
+        // What the node built is what the scene reader built.
+        if (std::string(kind.node) == "material") {
+          const auto m = std::get<std::shared_ptr<const MaterialData>>(out.at("material"));
+          EXPECT_EQ(m->material.describe(), scene.materials[k].describe());
+        }
+        if (std::string(kind.node) == "particle_source") {
+          const auto p = std::get<std::shared_ptr<const ParticlesData>>(out.at("particles"));
+          EXPECT_NEAR(p->bodies[0].shape.volume(), scene.bodies[k].shape.volume(), 1e-12);
+          EXPECT_EQ(p->bodies[0].emit.particlesPerCell, scene.bodies[k].emit.particlesPerCell);
+        }
+        if (std::string(kind.node) == "magnet") {
+          const auto s = std::get<std::shared_ptr<const SourcesData>>(out.at("sources"));
+          EXPECT_EQ(s->magnets[0].magnet->describe(), scene.magnets[k].magnet->describe());
+          EXPECT_EQ(s->magnets[0].collider, scene.magnets[k].collider);
+        }
+        if (std::string(kind.node) == "applied_field") {
+          const auto s = std::get<std::shared_ptr<const SourcesData>>(out.at("sources"));
+          EXPECT_EQ(s->fields.source(0).describe(), scene.fields.source(k).describe());
+        }
+      }
+    }
+  }
+  EXPECT_GT(entries, 20);
+}
+
+std::string errorOf(const std::string& text) {
+  try {
+    examples::parseScene(text, "test.json");
+  } catch (const InvalidArgument& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(SceneNodes, SceneErrorsComeFromTheDeclarations) {
+  const std::string base = R"({
+    "name": "s",
+    "domain": { "min": [0, 0, 0], "max": [0.2, 0.2, 0.2], "dx": 0.02 },
+    "time": { "frames": 1 },
+    "materials": [ { "name": "ferro", "model": "fluid", "density": 1000, "viscosity": 1, "bulk_modulus": 1e5,
+                     "magnetic": { "law": "langevin", "moment": 1e-19 } } ],
+    "bodies": [ { "material": "ferro", "shape": "sphere", "center": [0.1, 0.1, 0.1], "radius": 0.03 } ],
+    "magnets": [ { "shape": "cylinder", "center": [0.1, 0.1, -0.05], "radius": 0.03, "half_length": 0.01,
+                   "remanence": 1.2, "collider": false } ],
+    "fields": [ { "type": "uniform", "H": [0, 0, 1000], "ramp": [0, 0.1] } ]
+  })";
+  ASSERT_EQ(errorOf(base), "");
+  struct Case {
+    std::string from, to;
+    std::vector<std::string> expected;
+  };
+  const Case cases[] = {
+      {"\"radius\": 0.03 }", "\"radis\": 0.03 }", {"test.json: bodies[0]", "'radis'", "did you mean 'radius'"}},
+      {"\"moment\": 1e-19", "\"moment\": -1e-19", {"materials[0].magnetic.moment", "A*m^2", "> 0"}},
+      {"\"law\": \"langevin\"", "\"law\": \"langevn\"", {"materials[0].magnetic.law", "langevin"}},
+      {"\"bulk_modulus\": 1e5",
+       "\"bulk_modulus\": 1e5, \"youngs_modulus\": 1",
+       {"materials[0]", "unknown key 'youngs_modulus'"}},
+      {"\"remanence\": 1.2", "\"remanence\": 4", {"magnets[0].remanence", "T", "[-3, 3]"}},
+      {"\"remanence\": 1.2,", "", {"magnets[0]", "magnetization"}},
+      {"\"ramp\": [0, 0.1]", "\"ramp\": [0]", {"fields[0].ramp"}},
+      {"\"H\": [0, 0, 1000]", "\"H\": [0, 0]", {"fields[0].H"}},
+  };
+  for (const Case& c : cases) {
+    std::string text = base;
+    const auto at = text.find(c.from);
+    ASSERT_NE(at, std::string::npos) << c.from;
+    text.replace(at, c.from.size(), c.to);
+    const std::string e = errorOf(text);
+    for (const std::string& s : c.expected) EXPECT_NE(e.find(s), std::string::npos) << "'" << s << "' not in: " << e;
+  }
+}
+
+}  // namespace
