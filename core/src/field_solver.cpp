@@ -116,7 +116,7 @@ FieldSolveReport solveField(MagnetostaticProblem& problem, std::vector<double>& 
   if (problem.boundary() == BoundaryKind::Shield) project = [&](double* v) { problem.removeMean(v); };
 
   double prevNorm = 0, prevEta = settings.forcingMax;
-  std::vector<double> lastGood = phi, Ftrial(n);
+  std::vector<double> lastGood = phi, Ftrial(n), wallStep(n, 0.0);
   // Each iteration starts from an evaluation at phi (residual, energy, the
   // Jacobian's element matrices): the first here, later ones are the
   // accepted line-search trial.
@@ -129,8 +129,29 @@ FieldSolveReport solveField(MagnetostaticProblem& problem, std::vector<double>& 
       // the vacuum stencil, so F is corrected instead of re-evaluated.
       work = phi;
       problem.applyOpenBoundary(ev.multipoles, phi.data());
+      forEach(n, [&](std::size_t m) { work[m] = phi[m] - work[m]; });
+      // The wall values follow M one iteration late: a fixed-point
+      // iteration whose steps d_k shrink by rho = <d_k, d_k-1>/|d_k-1|^2
+      // per iteration (|rho| ~ 0.05 normally). A strongly magnetizable
+      // body (chi0 ~ 100) makes it oscillate (rho < -1) and diverge;
+      // relaxing the step by 1/(1 - rho) restores the contraction.
+      if (it >= 1) {
+        const double dd = deterministicDot(work.data(), wallStep.data(), n);
+        const double pp = deterministicDot(wallStep.data(), wallStep.data(), n);
+        const double rho = pp > 0 ? dd / pp : 0.0;
+        if (rho < -0.5) {
+          const double theta = std::clamp(1.0 / (1.0 - rho), 0.05, 1.0);
+          forEach(n, [&](std::size_t m) {
+            phi[m] -= (1.0 - theta) * work[m];
+            work[m] *= theta;
+          });
+        }
+      }
+      wallStep = work;
+      // When no material cell touches the wall the wall values enter the
+      // residual only through the vacuum stencil: F is corrected instead of
+      // re-evaluated.
       if (problem.materialWallClearance() >= 1) {
-        forEach(n, [&](std::size_t m) { work[m] = phi[m] - work[m]; });
         problem.applyVacuum(work.data(), delta.data());
         forEach(n, [&](std::size_t m) { F[m] += delta[m]; });
       } else {

@@ -205,8 +205,10 @@ ColliderMotion ColliderMotion::keyframed(std::vector<double> times, std::vector<
   require(times.size() == poses.size(), "keyframed collider: ", times.size(), " times but ", poses.size(), " poses");
   for (std::size_t i = 0; i < times.size(); ++i) {
     require(std::isfinite(times[i]), "keyframed collider: keyframe ", i, " time must be finite (s), got ", times[i]);
-    require(i == 0 || times[i] > times[i - 1], "keyframed collider: keyframe times must increase strictly, got ",
-            times[i - 1], " s then ", times[i], " s at keyframe ", i);
+    // (require's arguments are evaluated eagerly: times[i - 1] only for i > 0)
+    if (i > 0)
+      require(times[i] > times[i - 1], "keyframed collider: keyframe times must increase strictly, got ",
+              times[i - 1], " s then ", times[i], " s at keyframe ", i);
     validatePose(poses[i], "keyframed collider");
   }
   ColliderMotion m;

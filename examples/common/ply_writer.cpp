@@ -49,14 +49,18 @@ PlyPointCloud::PlyPointCloud(const std::vector<Vec3d>& positions) : PlyPointClou
 
 PlyPointCloud::PlyPointCloud(const Vec3d* positions, std::size_t count) : count_(count) {
   require(positions != nullptr || count == 0, "PLY point cloud: no positions (null pointer) for ", count, " points");
-  Column* axes[3] = {&addColumn("x", PlyType::Float32), &addColumn("y", PlyType::Float32),
-                     &addColumn("z", PlyType::Float32)};
+  // Add all three columns first: a pointer taken between push_backs would
+  // dangle once the vector of columns reallocates.
+  addColumn("x", PlyType::Float32);
+  addColumn("y", PlyType::Float32);
+  addColumn("z", PlyType::Float32);
+  std::uint8_t* axes[3] = {columns_[0].bytes.data(), columns_[1].bytes.data(), columns_[2].bytes.data()};
   for (std::size_t n = 0; n < count; ++n)
     for (int a = 0; a < 3; ++a) {
       const float f = float(positions[n][a]);
       require(std::isfinite(f), "PLY point cloud: position of point ", n, " is not finite in float: (", positions[n].x,
               ", ", positions[n].y, ", ", positions[n].z, ") m");
-      putFloat(axes[a]->bytes.data() + 4 * n, f);
+      putFloat(axes[a] + 4 * n, f);
     }
 }
 

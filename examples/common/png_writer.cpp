@@ -2,9 +2,7 @@
 
 #include <zlib.h>
 
-#include <cstdio>
-#include <memory>
-
+#include "atomic_file.h"
 #include "lodestone/core/error.h"
 
 namespace lodestone::examples {
@@ -72,15 +70,9 @@ std::vector<std::uint8_t> encodePng(int width, int height, const std::uint8_t* r
 }
 
 void writePng(const std::string& path, int width, int height, const std::uint8_t* rgb) {
-  const std::vector<std::uint8_t> png = encodePng(width, height, rgb, path);
-  struct Closer {
-    void operator()(std::FILE* f) const { std::fclose(f); }
-  };
-  std::unique_ptr<std::FILE, Closer> file(std::fopen(path.c_str(), "wb"));
-  if (!file) throw Error(concat("cannot open '", path, "' for writing"));
-  const bool written = std::fwrite(png.data(), 1, png.size(), file.get()) == png.size();
-  const bool closed = std::fclose(file.release()) == 0;
-  if (!written || !closed) throw Error(concat("cannot write the PNG file '", path, "' (disk full or I/O error?)"));
+  // Temporary file then rename (atomic_file.h): an interrupted run never
+  // leaves a truncated preview in place of a complete earlier one.
+  writeFileAtomically(path, encodePng(width, height, rgb, path));
 }
 
 }  // namespace lodestone::examples

@@ -10,7 +10,7 @@ namespace lodestone::examples {
 
 /// Writes `width` x `height` pixels of 8-bit RGB (3 bytes per pixel, rows top
 /// to bottom, left to right) to `path` as a PNG file, replacing any existing
-/// file. Throws lodestone::Error naming `path` when the size is not 1..2^24
+/// file atomically (a temporary file renamed over it, atomic_file.h). Throws lodestone::Error naming `path` when the size is not 1..2^24
 /// per side, `rgb` is null, or the file cannot be written.
 void writePng(const std::string& path, int width, int height, const std::uint8_t* rgb);
 

@@ -170,6 +170,33 @@ TEST(PngWriter, ErrorsNameThePath) {
   EXPECT_FALSE(std::filesystem::exists("null.png"));
 }
 
+// Atomic replacement: the new file is renamed over the old one, so a hard
+// link to the old file (a reader holding it) still sees the complete old
+// image; writing in place would have truncated and rewritten it. No
+// temporary file is left beside the output.
+TEST(PngWriter, ReplacesAtomicallyAndLeavesNoTemporaries) {
+  const auto dir = scratchDir();
+  const auto path = dir / "frame_0001.png";
+  const auto reader = dir / "held_by_a_reader.png";
+  const std::vector<std::uint8_t> first = pattern(9, 5);
+  writePng(path.string(), 9, 5, first.data());
+  std::filesystem::create_hard_link(path, reader);
+  EXPECT_THROW(writePng(path.string(), 0, 5, first.data()), Error);
+  checkDecodes(readFile(path), 9, 5, first);
+  const std::vector<std::uint8_t> second = pattern(3, 8);
+  writePng(path.string(), 3, 8, second.data());
+  checkDecodes(readFile(path), 3, 8, second);
+  checkDecodes(readFile(reader), 9, 5, first);
+  std::filesystem::remove(reader);
+  int files = 0;
+  for (const auto& entry : std::filesystem::directory_iterator(dir)) {
+    ++files;
+    EXPECT_EQ(entry.path().filename(), "frame_0001.png") << "left behind: " << entry.path();
+  }
+  EXPECT_EQ(files, 1);
+  std::filesystem::remove_all(dir);
+}
+
 TEST(Colormap, EndsAndMonotoneLightness) {
   // Published end colours of matplotlib's maps (0..255), within the fit's error.
   const Rgb v0 = mapColour(Colormap::Viridis, 0), v1 = mapColour(Colormap::Viridis, 1);

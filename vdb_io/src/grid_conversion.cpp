@@ -1,6 +1,7 @@
 // core <-> OpenVDB grid conversion and typed grid reading.
 #include "lodestone/vdb_io/grid_conversion.h"
 
+#include <cmath>
 #include <exception>
 #include <filesystem>
 #include <fstream>
@@ -97,6 +98,20 @@ DenseGrid<CoreT> toDense(const GridT& grid, const GridSpec& spec) {
       for (int j = 0; j < spec.dims.j; ++j)
         for (int i = 0; i < spec.dims.i; ++i) out(i, j, k) = toCore(acc.getValue(openvdb::Coord(i, j, k)));
   } else {
+    // The sampler floors index coordinates to int: the target grid must map
+    // to finite index coordinates well inside int (an absurd voxel size or
+    // translation in the file would otherwise overflow). The map is linear,
+    // so the corners bound the whole grid.
+    const auto& xf = grid.constTransform();
+    for (int c = 0; c < 8; ++c) {
+      const Vec3d x = spec.nodePosition((c & 1) ? spec.dims.i - 1 : 0, (c & 2) ? spec.dims.j - 1 : 0,
+                                        (c & 4) ? spec.dims.k - 1 : 0);
+      const openvdb::Vec3d u = xf.worldToIndex(openvdb::Vec3d(x.x, x.y, x.z));
+      for (int a = 0; a < 3; ++a)
+        require(std::isfinite(u[a]) && std::fabs(u[a]) < double(1 << 30), "VDB grid '", grid.getName(),
+                "': its transform (voxel size ", xf.voxelSize()[0], " m) maps the target grid to index coordinate ",
+                u[a], ", beyond +-2^30 voxels");
+    }
     openvdb::tools::GridSampler<GridT, openvdb::tools::BoxSampler> sampler(grid);
     for (int k = 0; k < spec.dims.k; ++k)
       for (int j = 0; j < spec.dims.j; ++j)

@@ -154,17 +154,28 @@ ParticleVdbData readParticlesVdb(const std::string& path) {
   const bool hasF = d.find("F") != vp::AttributeSet::INVALID_POS;
   if (hasF) requireAttribute<openvdb::math::Mat3s>(d, path, "F");
 
-  const auto n = std::size_t(vp::pointCount(grid->tree()));
-  out.x.reserve(n);
-  out.v.reserve(n);
-  out.count.reserve(n);
-  out.J.reserve(n);
-  out.material.reserve(n);
-  out.id.reserve(n);
-  if (hasF) out.F.reserve(n);
   const auto& xf = grid->transform();
   try {
+    // The count comes from the file: a corrupted one may claim billions of
+    // points (std::bad_alloc or length_error here becomes InvalidArgument).
+    const auto n = std::size_t(vp::pointCount(grid->tree()));
+    out.x.reserve(n);
+    out.v.reserve(n);
+    out.count.reserve(n);
+    out.J.reserve(n);
+    out.material.reserve(n);
+    out.id.reserve(n);
+    if (hasF) out.F.reserve(n);
     for (auto it = grid->tree().cbeginLeaf(); it; ++it) {
+      // Every attribute array must hold the leaf's points (its index offsets
+      // come from the file as well).
+      const openvdb::Index last = it->getLastValue();
+      for (const char* name : {"P", "v", "n_p", "material", "J", "id"})
+        if (it->constAttributeArray(name).size() < last)
+          throw InvalidArgument(concat("VDB file '", path, "': attribute '", name, "' of a leaf holds ",
+                                       it->constAttributeArray(name).size(), " values for ", last, " points"));
+      if (hasF && it->constAttributeArray("F").size() < last)
+        throw InvalidArgument(concat("VDB file '", path, "': attribute 'F' of a leaf is shorter than its points"));
       const vp::AttributeHandle<openvdb::Vec3f> P(it->constAttributeArray("P"));
       const vp::AttributeHandle<openvdb::Vec3f> V(it->constAttributeArray("v"));
       const vp::AttributeHandle<float> C(it->constAttributeArray("n_p"));
@@ -191,6 +202,8 @@ ParticleVdbData readParticlesVdb(const std::string& path) {
         }
       }
     }
+  } catch (const InvalidArgument&) {
+    throw;
   } catch (const std::exception& e) {
     throw InvalidArgument(concat("VDB file '", path, "': cannot read the points: ", e.what()));
   }

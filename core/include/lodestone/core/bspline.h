@@ -39,12 +39,16 @@ struct QuadraticWeights {
 
 /// floor(u - 1/2) as a T: the stencil's first node for grid coordinate u.
 /// Kept in floating point so callers can range-check it before converting to
-/// int (u may be huge or out of range).
+/// int (u may be huge or out of range). Computed as floor(u), less one when
+/// the fraction is below 1/2, because u - 1/2 itself rounds once the spacing
+/// of T at u reaches 1 (float from 2^23): floor(u - 1/2) then gave base = u,
+/// f = 0 and a negative middle weight.
 template <typename T>
 LODESTONE_HOSTDEV inline T quadraticBaseFloor(T u) {
   static_assert(std::is_floating_point_v<T>, "floating-point argument expected");
   using std::floor;
-  return floor(u - T(0.5));
+  const T b = floor(u);
+  return u - b < T(0.5) ? b - T(1) : b;
 }
 
 /// Weights for grid coordinate u (in node spacings) with a given first node
@@ -70,7 +74,8 @@ LODESTONE_HOSTDEV inline QuadraticWeights<T> quadraticWeightsAt(T u, int base, T
 }
 
 /// Weights for grid coordinate u = (x - origin)/dx (dimensionless). Requires u
-/// finite with |u| < 2^31 - 2 so that the base fits an int; range-check
+/// finite with |u| < 2^31 - 2 so that the base fits an int (in float, |u| <
+/// 2^24 - 2, so that the base is a float as well); range-check
 /// quadraticBaseFloor(u) first when u is untrusted.
 template <typename T>
 LODESTONE_HOSTDEV inline QuadraticWeights<T> quadraticWeights(T u, T invDx = T(1)) {

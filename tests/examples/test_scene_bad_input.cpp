@@ -1,0 +1,112 @@
+// Bad scene input, beyond test_scene.cpp's cases: every malformed or
+// non-physical scene is refused with an InvalidArgument naming the file, the
+// entry and what was expected (line:column for syntax errors, the nearest
+// valid key for a misspelt one, GiB and node counts for a grid too large),
+// never a crash, a silent default or an int overflow.
+#include <gtest/gtest.h>
+
+#include <string>
+#include <vector>
+
+#include "lodestone/core/error.h"
+#include "scene.h"
+
+using namespace lodestone;
+using namespace lodestone::examples;
+
+namespace {
+
+const char* kScene = R"({
+  "name": "bad-input",
+  "domain": { "min": [0, 0, 0], "max": [0.2, 0.2, 0.2], "dx": 0.02 },
+  "time": { "frames": 2, "fps": 100 },
+  "materials": [ { "name": "ferro", "model": "fluid", "density": 1000, "viscosity": 1, "bulk_modulus": 1e5,
+                   "magnetic": { "law": "paper" } } ],
+  "bodies": [ { "material": "ferro", "shape": "sphere", "center": [0.1, 0.1, 0.1], "radius": 0.03 } ],
+  "fields": [ { "type": "uniform", "H": [0, 0, 1e4] } ]
+})";
+
+std::string replaced(std::string s, const std::string& from, const std::string& to) {
+  const auto at = s.find(from);
+  EXPECT_NE(at, std::string::npos) << from;
+  return at == std::string::npos ? s : s.replace(at, from.size(), to);
+}
+
+// The message of the InvalidArgument parseScene throws ("" when it does not).
+std::string errorOf(const std::string& text) {
+  try {
+    parseScene(text, "bad.json");
+  } catch (const InvalidArgument& e) {
+    return e.what();
+  }
+  return "";
+}
+
+struct Case {
+  const char* what;
+  std::string from, to;
+  std::vector<std::string> expected;  // every one must appear in the message
+};
+
+}  // namespace
+
+TEST(SceneBadInput, TheUnchangedSceneIsValid) { EXPECT_EQ(errorOf(kScene), ""); }
+
+TEST(SceneBadInput, EachIsRefusedWithWhereAndWhat) {
+  const Case cases[] = {
+      // Syntax: line and column.
+      {"trailing comma", "\"fps\": 100 }", "\"fps\": 100, }", {"bad.json:4:"}},
+      {"NaN literal", "\"density\": 1000", "\"density\": NaN", {"bad.json:5:"}},
+      {"unterminated string", "\"name\": \"bad-input\"", "\"name\": \"bad-input", {"bad.json:"}},
+      // Unknown keys: the nearest valid name.
+      {"misspelt top-level key", "\"fields\"", "\"feilds\"", {"'feilds'", "did you mean 'fields'"}},
+      {"misspelt nested key", "\"bulk_modulus\"", "\"bulk_modulos\"", {"materials[0]", "did you mean 'bulk_modulus'"}},
+      // Wrong types.
+      {"string for a number", "\"dx\": 0.02", "\"dx\": \"0.02\"", {"domain.dx"}},
+      {"string in a vector", "\"max\": [0.2, 0.2, 0.2]", "\"max\": [0.2, \"a\", 0.2]", {"domain.max"}},
+      {"object for an array", "\"fields\": [ { \"type\": \"uniform\", \"H\": [0, 0, 1e4] } ]",
+       "\"fields\": { \"type\": \"uniform\" }", {"fields"}},
+      {"number for a boolean", "\"fields\"", "\"output\": {\"png\": 1}, \"fields\"", {"output.png"}},
+      // Missing required values.
+      {"missing domain",
+       "\"domain\": { \"min\": [0, 0, 0], \"max\": [0.2, 0.2, 0.2], \"dx\": 0.02 },",
+       "",
+       {"missing required key 'domain'"}},
+      {"missing dx", ", \"dx\": 0.02 }", " }", {"domain", "'dx'"}},
+      {"missing radius", ", \"radius\": 0.03", "", {"bodies[0]", "'radius'"}},
+      // Non-physical values.
+      {"negative dx", "\"dx\": 0.02", "\"dx\": -0.02", {"domain.dx", "-0.02"}},
+      {"zero dx", "\"dx\": 0.02", "\"dx\": 0", {"domain.dx"}},
+      {"zero density", "\"density\": 1000", "\"density\": 0", {"materials[0].density"}},
+      {"overflowing number (inf)", "\"density\": 1000", "\"density\": 1e999", {"bad.json:5:", "number overflow"}},
+      {"negative viscosity", "\"viscosity\": 1", "\"viscosity\": -1", {"materials[0].viscosity"}},
+      {"zero fps", "\"fps\": 100", "\"fps\": 0", {"time.fps"}},
+      {"zero frames", "\"frames\": 2", "\"frames\": 0", {"time.frames"}},
+      {"negative radius", "\"radius\": 0.03", "\"radius\": -0.03", {"bodies[0].radius"}},
+      {"empty domain", "\"max\": [0.2, 0.2, 0.2]", "\"max\": [0.2, 0.2, 0]", {"max must exceed min"}},
+      {"infinite field", "\"H\": [0, 0, 1e4]", "\"H\": [0, 0, 1e400]", {"bad.json:8:", "number overflow"}},
+      {"negative checkpoint interval",
+       "\"fields\"",
+       "\"output\": {\"checkpoint_every\": -1}, \"fields\"",
+       {"output.checkpoint_every"}},
+      // Grids too large: refused before any allocation, with GiB and node counts.
+      {"grid too large", "\"dx\": 0.02", "\"dx\": 0.0002", {"domain", "1001 x 1001 x 1001 nodes", "GiB"}},
+      {"grid beyond int", "\"dx\": 0.02", "\"dx\": 1e-300", {"domain", "nodes", "GiB", "too large"}},
+  };
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.what);
+    const std::string err = errorOf(replaced(kScene, c.from, c.to));
+    ASSERT_FALSE(err.empty()) << "accepted: " << c.to;
+    for (const std::string& e : c.expected) EXPECT_NE(err.find(e), std::string::npos) << err;
+    EXPECT_NE(err.find("bad.json"), std::string::npos) << err;
+  }
+}
+
+TEST(SceneBadInput, GridEstimateIsInGibibytesAndAcceptsTheLargestThatFits) {
+  // 257^3 nodes x 600 B = 9.48 GiB: accepted (nothing is allocated by parsing).
+  EXPECT_EQ(errorOf(replaced(kScene, "\"dx\": 0.02", "\"dx\": 0.00078125")), "");
+  // 401^3 x 600 B = 36.03 GiB: refused, naming the estimate.
+  const std::string err = errorOf(replaced(kScene, "\"dx\": 0.02", "\"dx\": 0.0005"));
+  EXPECT_NE(err.find("401 x 401 x 401 nodes"), std::string::npos) << err;
+  EXPECT_NE(err.find("36.03"), std::string::npos) << err;
+}
