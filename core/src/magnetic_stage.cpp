@@ -124,8 +124,15 @@ MagneticStageReport MagneticForceStage::solveAndForce(const FieldSource& sources
 
   // Field solve.
   t = Clock::now();
-  if (!settings_.warmStart) resetWarmStart();
-  rep.solve = solveField(problem, phi_, settings_.solve, progress_);
+  if (!settings_.warmStart || settings_.appliedFieldOnly) resetWarmStart();
+  if (settings_.appliedFieldOnly) {
+    rep.solve = FieldSolveReport{};
+    rep.solve.status = SolveStatus::Trivial;
+    rep.solve.materialCells = problem.materialCellCount();
+    rep.solve.message = "skipped (applied field only): phi = 0, H = H_ext";
+  } else {
+    rep.solve = solveField(problem, phi_, settings_.solve, progress_);
+  }
   rep.secondsSolve = secondsSince(t);
   if (!rep.solve.converged()) rep.warnings.push_back("field solve: " + rep.solve.message);
 

@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <sstream>
 
 #include "lodestone/core/cuboid_magnet.h"
@@ -26,6 +27,26 @@ double secondsSince(Clock::time_point t0) { return std::chrono::duration<double>
 
 bool sameLaw(const MagnetizationLaw<double>& a, const MagnetizationLaw<double>& b) {
   return a.kind == b.kind && a.moment == b.moment && a.k2 == b.k2 && a.chiPerDensity == b.chiPerDensity;
+}
+
+bool finiteMat(const Mat3d& m) {
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c)
+      if (!std::isfinite(m(r, c))) return false;
+  return true;
+}
+
+// The first index in [0, n) for which bad(i) holds, or n; deterministic.
+template <typename Bad>
+std::size_t firstBad(std::size_t n, const Bad& bad) {
+  return tbb::parallel_reduce(
+      tbb::blocked_range<std::size_t>(0, n, 4096), n,
+      [&](const tbb::blocked_range<std::size_t>& r, std::size_t found) {
+        for (std::size_t i = r.begin(); i != r.end() && i < found; ++i)
+          if (bad(i)) return i;
+        return found;
+      },
+      [](std::size_t a, std::size_t b) { return std::min(a, b); });
 }
 
 struct DomainCounts {
@@ -103,6 +124,7 @@ void MpmSettings::validate() const {
           magneticSolveInterval);
   if (magneticGrid) magneticGrid->validate("magnetic stage grid");
   magnetic.validate();
+  planner.validate();
 }
 
 std::string MpmFrameReport::summary() const {
@@ -218,6 +240,12 @@ void MpmSolver::setTime(double t) {
 
 double MpmSolver::suggestedDt() const {
   if (settings_.fixedDt > 0) return settings_.fixedDt;
+  return cflDt(settings_.cfl, false);
+}
+
+double MpmSolver::stabilityLimitDt() const { return cflDt(1.0, true); }
+
+double MpmSolver::cflDt(double cfl, bool bound) const {
   const std::size_t np = particles_.size();
   const Vec3d* v = particles_.v.data();
   const double vmax = tbb::parallel_reduce(
@@ -234,8 +262,15 @@ double MpmSolver::suggestedDt() const {
   }
   const double dx = settings_.grid.dx;
   const double speed = std::sqrt(vmax) + c;
-  double dt = speed > 0 ? settings_.cfl * dx / speed : settings_.dtMax;
-  if (nu > 0) dt = std::min(dt, settings_.cfl * dx * dx / (3 * nu));
+  // The bound: a cell per substep, and the explicit viscous limit dx^2/(6 nu)
+  // (cfl dx^2/(3 nu) at the default cfl = 1/2 of it).
+  if (bound) {
+    double dt = speed > 0 ? dx / speed : std::numeric_limits<double>::infinity();
+    if (nu > 0) dt = std::min(dt, dx * dx / (6 * nu));
+    return dt;
+  }
+  double dt = speed > 0 ? cfl * dx / speed : settings_.dtMax;
+  if (nu > 0) dt = std::min(dt, cfl * dx * dx / (3 * nu));
   dt = std::min(dt, settings_.dtMax);
   return std::max(dt, settings_.dtMin);
 }
@@ -305,6 +340,48 @@ std::size_t MpmSolver::enforceDomain(std::size_t& removedOut, std::size_t& nonFi
 // ---------------------------------------------------------------------------
 // Magnetism
 
+bool MpmSolver::magneticStateChanged() {
+  // Moved: any magnetic point farther than the reuse distance from where it
+  // was at the last solve (a changed particle set counts as moved).
+  if (lastSolveX_.size() != particles_.size() || lastSolveSample_.empty()) return true;
+  const double d2 = lastPlan_.reuseDistance * lastPlan_.reuseDistance;
+  for (std::size_t p = 0; p < particles_.size(); ++p) {
+    const std::uint32_t mat = particles_.material[p];
+    if (particles_.count[p] > 0 && mat < materials_.size() && materials_[mat].isMagnetic() &&
+        norm2(particles_.x[p] - lastSolveX_[p]) > d2)
+      return true;
+  }
+  // Applied field changed (magnets moved, time profiles) at the sampled points.
+  for (std::size_t m = 0; m < magnets_.size(); ++m)
+    magnets_[m]->setPose(colliders_[magnetCollider_[m]].motion().poseAt(time_));
+  std::vector<Vec3d> H(lastSolveSample_.size());
+  for (std::size_t q = 0; q < H.size(); ++q) H[q] = scene_->field(lastSolveX_[lastSolveSample_[q]], time_);
+  return relativeFieldChange(H, lastSolveH_) > lastPlan_.reuseFieldChange;
+}
+
+MagneticPlan MpmSolver::planMagneticNow() const {
+  std::vector<Vec3d> positions;
+  const MagneticMaterial* law = nullptr;
+  for (const MpmMaterial& m : materials_)
+    if (m.isMagnetic() && !law) law = &m.magnetic;
+  for (std::size_t p = 0; p < particles_.size(); ++p) {
+    const std::uint32_t mat = particles_.material[p];
+    if (particles_.count[p] > 0 && mat < materials_.size() && materials_[mat].isMagnetic())
+      positions.push_back(particles_.x[p]);
+  }
+  for (std::size_t m = 0; m < magnets_.size(); ++m)
+    magnets_[m]->setPose(colliders_[magnetCollider_[m]].motion().poseAt(time_));
+  PlannerInputs in;
+  in.positions = positions.data();
+  in.count = positions.size();
+  in.material = law ? *law : nonMagneticMaterial();
+  in.applied = scene_.get();
+  in.appliedEmpty = scene_->empty();
+  in.time = time_;
+  in.grid = magneticGrid_;
+  return planMagnetic(settings_.planner, in);
+}
+
 bool MpmSolver::anyMagneticParticles() const {
   bool anyMaterial = false;
   for (const MpmMaterial& m : materials_) anyMaterial = anyMaterial || m.isMagnetic();
@@ -338,12 +415,74 @@ void MpmSolver::solveMagnetic(MpmStepReport& rep) {
   stepsSinceSolve_ = 0;
   if (index.empty() || !law || scene_->empty()) return;
 
-  if (!stage_) stage_ = std::make_unique<MagneticForceStage>(magneticGrid_, *law, settings_.magnetic);
   for (std::size_t m = 0; m < magnets_.size(); ++m)
     magnets_[m]->setPose(colliders_[magnetCollider_[m]].motion().poseAt(time_));
+  if (settings_.planner.enabled) {
+    // The planner picks the law, whether to solve at all, and the solve grid.
+    PlannerInputs in;
+    in.positions = positions.data();
+    in.count = positions.size();
+    in.material = *law;
+    in.applied = scene_.get();
+    in.appliedEmpty = scene_->empty();
+    in.time = time_;
+    in.grid = magneticGrid_;
+    lastPlan_ = planMagnetic(settings_.planner, in);
+    GridSpec solveGrid = magneticGrid_;
+    if (lastPlan_.activeRegion) {
+      // Keep the current region while it holds the material's; otherwise a
+      // new one with 4 cells of slack (clipped to the full grid).
+      const GridSpec& r = lastPlan_.region;
+      const auto contains = [](const GridSpec& outer, const GridSpec& inner) {
+        for (int a = 0; a < 3; ++a) {
+          const double lo = (inner.origin[a] - outer.origin[a]) / outer.dx;
+          if (lo < -1e-9 || lo + inner.dims[a] - 1 > outer.dims[a] - 1 + 1e-9) return false;
+        }
+        return true;
+      };
+      if (stage_ && !(stage_->grid() == magneticGrid_) && contains(stage_->grid(), r)) {
+        solveGrid = stage_->grid();
+      } else {
+        int lo[3], hi[3];
+        for (int a = 0; a < 3; ++a) {
+          const int first = int(std::lround((r.origin[a] - magneticGrid_.origin[a]) / magneticGrid_.dx));
+          lo[a] = std::max(0, first - 4);
+          hi[a] = std::min(magneticGrid_.dims[a] - 1, first + r.dims[a] - 1 + 4);
+        }
+        solveGrid.origin = magneticGrid_.nodePosition(lo[0], lo[1], lo[2]);
+        solveGrid.dims = {hi[0] - lo[0] + 1, hi[1] - lo[1] + 1, hi[2] - lo[2] + 1};
+      }
+    }
+    if (!stage_ || !(stage_->grid() == solveGrid)) stage_ = std::make_unique<MagneticForceStage>(solveGrid, *law, settings_.magnetic);
+    MagneticStageSettings st = settings_.magnetic;
+    st.appliedFieldOnly = lastPlan_.appliedFieldOnly;
+    stage_->setSettings(st);
+    stage_->setMaterial(lastPlan_.linearLaw ? linearized(*law) : *law);
+    sameGrid_ = solveGrid == settings_.grid;
+    if (sameGrid_ && !(magneticForce_.spec() == settings_.grid)) magneticForce_.reset(settings_.grid, Vec3d{});
+    // What the reuse test compares against.
+    lastSolveX_ = particles_.x;
+    lastSolveSample_.clear();
+    const std::size_t stride = std::max<std::size_t>(1, index.size() / 256);
+    for (std::size_t q = 0; q < index.size(); q += stride) lastSolveSample_.push_back(index[q]);
+    lastSolveH_.resize(lastSolveSample_.size());
+    for (std::size_t q = 0; q < lastSolveSample_.size(); ++q)
+      lastSolveH_[q] = scene_->field(particles_.x[lastSolveSample_[q]], time_);
+  }
+  if (!stage_) stage_ = std::make_unique<MagneticForceStage>(magneticGrid_, *law, settings_.magnetic);
   const ParticleView view{positions.data(), counts.data(), positions.size()};
   rep.magnetic = stage_->run(view, *scene_, time_);
   rep.magneticSolved = true;
+  if (settings_.checkFinite) {
+    const GridView<const Vec3d> H = stage_->field(), f = stage_->nodalForce();
+    const std::size_t nn = magneticGrid_.nodeCount();
+    const std::size_t bad = firstBad(nn, [&](std::size_t i) { return !isFinite(H.data[i]) || !isFinite(f.data[i]); });
+    if (bad < nn)
+      throw Error(concat("MPM finite check: non-finite magnetic ", isFinite(H.data[bad]) ? "nodal force (N)" : "field H (A/m)",
+                         " at magnetic-grid node index ", bad, " after the field solve in substep ", substeps_ + 1,
+                         " at t = ", time_, " s (solve: ", toString(rep.magnetic.solve.status), ", ",
+                         rep.magnetic.solve.message, ")"));
+  }
   if (sameGrid_) {
     magneticDropped_ = gatherToSupport(stage_->nodalForce(), stage_->density(), magneticForce_.view());
   } else {
@@ -427,6 +566,56 @@ void MpmSolver::gridUpdate(double dt, MpmStepReport& rep) {
 }
 
 // ---------------------------------------------------------------------------
+// Finite checks (MpmSettings::checkFinite)
+
+
+void MpmSolver::checkFiniteParticles(const char* where) const {
+  const MpmParticles& P = particles_;
+  const std::size_t np = P.size();
+  const bool forces = P.magneticForce.size() == np;
+  const std::size_t p = firstBad(np, [&](std::size_t i) {
+    return !isFinite(P.x[i]) || !isFinite(P.v[i]) || !finiteMat(P.C[i]) || !finiteMat(P.F[i]) ||
+           !std::isfinite(P.J[i]) || (forces && !isFinite(P.magneticForce[i]));
+  });
+  if (p == np) return;
+  const char* what = !isFinite(P.x[p])        ? "position x (m)"
+                     : !isFinite(P.v[p])      ? "velocity v (m/s)"
+                     : !finiteMat(P.C[p])     ? "APIC matrix C (1/s)"
+                     : !finiteMat(P.F[p])     ? "deformation gradient F"
+                     : !std::isfinite(P.J[p]) ? "volume ratio J"
+                                              : "magnetic force (N)";
+  throw Error(concat("MPM finite check: non-finite ", what, " of particle ", p, " (id ", P.id[p], ", material ",
+                     P.material[p], ") ", where, " in substep ", substeps_ + 1, " at t = ", time_,
+                     " s; position (", P.x[p].x, ", ", P.x[p].y, ", ", P.x[p].z, ") m, velocity (", P.v[p].x, ", ",
+                     P.v[p].y, ", ", P.v[p].z, ") m/s, J = ", P.J[p]));
+}
+
+void MpmSolver::checkFiniteGrid(const char* where) const {
+  const GridSpec& g = settings_.grid;
+  const std::vector<MpmNode>& nodes = grid_.nodes();
+  const std::vector<Vec3d>& vel = grid_.velocity();
+  const Vec3d* fmag = sameGrid_ && haveMagneticForce_ && !magneticForce_.empty() ? magneticForce_.data() : nullptr;
+  const std::size_t nn = std::min(nodes.size(), vel.size());
+  const std::size_t n = firstBad(nn, [&](std::size_t i) {
+    return !std::isfinite(nodes[i].mass) || !isFinite(nodes[i].momentum) || !isFinite(vel[i]) ||
+           (fmag && !isFinite(fmag[i]));
+  });
+  if (n == nn) return;
+  const char* what = !std::isfinite(nodes[n].mass)      ? "mass (kg)"
+                     : !isFinite(nodes[n].momentum)      ? "momentum (kg m/s)"
+                     : !isFinite(vel[n])                 ? "velocity (m/s)"
+                                                         : "magnetic nodal force (N)";
+  const std::size_t plane = std::size_t(g.dims.i) * std::size_t(g.dims.j);
+  const std::size_t k = n / plane, j = (n % plane) / std::size_t(g.dims.i), i = n % std::size_t(g.dims.i);
+  throw Error(concat("MPM finite check: non-finite grid ", what, " at node (", i, ", ", j, ", ", k, ") ", where,
+                     " in substep ", substeps_ + 1, " at t = ", time_, " s (node mass ", nodes[n].mass, " kg)"));
+}
+
+void MpmSolver::resetMagneticWarmStart() {
+  if (stage_) stage_->resetWarmStart();
+}
+
+// ---------------------------------------------------------------------------
 // Substeps and frames
 
 MpmStepReport MpmSolver::step(double dt) {
@@ -441,6 +630,7 @@ MpmStepReport MpmSolver::step(double dt) {
   // advection; here only when the particles were handed out since).
   auto t = Clock::now();
   if (particlesDirty_) {
+    if (settings_.checkFinite) checkFiniteParticles("at the start of the substep");
     rep.clamped += enforceDomain(rep.removed, rep.nonFinite);
     particlesDirty_ = false;
   }
@@ -449,8 +639,14 @@ MpmStepReport MpmSolver::step(double dt) {
   // 2-3. Field solve and magnetic force on the solver's interval.
   const bool magneticScene = !scene_->empty() && anyMagneticParticles();
   if (magneticScene) {
-    const bool due =
+    bool due =
         settings_.magneticSolveInterval > 0 ? stepsSinceSolve_ >= settings_.magneticSolveInterval : frameStart_;
+    if (due && haveMagneticForce_ && settings_.planner.enabled && lastPlan_.reuseDistance > 0 &&
+        !magneticStateChanged()) {
+      due = false;  // nothing moved or changed enough: the last solve still holds
+      rep.magneticReused = true;
+      stepsSinceSolve_ = 0;
+    }
     if (due || !haveMagneticForce_) solveMagnetic(rep);
   } else if (haveMagneticForce_) {
     solveMagnetic(rep);  // clears the cached force
@@ -471,12 +667,14 @@ MpmStepReport MpmSolver::step(double dt) {
   // 4. Grid update.
   t = Clock::now();
   gridUpdate(dt, rep);
+  if (settings_.checkFinite) checkFiniteGrid("after the grid update");
   rep.secondsGridUpdate = secondsSince(t);
 
   // 5-7. G2P, F/J update, advection.
   t = Clock::now();
   const ParticleBounds bounds = domainBounds();
   const GridToParticleReport g2p = grid_.gridToParticle(particles_, materials_, dt, &bounds);
+  if (settings_.checkFinite) checkFiniteParticles("after G2P and advection");
   rep.maxSpeed = g2p.maxSpeed;
   rep.clamped += g2p.clamped;
   const std::size_t removedBefore = rep.removed;
@@ -485,7 +683,20 @@ MpmStepReport MpmSolver::step(double dt) {
   ++stepsSinceSolve_;
   if (settings_.reorderInterval > 0 && substeps_ % settings_.reorderInterval == 0 && rep.removed == removedBefore &&
       grid_.binnedOrder().size() == particles_.size())
+  {
+    if (lastSolveX_.size() == particles_.size()) {
+      std::vector<Vec3d> moved(lastSolveX_.size());
+      const std::vector<std::uint32_t>& order = grid_.binnedOrder();
+      std::vector<std::uint32_t> newIndex(order.size());
+      for (std::size_t p = 0; p < order.size(); ++p) {
+        moved[p] = lastSolveX_[order[p]];
+        newIndex[order[p]] = std::uint32_t(p);
+      }
+      lastSolveX_.swap(moved);
+      for (std::uint32_t& q : lastSolveSample_) q = newIndex[q];
+    }
     particles_.permute(grid_.binnedOrder());
+  }
   rep.secondsG2P = secondsSince(t);
 
   time_ += dt;
@@ -506,6 +717,14 @@ MpmFrameReport MpmSolver::advanceFrame(double frameDuration, const MpmProgressCa
   while (time_ < tEnd) {
     double dt = suggestedDt();
     if (settings_.fixedDt == 0 && dt <= settings_.dtMin) ++fr.dtAtMinimum;
+    if (settings_.fixedDt > 0) {
+      // A fixed dt above the stability bound would blow up: substep it.
+      const double limit = stabilityLimitDt();
+      if (dt > limit) {
+        dt = std::max(settings_.cfl * limit, settings_.dtMin);
+        ++fr.dtLimitedByCfl;
+      }
+    }
     const double remaining = tEnd - time_;
     bool last = false;
     if (remaining <= dt * (1 + 1e-9)) {
@@ -535,6 +754,7 @@ MpmFrameReport MpmSolver::advanceFrame(double frameDuration, const MpmProgressCa
             concat("field solve at t = ", time_ - dt, " s did not converge: ", r.magnetic.solve.message));
       fr.magneticReports.push_back(r.magnetic);
     }
+    fr.magneticReused += r.magneticReused ? 1 : 0;
     if (progress) {
       MpmProgress pr;
       pr.substep = fr.substeps;
@@ -552,6 +772,10 @@ MpmFrameReport MpmSolver::advanceFrame(double frameDuration, const MpmProgressCa
                                  " s and were taken at dtMin; the step may be unstable"));
   if (fr.nonFinite > 0)
     fr.warnings.push_back(concat(fr.nonFinite, " particle(s) with a non-finite state were removed"));
+  if (fr.dtLimitedByCfl > 0)
+    fr.warnings.push_back(concat(fr.dtLimitedByCfl, " substep(s): the fixed dt = ", settings_.fixedDt,
+                                 " s exceeded the stability bound (a cell per substep, dx^2/(6 nu)) and was "
+                                 "shortened to cfl times the bound"));
   fr.time = time_;
   fr.energies = energies();
   return fr;

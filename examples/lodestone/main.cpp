@@ -3,9 +3,12 @@
 // previews (PNG) and stats.json.
 //
 //   lodestone run scene.json --out DIR [--frames a:b] [--full] [--dx m] [--threads n]
+//                 [--checkpoint-every n] [--resume] [--check-finite]
 //   lodestone validate scene.json [--full] [--dx m]
 //   lodestone --help | --version
 #include <chrono>
+#include <cmath>
+#include <csignal>
 #include <cstdio>
 #include <cstdlib>
 #include <algorithm>
@@ -13,13 +16,18 @@
 #include <iostream>
 #include <memory>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <tbb/global_control.h>
 
+#include "atomic_file.h"
 #include "lodestone/core/error.h"
+#include "lodestone/core/mpm_checkpoint.h"
+#include "lodestone/plugin/node_registry.h"
 #if LODESTONE_HAVE_VDB
 #include "lodestone/vdb_io/field_file.h"
+#include "lodestone/vdb_io/level_set_file.h"
 #include "lodestone/vdb_io/point_file.h"
 #endif
 #include "ply_writer.h"
@@ -27,6 +35,7 @@
 #include "preview.h"
 #include "progress.h"
 #include "scene.h"
+#include "plan_report.h"
 #include "stats_json.h"
 
 using namespace lodestone;
@@ -40,9 +49,14 @@ const char* kUsage =
     "Usage:\n"
     "  lodestone run SCENE.json --out DIR [options]   simulate a scene, write frames and stats.json\n"
     "  lodestone validate SCENE.json [options]        check a scene file and print what it builds\n"
-    "  lodestone export-fields SCENE.json --out FILE.vdb [--frame N]\n"
+    "  lodestone plan SCENE.json [options]            print which stages would run, why, at what predicted\n"
+    "                                                 error and cost (the effects planner), without running\n"
+    "  lodestone export-fields SCENE.json --out FILE.vdb [--frame N] [--density N.vdb [--density-grid G]]\n"
     "                                                 field solve of the state at frame N (default 0),\n"
-    "                                                 written as OpenVDB grids n, phi, H, M, B, force\n"
+    "                                                 written as OpenVDB grids n, phi, H, M, B, force;\n"
+    "                                                 with --density, of the density grid G (default n,\n"
+    "                                                 1/m^3) of N.vdb instead of the scene's particles\n"
+    "  lodestone nodes [--markdown]                   list the node library (--markdown: docs/nodes.md)\n"
     "  lodestone --help | --version\n"
     "\n"
     "Run `lodestone run --help` for the options. Scene files are documented in docs/scenes.md.\n";
@@ -65,7 +79,16 @@ const char* kRunUsage =
     "  --full           paper resolution: use the scene's domain.full_dx\n"
     "  --dx M           override the grid spacing, m (> 0)\n"
     "  --threads N      worker threads (0 = all cores; default 0)\n"
-    "  --no-png         skip previews;  --no-ply  skip particle files\n";
+    "  --no-png         skip previews;  --no-ply  skip particle files\n"
+    "  --checkpoint-every N  write DIR/checkpoint_NNNN.lsck every N frames (overrides the\n"
+    "                   scene's output.checkpoint_every; 0 = none)\n"
+    "  --resume         continue from the last valid checkpoint in DIR; the frames it\n"
+    "                   writes equal those of an uninterrupted run, bit for bit\n"
+    "  --check-finite   stop with an error naming the quantity, substep and particle or\n"
+    "                   node at the first NaN/Inf (one extra scan per substep)\n"
+    "\n"
+    "Ctrl-C stops after the current substep, keeps every complete frame and says how\n"
+    "to resume; a second Ctrl-C exits at once.\n";
 
 struct Args {
   std::string command, scene, out;
@@ -73,7 +96,10 @@ struct Args {
   SceneOptions options;
   int threads = 0;
   int frame = 0;  // export-fields
+  std::string density, densityGrid = "n";  // export-fields: n (1/m^3) from a .vdb instead of the particles
   bool png = true, ply = true;
+  int checkpointEvery = -1;  // -1: the scene's output.checkpoint_every
+  bool resume = false, checkFinite = false;
 };
 
 [[noreturn]] void usageError(const std::string& message) {
@@ -85,6 +111,20 @@ double parseNumber(const std::string& option, const std::string& text) {
   const double v = std::strtod(text.c_str(), &end);
   if (text.empty() || *end != '\0' || !std::isfinite(v)) usageError(concat(option, ": '", text, "' is not a number"));
   return v;
+}
+
+/// Readers for the scene's "level_set" and "mesh" shapes (none without OpenVDB).
+void installShapeLoaders(SceneOptions& options) {
+#if LODESTONE_HAVE_VDB
+  options.loaders.levelSet = [](const std::string& path, const std::string& grid) {
+    return std::make_shared<const SampledSdf>(readLevelSetVdb(path, grid));
+  };
+  options.loaders.mesh = [](const std::string& path, double voxelSize) {
+    return std::make_shared<const SampledSdf>(levelSetFromObj(path, voxelSize));
+  };
+#else
+  (void)options;
+#endif
 }
 
 Args parseArgs(int argc, char** argv) {
@@ -112,6 +152,10 @@ Args parseArgs(int argc, char** argv) {
     } else if (s == "--frame") {
       a.frame = int(parseNumber("--frame", value()));
       if (a.frame < 0) usageError(concat("--frame: must be >= 0, got ", a.frame));
+    } else if (s == "--density") {
+      a.density = value();
+    } else if (s == "--density-grid") {
+      a.densityGrid = value();
     } else if (s == "--full") {
       a.options.full = true;
     } else if (s == "--dx") {
@@ -124,6 +168,15 @@ Args parseArgs(int argc, char** argv) {
       a.png = false;
     } else if (s == "--no-ply") {
       a.ply = false;
+    } else if (s == "--checkpoint-every") {
+      const double every = parseNumber("--checkpoint-every", value());
+      if (!(every >= 0 && every <= 1e6 && every == std::floor(every)))
+        usageError(concat("--checkpoint-every: must be a whole number of frames in 0..1000000, got ", every));
+      a.checkpointEvery = int(every);
+    } else if (s == "--resume") {
+      a.resume = true;
+    } else if (s == "--check-finite") {
+      a.checkFinite = true;
     } else if (!s.empty() && s[0] == '-') {
       usageError(concat("unknown option '", s, "'"));
     } else if (a.scene.empty()) {
@@ -133,6 +186,7 @@ Args parseArgs(int argc, char** argv) {
     }
   }
   if (a.scene.empty()) usageError(concat("'", a.command, "' needs a scene file"));
+  installShapeLoaders(a.options);
   return a;
 }
 
@@ -196,21 +250,54 @@ nlohmann::json frameJson(int frame, const MpmFrameReport& r, std::size_t particl
   return f;
 }
 
+#if LODESTONE_HAVE_VDB
+/// The MPM grid's node mass (kg) and velocity (m/s) after the last substep;
+/// zero outside the box the last transfer touched (all zero before the first).
+void mpmGridData(const MpmSolver& solver, DenseGrid<double>& mass, DenseGrid<Vec3d>& velocity) {
+  const MpmGrid& g = solver.grid();
+  const GridSpec& s = g.spec();
+  mass.reset(s, 0.0);
+  velocity.reset(s, Vec3d{});
+  if (g.nodes().size() != s.nodeCount() || g.velocity().size() != s.nodeCount()) return;
+  const Index3 lo = g.activeLo(), hi = g.activeHi();
+  for (int k = lo.k; k < hi.k; ++k)
+    for (int j = lo.j; j < hi.j; ++j)
+      for (int i = lo.i; i < hi.i; ++i) {
+        const std::size_t n = s.index(i, j, k);
+        if (!(g.nodes()[n].mass > 0)) continue;
+        mass(i, j, k) = g.nodes()[n].mass;
+        velocity(i, j, k) = g.velocity()[n];
+      }
+}
+#endif
+
+/// `solver` (may be null) supplies the MPM grid's mass and velocity when the
+/// scene's output.vdb lists them.
 void writeFields(const std::string& path, const Scene& scene, const MagneticForceStage& stage, int frame,
-                 double time) {
+                 double time, const MpmSolver* solver = nullptr) {
 #if LODESTONE_HAVE_VDB
   VdbWriteOptions o;
-  const auto has = [&](const char* g) {
-    return scene.output.vdbFields.empty() ||
-           std::find(scene.output.vdbFields.begin(), scene.output.vdbFields.end(), g) != scene.output.vdbFields.end();
+  const auto listed = [&](const char* g) {
+    return std::find(scene.output.vdbFields.begin(), scene.output.vdbFields.end(), g) != scene.output.vdbFields.end();
   };
+  const auto has = [&](const char* g) { return scene.output.vdbFields.empty() || listed(g); };
   o.fields = {has("n"), has("phi"), has("H"), has("M"), has("B"), has("force")};
+  o.fields.mass = listed("mass");
+  o.fields.velocity = listed("velocity");
+  o.displayAliases = scene.output.vdbAliases;
+  DenseGrid<double> mass;
+  DenseGrid<Vec3d> velocity;
+  if (solver && (o.fields.mass || o.fields.velocity || o.displayAliases)) {
+    mpmGridData(*solver, mass, velocity);
+    o.mpm = {mass.view(), velocity.view()};
+  }
+  require(solver || !(o.fields.mass || o.fields.velocity), path, ": the mass and velocity grids need a simulated state");
   VdbFrameMetadata meta;
   meta.frame = frame;
   meta.time = time;
   writeFieldsVdb(path, stage, meta, o);
 #else
-  (void)scene, (void)stage, (void)frame, (void)time;
+  (void)scene, (void)stage, (void)frame, (void)time, (void)solver;
   throw Error(concat("cannot write ", path, ": this lodestone was built without OpenVDB"));
 #endif
 }
@@ -245,7 +332,8 @@ void writeFrameFiles(const Args& a, const Scene& scene, const MpmSolver& solver,
   }
   if (!scene.output.vdbFields.empty() && solver.magneticStage()) {
     std::snprintf(name, sizeof name, "fields_%04d.vdb", frame);
-    writeFields((std::filesystem::path(a.out) / name).string(), scene, *solver.magneticStage(), frame, solver.time());
+    writeFields((std::filesystem::path(a.out) / name).string(), scene, *solver.magneticStage(), frame, solver.time(),
+                &solver);
   }
   if (scene.output.vdbPoints) {
     std::snprintf(name, sizeof name, "particles_%04d.vdb", frame);
@@ -258,17 +346,89 @@ void writeFrameFiles(const Args& a, const Scene& scene, const MpmSolver& solver,
   }
 }
 
+// Ctrl-C / SIGTERM: the first asks the run to stop after the current
+// substep; the handler then restores the default, so a second one exits.
+volatile std::sig_atomic_t gStopRequested = 0;
+extern "C" void onStopSignal(int sig) {
+  gStopRequested = 1;
+  std::signal(sig, SIG_DFL);
+}
+
+std::string checkpointName(int frame) {
+  char name[64];
+  std::snprintf(name, sizeof name, "checkpoint_%04d.lsck", frame);
+  return name;
+}
+
+// What a checkpoint must match: the scene and the options that change the
+// simulation (grid spacing, --full).
+std::string checkpointTag(const Scene& scene) {
+  const GridSpec& g = scene.settings.grid;
+  char buf[256];
+  std::snprintf(buf, sizeof buf, " grid %dx%dx%d dx %.17g m", g.dims.i, g.dims.j, g.dims.k, g.dx);
+  return scene.name + buf;
+}
+
+std::vector<std::uint8_t> readBytes(const std::filesystem::path& path) {
+  std::FILE* f = std::fopen(path.string().c_str(), "rb");
+  if (!f) throw Error(concat("cannot open '", path.string(), "'"));
+  std::vector<std::uint8_t> bytes;
+  std::uint8_t buf[1 << 16];
+  std::size_t n = 0;
+  while ((n = std::fread(buf, 1, sizeof buf, f)) > 0) bytes.insert(bytes.end(), buf, buf + n);
+  const bool failed = std::ferror(f) != 0;
+  std::fclose(f);
+  if (failed) throw Error(concat("cannot read '", path.string(), "'"));
+  return bytes;
+}
+
+// Restores the newest checkpoint in `dir` that reads back whole (a corrupted
+// or foreign one is reported and the next older tried); returns its frame.
+int resumeFromCheckpoint(const std::string& dir, const Scene& scene, MpmSolver& solver) {
+  std::vector<std::pair<int, std::filesystem::path>> found;
+  std::error_code ec;
+  for (const auto& e : std::filesystem::directory_iterator(dir, ec)) {
+    const std::string name = e.path().filename().string();
+    int frame = -1;
+    char tail[8] = {};
+    if (std::sscanf(name.c_str(), "checkpoint_%d.%7s", &frame, tail) == 2 && std::string(tail) == "lsck" &&
+        frame >= 0 && name == checkpointName(frame))
+      found.emplace_back(frame, e.path());
+  }
+  if (ec) throw Error(concat("--resume: cannot list '", dir, "' (", ec.message(), ")"));
+  std::sort(found.rbegin(), found.rend());
+  for (const auto& [frame, path] : found) {
+    try {
+      const std::vector<std::uint8_t> bytes = readBytes(path);
+      const MpmCheckpointInfo info = restoreMpmCheckpoint(solver, bytes.data(), bytes.size(), checkpointTag(scene));
+      if (info.frame != frame) throw InvalidArgument(concat("it holds frame ", info.frame));
+      std::printf("resuming from %s: frame %d, t = %.6g s, %zu particles\n", path.string().c_str(), frame, info.time,
+                  info.particles);
+      return frame;
+    } catch (const Error& e) {
+      std::fprintf(stderr, "lodestone: skipping %s: %s\n", path.string().c_str(), e.what());
+    }
+  }
+  throw Error(concat("--resume: no usable checkpoint_NNNN.lsck in '", dir,
+                     "' (write them with output.checkpoint_every or --checkpoint-every N)"));
+}
+
 int run(const Args& a) {
   if (a.out.empty()) usageError("run needs --out DIR");
   std::unique_ptr<tbb::global_control> threads;
   if (a.threads > 0)
     threads = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, std::size_t(a.threads));
-  const Scene scene = loadScene(a.scene, a.options);
+  Scene scene = loadScene(a.scene, a.options);
+  if (a.checkFinite) scene.settings.checkFinite = true;
   auto solver = buildSolver(scene);
   printSceneSummary(scene, *solver);
+  printPlan(scene, *solver, stdout);
+  std::string planShown;
   std::filesystem::create_directories(a.out);
   const int last = a.last < 0 ? scene.frames : std::min(a.last, scene.frames);
   if (a.first > scene.frames) usageError(concat("--frames starts at ", a.first, " but the scene has ", scene.frames));
+  const int checkpointEvery = a.checkpointEvery >= 0 ? a.checkpointEvery : scene.output.checkpointEvery;
+  const int startFrame = a.resume ? resumeFromCheckpoint(a.out, scene, *solver) : 0;
 
   nlohmann::json stats;
   stats["scene"] = scene.name;
@@ -277,16 +437,66 @@ int run(const Args& a) {
   stats["grid"] = {{"dims", {scene.settings.grid.dims.i, scene.settings.grid.dims.j, scene.settings.grid.dims.k}},
                    {"dx_m", scene.settings.grid.dx}};
   stats["frames"] = nlohmann::json::array();
+  const std::filesystem::path statsPath = std::filesystem::path(a.out) / "stats.json";
+  if (startFrame > 0 && std::filesystem::exists(statsPath)) {
+    // Keep the per-frame records up to the checkpoint.
+    try {
+      const std::vector<std::uint8_t> bytes = readBytes(statsPath);
+      const nlohmann::json old = nlohmann::json::parse(bytes.begin(), bytes.end());
+      for (const nlohmann::json& f : old.at("frames"))
+        if (f.at("frame").get<int>() <= startFrame) stats["frames"].push_back(f);
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "lodestone: %s could not be read (%s); it restarts at frame %d\n",
+                   statsPath.string().c_str(), e.what(), startFrame + 1);
+    }
+  }
+  int lastCheckpoint = startFrame > 0 ? startFrame : -1;
+  const auto stopMessage = [&](int frame, double time, bool midFrame) {
+    std::string how = lastCheckpoint >= 0
+                          ? concat("resume from ", checkpointName(lastCheckpoint), " (frame ", lastCheckpoint,
+                                   ") with: lodestone run ", a.scene, " --out ", a.out, " --resume")
+                          : std::string("no checkpoint was written (use --checkpoint-every N or "
+                                        "output.checkpoint_every); run again to start over");
+    std::printf("\ninterrupted: stopped %s frame %d at t = %.6g s; frames up to %d are complete in %s; %s\n",
+                midFrame ? "during" : "after", frame, time, midFrame ? frame - 1 : frame, a.out.c_str(), how.c_str());
+  };
+  std::signal(SIGINT, onStopSignal);
+  std::signal(SIGTERM, onStopSignal);
+  const MpmProgressCallback keepGoing = [](const MpmProgress&) { return gStopRequested == 0; };
   const auto t0 = std::chrono::steady_clock::now();
   ProgressPrinter progress(std::cout, last, ProgressOptions{isTerminal(stdout)});
-  if (a.first == 1) writeFrameFiles(a, scene, *solver, 0);  // the initial state
-  for (int frame = 1; frame <= last; ++frame) {
-    const MpmFrameReport r = solver->advanceFrame(scene.frameDuration());
+  if (a.first == 1 && startFrame == 0) writeFrameFiles(a, scene, *solver, 0);  // the initial state
+  for (int frame = startFrame + 1; frame <= last; ++frame) {
+    const MpmFrameReport r = solver->advanceFrame(scene.frameDuration(), keepGoing);
+    if (r.cancelled) {
+      progress.finish();
+      stopMessage(frame, solver->time(), true);
+      return 130;
+    }
     const auto tio = std::chrono::steady_clock::now();
     if (frame >= a.first) writeFrameFiles(a, scene, *solver, frame);
     const double io = std::chrono::duration<double>(std::chrono::steady_clock::now() - tio).count();
     stats["frames"].push_back(frameJson(frame, r, solver->particles().size(), io));
-    writeJsonFile((std::filesystem::path(a.out) / "stats.json").string(), stats);
+    if (scene.settings.planner.enabled) {
+      // Every decision in stats.json; a line when one changes.
+      const MagneticPlan& plan = solver->lastMagneticPlan();
+      stats["frames"].back()["planner"] = {{"decisions", decisionsJson(plan.decisions)},
+                                           {"predicted_error", plan.predictedError},
+                                           {"field_solves_reused", r.magneticReused}};
+      const std::string sig = planSignature(plan);
+      if (!plan.decisions.empty() && sig != planShown) {
+        if (!planShown.empty()) progress.message(concat("frame ", frame, ": plan changed\n", plan.summary()));
+        planShown = sig;
+      }
+    }
+    writeJsonFile(statsPath.string(), stats);
+    if (checkpointEvery > 0 && frame % checkpointEvery == 0) {
+      writeFileAtomically((std::filesystem::path(a.out) / checkpointName(frame)).string(),
+                          saveMpmCheckpoint(*solver, frame, checkpointTag(scene)));
+      // A resumed solver starts its next field solve from phi = 0: so does this one.
+      solver->resetMagneticWarmStart();
+      lastCheckpoint = frame;
+    }
     for (const MagneticStageReport& m : r.magneticReports)
       if (!m.converged()) progress.message(concat("frame ", frame, ": ", m.solve.message));
     for (const std::string& w : r.warnings) progress.message(concat("frame ", frame, ": ", w));
@@ -294,6 +504,11 @@ int run(const Args& a) {
     progress.update(frame, elapsed,
                     formatStageSplit({{"p2g", r.secondsP2G}, {"magnetic", r.secondsMagnetic},
                                       {"grid", r.secondsGridUpdate}, {"g2p", r.secondsG2P}, {"output", io}}));
+    if (gStopRequested != 0 && frame < last) {
+      progress.finish();
+      stopMessage(frame, solver->time(), false);
+      return 130;
+    }
   }
   progress.finish();
   std::printf("wrote frames %d..%d to %s (stats.json has the per-frame details)\n", a.first, last, a.out.c_str());
@@ -305,30 +520,47 @@ int exportFields(const Args& a) {
   const Scene scene = loadScene(a.scene, a.options);
   auto solver = buildSolver(scene);
   for (int f = 0; f < a.frame && f < scene.frames; ++f) solver->advanceFrame(scene.frameDuration());
-  // One field solve of this state, through the stage's public entry point.
+  // One field solve of this state, through the stage's public entry points.
   const MpmParticles& p = solver->particles();
-  std::vector<std::uint32_t> magnetic;
   const MpmMaterial* law = nullptr;
-  for (std::size_t i = 0; i < p.size(); ++i)
-    if (solver->materials()[p.material[i]].isMagnetic()) magnetic.push_back(std::uint32_t(i));
   for (const MpmMaterial& m : solver->materials())
     if (m.isMagnetic()) law = &m;
   if (!law) throw InvalidArgument(concat(a.scene, ": the scene has no magnetic material; there is no field to export"));
-  std::vector<Vec3d> x;
-  std::vector<double> n;
-  for (std::uint32_t i : magnetic) {
-    x.push_back(p.x[i]);
-    n.push_back(p.count[i]);
-  }
   const GridSpec grid = scene.settings.magneticGrid ? *scene.settings.magneticGrid : scene.settings.grid;
   MagneticStageSettings settings = scene.settings.magnetic;
   settings.outOfGrid = OutOfGridPolicy::Skip;
   MagneticForceStage stage(grid, law->magnetic, settings);
-  const MagneticStageReport rep = stage.run({x.data(), n.data(), x.size()}, solver->appliedField(), solver->time());
+  MagneticStageReport rep;
+  if (!a.density.empty()) {
+    // A host's own particle-to-grid transfer: n (1/m^3) on the field grid.
+#if LODESTONE_HAVE_VDB
+    const DenseGrid<double> n = readDensityVdb(a.density, grid, a.densityGrid);
+    rep = stage.runOnDensity(n.view(), solver->appliedField(), solver->time());
+#else
+    throw Error(concat("cannot read ", a.density, ": this lodestone was built without OpenVDB"));
+#endif
+  } else {
+    std::vector<Vec3d> x;
+    std::vector<double> n;
+    for (std::size_t i = 0; i < p.size(); ++i)
+      if (solver->materials()[p.material[i]].isMagnetic()) {
+        x.push_back(p.x[i]);
+        n.push_back(p.count[i]);
+      }
+    rep = stage.run({x.data(), n.data(), x.size()}, solver->appliedField(), solver->time());
+  }
   std::printf("%s", rep.summary().c_str());
-  writeFields(a.out, scene, stage, a.frame, solver->time());
+  writeFields(a.out, scene, stage, a.frame, solver->time(), solver.get());
   std::printf("wrote %s (frame %d, t = %g s)\n", a.out.c_str(), a.frame, solver->time());
   return rep.converged() ? 0 : 1;
+}
+
+int plan(const Args& a) {
+  const Scene scene = loadScene(a.scene, a.options);
+  auto solver = buildSolver(scene);
+  printSceneSummary(scene, *solver);
+  printPlan(scene, *solver, stdout);
+  return 0;
 }
 
 int validate(const Args& a) {
@@ -351,9 +583,17 @@ int main(int argc, char** argv) {
       std::cout << "lodestone " << LODESTONE_VERSION_STRING << "\n";
       return 0;
     }
+    if (argc >= 2 && std::string(argv[1]) == "nodes") {
+      // The node library, generated from the node declarations.
+      if (argc > 3 || (argc == 3 && std::string(argv[2]) != "--markdown"))
+        usageError("usage: lodestone nodes [--markdown]");
+      std::cout << (argc == 3 ? plugin::nodesMarkdown() : plugin::nodesText());
+      return 0;
+    }
     const Args a = parseArgs(argc, argv);
     if (a.command == "run") return run(a);
     if (a.command == "validate") return validate(a);
+    if (a.command == "plan") return plan(a);
     if (a.command == "export-fields") return exportFields(a);
     usageError(concat("unknown command '", a.command, "'"));
   } catch (const std::exception& e) {

@@ -2,8 +2,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 
 #include "json_schema.h"
+#include "node_entry.h"
+#include "lodestone/core/accuracy_preset.h"
 #include "lodestone/core/constants.h"
 #include "lodestone/core/cuboid_magnet.h"
 #include "lodestone/core/cylinder_magnet.h"
@@ -12,10 +15,23 @@
 #include "lodestone/core/point_dipole.h"
 #include "lodestone/core/sphere_magnet.h"
 #include "lodestone/core/uniform_field.h"
+#include "lodestone/plugin/node_builders.h"
 
 namespace lodestone::examples {
 
 namespace {
+
+// Memory the simulation needs per grid node, bytes: the MPM grid (mass,
+// momentum, velocity, binning) and the magnetic stage's padded grid (n, phi,
+// H_ext, H, M, B, t, f, the solver's vectors and multigrid hierarchy), about
+// 600 B together; the estimate refuses grids that cannot fit before any
+// allocation.
+constexpr double kBytesPerNode = 600;
+constexpr double kMaxGridGiB = 25;
+
+double gridMemoryGiB(double ni, double nj, double nk) {
+  return ni * nj * nk * kBytesPerNode / (1024.0 * 1024.0 * 1024.0);
+}
 
 /// A pose at `centre` whose body z axis points along the unit vector `axis`.
 Pose poseAlong(const Vec3d& centre, const Vec3d& axis) {
@@ -35,55 +51,6 @@ BoundaryCondition readBoundary(JsonReader& r, const BoundaryCondition& fallback)
   bc.mode = mode == "sticky" ? BoundaryMode::Sticky : mode == "slip" ? BoundaryMode::Slip : BoundaryMode::Separate;
   bc.friction = r.number("friction", "", Range::closed(0, 10), fallback.friction);
   return bc;
-}
-
-MagneticMaterial readMagnetic(JsonReader& r) {
-  const std::string law = r.string("law", {"none", "paper", "paper-linear", "langevin", "linear"});
-  // n0: bulk micro-particle density, 1/m^3, directly or as a count per cell of a size.
-  const auto numberDensity = [&](double fallback) {
-    if (r.has("number_density")) return r.number("number_density", "1/m^3", Range::positive());
-    if (r.has("per_cell")) {
-      const double perCell = r.number("per_cell", "micro-particles", Range::positive());
-      const double cell = r.number("cell_size", "m", Range::positive());
-      return perCell / (cell * cell * cell);
-    }
-    return fallback;
-  };
-  MagneticMaterial m;
-  if (law == "none") {
-    m = nonMagneticMaterial();
-  } else if (law == "paper") {
-    m = paperMaterial();
-  } else if (law == "paper-linear") {
-    m = linearized(paperMaterial());
-  } else if (law == "langevin") {
-    const double moment = r.number("moment", "A*m^2", Range::positive());
-    const double temperature = r.number("temperature", "K", Range::positive(), 300.0);
-    m = langevinMaterial(moment, temperature, numberDensity(paperMaterial().numberDensity));
-  } else {
-    const double chi = r.number("chi", "", Range::closed(0, 1e4));
-    m = linearMaterial(chi, numberDensity(paperMaterial().numberDensity));
-  }
-  r.finish();
-  return m;
-}
-
-std::unique_ptr<MagnetSource> readMagnet(JsonReader& r, Pose& pose) {
-  const std::string shape = r.string("shape", {"sphere", "box", "cylinder"});
-  const Vec3d centre = r.vec3("center", "m");
-  const Vec3d axis = r.direction("axis", {0, 0, 1});
-  pose = poseAlong(centre, axis);
-  double M = 0;
-  if (r.has("remanence"))
-    M = magnetizationFromRemanence(r.number("remanence", "T", Range::closed(-3, 3)));
-  else
-    M = r.number("magnetization", "A/m", Range::closed(-3e6, 3e6));
-  const Vec3d Mbody{0, 0, M};  // along the magnet's axis
-  if (shape == "sphere") return std::make_unique<SphereMagnet>(pose, r.number("radius", "m", Range::positive()), Mbody);
-  if (shape == "box")
-    return std::make_unique<CuboidMagnet>(pose, r.vec3("half_size", "m", Range::positive()), Mbody);
-  const double radius = r.number("radius", "m", Range::positive());
-  return std::make_unique<CylinderMagnet>(pose, radius, r.number("half_length", "m", Range::positive()), Mbody);
 }
 
 ColliderMotion readMotion(JsonReader& r, const Pose& rest) {
@@ -107,13 +74,41 @@ ColliderMotion readMotion(JsonReader& r, const Pose& rest) {
   return motion;
 }
 
-EmitterShape readShape(JsonReader& r) {
-  const std::string shape = r.string("shape", {"box", "sphere", "cylinder"});
-  const Pose pose = poseAlong(r.vec3("center", "m"), r.direction("axis", {0, 0, 1}));
-  if (shape == "box") return EmitterShape::box(pose, r.vec3("half_size", "m", Range::positive()));
-  if (shape == "sphere") return EmitterShape::sphere(pose, r.number("radius", "m", Range::positive()));
-  const double radius = r.number("radius", "m", Range::positive());
-  return EmitterShape::cylinder(pose, radius, r.number("half_length", "m", Range::positive()));
+/// What shapes stored in files need: the readers, the scene file's directory
+/// (relative paths are resolved against it) and the MPM dx (m), the default
+/// voxel size of a mesh.
+struct FileShapes {
+  const ShapeLoaders* loaders = nullptr;
+  std::filesystem::path directory;
+  double dx = 0;
+};
+
+bool isFileShape(const std::string& shape) { return shape == "level_set" || shape == "mesh"; }
+
+/// Body-frame placement of a file shape: the file's origin goes to `center`
+/// (default the world origin) and its z axis along `axis`.
+Pose readFilePose(JsonReader& r) {
+  return poseAlong(r.vec3("center", "m", Range::any(), Vec3d{}), r.direction("axis", {0, 0, 1}));
+}
+
+/// The signed distance of a "level_set" (keys file, grid) or "mesh" (keys
+/// file, voxel_size) entry.
+std::shared_ptr<const SampledSdf> readFileShape(JsonReader& r, const std::string& shape, const FileShapes& files) {
+  std::filesystem::path path(r.string("file"));
+  if (path.is_relative()) path = files.directory / path;
+  try {
+    if (shape == "level_set") {
+      const std::string grid = r.has("grid") ? r.string("grid") : std::string("surface");
+      if (!files.loaders->levelSet) r.failAt("file", "shape 'level_set' needs a lodestone built with OpenVDB");
+      return files.loaders->levelSet(path.string(), grid);
+    }
+    const double voxel = r.number("voxel_size", "m", Range::positive(), files.dx);
+    if (!files.loaders->mesh) r.failAt("file", "shape 'mesh' needs a lodestone built with OpenVDB");
+    return files.loaders->mesh(path.string(), voxel);
+  } catch (const InvalidArgument& e) {
+    if (std::string(e.what()).rfind(r.file(), 0) == 0) throw;  // already names the entry
+    r.failAt("file", e.what());
+  }
 }
 
 std::vector<JsonReader> optionalArray(JsonReader& r, const std::string& key) {
@@ -147,15 +142,42 @@ Scene sceneFromJson(const nlohmann::json& doc, const std::string& sourceName, co
     GridSpec g;
     g.origin = lo;
     g.dx = dx;
-    g.dims = {int(std::ceil((hi.x - lo.x) / dx - 1e-9)) + 1, int(std::ceil((hi.y - lo.y) / dx - 1e-9)) + 1,
-              int(std::ceil((hi.z - lo.z) / dx - 1e-9)) + 1};
-    const double nodes = double(g.dims.i) * g.dims.j * g.dims.k;
-    if (nodes > 4.5e7)
-      d.fail(concat("a grid of ", g.dims.i, " x ", g.dims.j, " x ", g.dims.k, " nodes at dx = ", dx,
-                    " m is too large (needs about ", nodes * 600 / 1e9, " GB)"));
+    // Node counts in double first: a tiny dx must be refused, not overflow an int.
+    double n[3];
+    for (int a = 0; a < 3; ++a) n[a] = std::ceil((hi[a] - lo[a]) / dx - 1e-9) + 1;
+    const double gib = gridMemoryGiB(n[0], n[1], n[2]);
+    if (!(gib <= kMaxGridGiB) || !(std::max(n[0], std::max(n[1], n[2])) <= 1 << 20))
+      d.fail(concat("a grid of ", n[0], " x ", n[1], " x ", n[2], " nodes at dx = ", dx, " m is too large (needs about ",
+                    gib, " GiB, limit ", kMaxGridGiB, " GiB)"));
+    g.dims = {int(n[0]), int(n[1]), int(n[2])};
     scene.settings.grid = g;
     scene.settings.walls = readBoundary(d, BoundaryCondition{});
     d.finish();
+  }
+
+  // Accuracy preset (docs/accuracy_vs_time.md): the defaults of the field
+  // solve's tolerance and frequency; explicit keys below still win.
+  if (root.has("accuracy")) {
+    const AccuracyPresetSettings p =
+        accuracyPresetSettings(parseAccuracyPreset(root.string("accuracy", {"draft", "preview", "final"})));
+    scene.accuracy = p;
+    scene.settings.magnetic.solve.tolerance = p.solveTolerance;
+    scene.settings.magneticSolveInterval = p.solveInterval;
+    scene.settings.planner.enabled = true;  // a preset is also the planner's budget
+    scene.settings.planner.budget = p.bound;
+  }
+  // Effects planner (docs/planner.md): which magnetic stages run, within a budget.
+  if (root.has("planner")) {
+    JsonReader pl = root.object("planner");
+    PlannerSettings& ps = scene.settings.planner;
+    ps.enabled = pl.boolean("enabled", true);
+    ps.budget = pl.number("budget", "", Range{0, 1, true, true}, ps.budget);
+    const std::vector<std::string> toggles{"auto", "off", "on"};
+    ps.linearLaw = parsePlannerToggle(pl.string("linear_law", toggles, "auto"));
+    ps.appliedFieldOnly = parsePlannerToggle(pl.string("applied_field_only", toggles, "auto"));
+    ps.fieldReuse = parsePlannerToggle(pl.string("field_reuse", toggles, "auto"));
+    ps.activeRegion = parsePlannerToggle(pl.string("active_region", toggles, "auto"));
+    pl.finish();
   }
 
   // Time stepping.
@@ -166,7 +188,8 @@ Scene sceneFromJson(const nlohmann::json& doc, const std::string& sourceName, co
     scene.settings.fixedDt = t.number("dt", "s", Range::closed(0, 1), 0.0);
     scene.settings.cfl = t.number("cfl", "", Range::closed(0.01, 1), scene.settings.cfl);
     scene.settings.dtMax = t.number("dt_max", "s", Range::positive(), scene.settings.dtMax);
-    scene.settings.magneticSolveInterval = t.integer("field_solve_every", 0, 1000000, 0);
+    scene.settings.magneticSolveInterval =
+        t.integer("field_solve_every", 0, 1000000, scene.settings.magneticSolveInterval);
     t.finish();
   }
   scene.settings.gravity = root.vec3("gravity", "m/s^2", Range::any(), scene.settings.gravity);
@@ -194,94 +217,90 @@ Scene sceneFromJson(const nlohmann::json& doc, const std::string& sourceName, co
     scene.settings.magneticGrid = mg;
   }
 
-  // Materials.
+  // Materials: each entry is a `material` node (docs/nodes.md); its keys are
+  // the node's parameters, read and checked from the declarations.
   for (JsonReader& m : root.array("materials", 1)) {
-    const std::string name = m.string("name");
+    const plugin::ParamSet p = readNodeEntry(m, "material");
+    const std::string& name = p.getString("name");
     if (std::find(scene.materialNames.begin(), scene.materialNames.end(), name) != scene.materialNames.end())
       m.fail(concat("duplicate material name '", name, "'"));
-    const std::string model = m.string("model", {"solid", "fluid"});
-    const double rho = m.number("density", "kg/m^3", Range::positive());
-    MagneticMaterial mag = nonMagneticMaterial();
-    if (m.has("magnetic")) {
-      JsonReader mr = m.object("magnetic");
-      mag = readMagnetic(mr);
-    }
-    if (model == "solid") {
-      const double E = m.number("youngs_modulus", "Pa", Range::positive());
-      const double nu = m.number("poisson_ratio", "", Range::closed(0, 0.49), 0.3);
-      scene.materials.push_back(neoHookeanSolid(E, nu, rho, mag));
-    } else {
-      const double mu = m.number("viscosity", "Pa*s", Range::nonNegative());
-      const double K = m.number("bulk_modulus", "Pa", Range::positive());
-      scene.materials.push_back(viscousFluid(mu, K, rho, mag));
-    }
+    scene.materials.push_back(plugin::materialFrom(p));
     scene.materialNames.push_back(name);
     m.finish();
   }
 
-  // Bodies.
+  const FileShapes files{&options.loaders, std::filesystem::path(sourceName).parent_path(), scene.settings.grid.dx};
+
+  // Bodies: `particle_source` nodes (the lattice is fitted to domain.dx), plus
+  // the scene-only key `material` naming one of the materials above.
   for (JsonReader& b : optionalArray(root, "bodies")) {
     SceneBody body;
-    body.name = b.has("name") ? b.string("name") : concat("body ", scene.bodies.size());
     const std::string material = b.string("material", scene.materialNames);
+    const plugin::ParamSet p = readNodeEntry(b, "particle_source", {"cell_size"});
+    body.name = p.given("name") ? p.getString("name") : concat("body ", scene.bodies.size());
     body.material = std::uint32_t(std::find(scene.materialNames.begin(), scene.materialNames.end(), material) -
                                   scene.materialNames.begin());
-    body.shape = readShape(b);
-    body.emit.particlesPerCell = b.integer("particles_per_cell", 1, 1000, 8);
-    body.emit.jitter = b.number("jitter", "", Range::closed(0, 1), 0.0);
-    body.emit.seed = std::uint64_t(b.integer64("seed", 0, std::int64_t(1) << 62, 1));
-    body.emit.velocity = b.vec3("velocity", "m/s", Range::any(), Vec3d{});
+    const std::string& shape = p.getString("shape");
+    if (isFileShape(shape)) {
+      const Pose pose = readFilePose(b);
+      body.shape = EmitterShape::levelSetShape(pose, readFileShape(b, shape, files));
+    } else {
+      body.shape = plugin::shapeFrom(p);
+    }
+    body.emit.particlesPerCell = int(p.getInt("particles_per_cell"));
+    body.emit.jitter = p.getFloat("jitter");
+    body.emit.seed = std::uint64_t(p.getInt("seed"));
+    body.emit.velocity = p.getVec3("velocity");
     b.finish();
     scene.bodies.push_back(std::move(body));
   }
 
-  // Permanent magnets (field sources, and colliders unless told otherwise).
+  // Permanent magnets (field sources, and colliders unless told otherwise):
+  // `magnet` nodes; `motion` may also hold keyframes.
   for (JsonReader& m : optionalArray(root, "magnets")) {
     SceneMagnet sm;
-    Pose pose;
-    sm.magnet = readMagnet(m, pose);
+    const plugin::ParamSet p = readNodeEntry(m, "magnet", {"motion."});
+    if (p.given("remanence") && p.given("magnetization")) m.fail("give magnetization or remanence, not both");
+    if (!p.given("remanence")) m.number("magnetization", "A/m", Range::closed(-3e6, 3e6));  // required then
+    const Pose pose = plugin::poseAlong(p.getVec3("center"), p.getVec3("axis"));
+    sm.magnet = plugin::makeMagnet(p, pose);
     sm.motion = readMotion(m, pose);
-    sm.collider = m.boolean("collider", true);
-    sm.boundary = readBoundary(m, BoundaryCondition{BoundaryMode::Sticky, 0.0});
+    sm.collider = p.getBool("collider");
+    sm.boundary = plugin::boundaryFrom(p);
     m.finish();
     scene.magnets.push_back(std::move(sm));
   }
 
-  // Applied fields.
+  // Applied fields: `applied_field` nodes (a VDB file is relative to the scene file).
   for (JsonReader& f : optionalArray(root, "fields")) {
-    const std::string type = f.string("type", {"uniform", "dipole"});
-    TimeProfile profile;
-    if (f.has("ramp")) {
-      const std::vector<double> ramp = f.numbers("ramp", "s", Range::nonNegative(), 2, 2);
-      profile = TimeProfile::ramp(ramp[0], ramp[1]);
+    plugin::ParamSet p = readNodeEntry(f, "applied_field");
+    if (p.getString("type") == "vdb") {
+      std::filesystem::path path(p.getString("file"));
+      if (path.is_relative()) p.set("file", (files.directory / path).string());
     }
-    if (type == "uniform")
-      scene.fields.add(std::make_unique<UniformField>(f.vec3("H", "A/m", Range::closed(-1e8, 1e8)), profile));
-    else
-      scene.fields.add(std::make_unique<PointDipole>(f.vec3("position", "m"), f.vec3("moment", "A*m^2"), profile));
+    try {
+      scene.fields.add(plugin::appliedFieldFrom(p));
+    } catch (const std::exception& e) {
+      f.failAt(p.getString("type") == "vdb" ? "file" : "type", e.what());
+    }
     f.finish();
   }
 
-  // Colliders.
+  // Colliders: `collider` nodes; `motion` may also hold keyframes.
   for (JsonReader& c : optionalArray(root, "colliders")) {
-    const std::string shape = c.string("shape", {"plane", "box", "sphere", "cylinder"});
+    const plugin::ParamSet p = readNodeEntry(c, "collider", {"motion."});
+    const std::string& shape = p.getString("shape");
     ColliderShape cs;
     Pose pose;
-    if (shape == "plane") {
-      cs = ColliderShape::plane();
-      pose = poseAlong(c.vec3("point", "m"), c.direction("normal"));
+    if (isFileShape(shape)) {
+      pose = readFilePose(c);
+      cs = ColliderShape::levelSetShape(readFileShape(c, shape, files));
+      if (p.getBool("inverted")) cs = cs.invertedShape();
     } else {
-      pose = poseAlong(c.vec3("center", "m"), c.direction("axis", {0, 0, 1}));
-      if (shape == "box") cs = ColliderShape::box(c.vec3("half_size", "m", Range::positive()));
-      if (shape == "sphere") cs = ColliderShape::sphere(c.number("radius", "m", Range::positive()));
-      if (shape == "cylinder") {
-        const double radius = c.number("radius", "m", Range::positive());
-        cs = ColliderShape::cylinder(radius, c.number("half_length", "m", Range::positive()));
-      }
-      if (c.boolean("inverted", false)) cs = cs.invertedShape();
+      cs = plugin::colliderShapeFrom(p, pose);
     }
     const ColliderMotion motion = readMotion(c, pose);
-    const BoundaryCondition bc = readBoundary(c, BoundaryCondition{BoundaryMode::Sticky, 0.0});
+    const BoundaryCondition bc = plugin::boundaryFrom(p);
     c.finish();
     scene.colliders.emplace_back(cs, motion, bc);
   }
@@ -296,15 +315,19 @@ Scene sceneFromJson(const nlohmann::json& doc, const std::string& sourceName, co
     scene.output.fovDegrees = o.number("fov", "degrees", Range::closed(5, 120), 35.0);
     if (o.has("vdb")) {
       const nlohmann::json& list = o.raw("vdb");
-      if (!list.is_array()) o.failAt("vdb", "expected an array of grid names (n, phi, H, M, B, force)");
+      if (!list.is_array())
+        o.failAt("vdb", "expected an array of grid names (n, phi, H, M, B, force, mass, velocity)");
       for (std::size_t k = 0; k < list.size(); ++k) {
-        const std::vector<std::string> allowed{"n", "phi", "H", "M", "B", "force"};
+        const std::vector<std::string> allowed{"n", "phi", "H", "M", "B", "force", "mass", "velocity"};
         if (!list[k].is_string() || std::find(allowed.begin(), allowed.end(), list[k].get<std::string>()) == allowed.end())
-          o.failAt("vdb", concat("element ", k, ": expected one of n, phi, H, M, B, force, found ", list[k].dump()));
+          o.failAt("vdb", concat("element ", k, ": expected one of n, phi, H, M, B, force, mass, velocity, found ",
+                                 list[k].dump()));
         scene.output.vdbFields.push_back(list[k].get<std::string>());
       }
     }
     scene.output.vdbPoints = o.boolean("vdb_points", false);
+    scene.output.vdbAliases = o.boolean("vdb_aliases", false);
+    scene.output.checkpointEvery = o.integer("checkpoint_every", 0, 1000000, 0);
     if (o.has("camera")) {
       JsonReader cam = o.object("camera");
       scene.output.autoCamera = false;

@@ -3,15 +3,22 @@
 // (domain, materials, bodies, magnets, applied fields, colliders, time
 // stepping, outputs), read strictly: unknown keys, wrong types and
 // out-of-range values are rejected with the path of the entry and what was
-// expected. The format is documented in docs/scenes.md.
+// expected. The format is documented in docs/scenes.md. The entries of
+// materials, bodies, magnets, fields and colliders are nodes of the node
+// library (docs/nodes.md): their keys are those nodes' declared parameters,
+// read and checked from the declarations (node_entry.h).
 #include <cstdint>
+#include <functional>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
+#include "lodestone/core/accuracy_preset.h"
 #include "lodestone/core/field_source_set.h"
 #include "lodestone/core/magnet_source.h"
 #include "lodestone/core/mpm_solver.h"
+#include "lodestone/core/sampled_sdf.h"
 
 namespace lodestone::examples {
 
@@ -32,8 +39,10 @@ struct SceneMagnet {
 struct SceneOutput {
   bool ply = true;           ///< per-frame particle files
   bool png = true;           ///< per-frame preview renders
-  std::vector<std::string> vdbFields;  ///< grids of the per-frame field file (n, phi, H, M, B, force); empty = none
+  std::vector<std::string> vdbFields;  ///< grids of the per-frame field file (n, phi, H, M, B, force, mass, velocity); empty = none
+  bool vdbAliases = false;   ///< also write `density` (= n) and `vel` (= velocity) for Blender and Houdini
   bool vdbPoints = false;    ///< per-frame particles_NNNN.vdb (OpenVDB PointDataGrid)
+  int checkpointEvery = 0;   ///< frames between checkpoint files (checkpoint_NNNN.lsck); 0 = none
   int width = 640, height = 480;  ///< preview size, pixels
   bool autoCamera = true;
   Vec3d cameraPosition, cameraLookAt;  ///< m (when not automatic)
@@ -52,6 +61,7 @@ struct Scene {
   std::vector<SceneMagnet> magnets;
   FieldSourceSet fields;
   std::vector<MpmCollider> colliders;
+  std::optional<AccuracyPresetSettings> accuracy;  ///< the scene's accuracy preset, if it names one
   int frames = 1;
   double fps = 24;     ///< frames per second
   SceneOutput output;
@@ -59,9 +69,25 @@ struct Scene {
   double frameDuration() const { return 1.0 / fps; }
 };
 
+/// Readers of shapes stored in files, for bodies and colliders of shape
+/// "level_set" (a VDB level set) and "mesh" (an OBJ file). The scene library
+/// does not depend on OpenVDB: a host built with vdb_io installs readers
+/// (the lodestone command wraps readLevelSetVdb and levelSetFromObj of
+/// vdb_io/level_set_file.h); without them such shapes are rejected with a
+/// message saying so. Paths arrive resolved against the
+/// scene file's directory. Both return the shape in its own frame (the file's
+/// world frame), which the scene entry's pose then places.
+struct ShapeLoaders {
+  /// Float level set `grid` of the .vdb file `path`.
+  std::function<std::shared_ptr<const SampledSdf>(const std::string& path, const std::string& grid)> levelSet;
+  /// The closed triangle mesh of the .obj file `path` as a level set of voxel size `voxelSize` (m).
+  std::function<std::shared_ptr<const SampledSdf>(const std::string& path, double voxelSize)> mesh;
+};
+
 struct SceneOptions {
   bool full = false;   ///< use the scene's full-resolution dx (domain.full_dx)
   double dx = 0;       ///< > 0: override the grid spacing (m)
+  ShapeLoaders loaders;  ///< readers for "level_set" and "mesh" shapes (none: such shapes are rejected)
 };
 
 /// Reads and validates a scene file; throws InvalidArgument naming the file,

@@ -28,6 +28,8 @@ struct MagneticStageSettings {
   int forceMaskDilation = 2;                      ///< nodes beyond n > 0 kept by ForceMask::Material (0..8)
   OutOfGridPolicy outOfGrid = OutOfGridPolicy::Throw;  ///< particles whose stencil leaves the grid
   bool warmStart = true;                          ///< start each solve from the previous potential
+  bool appliedFieldOnly = false;                  ///< skip the solve: phi = 0, H = H_ext (weak magnetization;
+                                                  ///< the effects planner decides it from the susceptibility)
 
   /// Throws InvalidArgument naming the first bad value.
   void validate() const;

@@ -42,6 +42,8 @@
 // (3 nu), dtMax) floored at dtMin, with c the largest elastic wave speed of
 // the materials (sqrt((lambda + 2 mu)/rho) or sqrt(K/rho)) and nu the largest
 // kinematic viscosity (the explicit diffusion limit dx^2/(6 nu) at cfl = 1/2).
+// A fixed dt above the stability bound (stabilityLimitDt) is shortened by
+// advanceFrame, with a warning, rather than taken and blown up.
 //
 // Known limitations of the scheme (measured in tests/core/test_mpm_*.cpp):
 // APIC transfers damp elastic vibration at the grid scale (an 8-cell block
@@ -59,6 +61,7 @@
 #include <string>
 #include <vector>
 
+#include "lodestone/core/effects_planner.h"
 #include "lodestone/core/field_source_set.h"
 #include "lodestone/core/grid.h"
 #include "lodestone/core/magnet_source.h"
@@ -96,6 +99,15 @@ struct MpmSettings {
   std::optional<GridSpec> magneticGrid;  ///< grid of the magnetic stage; empty = the MPM grid (a grid not covering
                                          ///< every magnetic particle needs magnetic.outOfGrid = Skip)
   MagneticStageSettings magnetic;        ///< settings of the magnetic stage
+  PlannerSettings planner;               ///< effects planner (off: every magnetic stage runs as configured)
+
+  /// Scan every substep for NaN/Inf (particles' x, v, C, F, J, magnetic
+  /// force; the grid's mass, momentum and velocity on the active box; the
+  /// magnetic nodal force) and throw lodestone::Error naming the quantity, the
+  /// substep and the particle (index and id) or node. Off by default: the
+  /// solver then removes non-finite particles and counts them. About one
+  /// extra pass over the particles and the active grid per substep.
+  bool checkFinite = false;
 
   /// Throws InvalidArgument naming the first bad value.
   void validate() const;
@@ -120,6 +132,7 @@ struct MpmStepReport {
   double secondsG2P = 0;  ///< G2P, F/J update, advection, domain check
   double secondsTotal = 0;
   bool magneticSolved = false;   ///< a field solve ran in this substep
+  bool magneticReused = false;   ///< a solve was due but the planner reused the last one (nothing moved enough)
   MagneticStageReport magnetic;  ///< its report (when magneticSolved)
   Vec3d magneticImpulse;         ///< dt * magnetic force applied this substep, N*s
   std::size_t particles = 0;     ///< particles after the substep
@@ -135,8 +148,10 @@ struct MpmFrameReport {
   double time = 0;              ///< time at the end, s
   double minDt = 0, maxDt = 0;  ///< s
   int dtAtMinimum = 0;          ///< substeps whose CFL step was raised to dtMin
+  int dtLimitedByCfl = 0;       ///< substeps whose fixed dt exceeded stabilityLimitDt() and was shortened
   double secondsP2G = 0, secondsMagnetic = 0, secondsGridUpdate = 0, secondsG2P = 0, secondsTotal = 0;
   std::vector<MagneticStageReport> magneticReports;  ///< one per field solve
+  int magneticReused = 0;                            ///< due solves the planner skipped (field reused)
   Vec3d magneticImpulse;                             ///< sum over substeps of dt * applied magnetic force, N*s
   std::size_t clamped = 0, removed = 0, nonFinite = 0;
   MpmEnergies energies;    ///< at the end of the frame
@@ -209,6 +224,11 @@ class MpmSolver {
 
   /// The substep the solver would take now (s): fixedDt, or the CFL step.
   double suggestedDt() const;
+  /// The largest stable substep now (s): dx / (max|v_p| + c) and the
+  /// explicit viscous limit dx^2 / (6 nu); infinite for an empty or static
+  /// inviscid scene. advanceFrame shortens a fixedDt above it to cfl times
+  /// it (counted in MpmFrameReport::dtLimitedByCfl, with a warning).
+  double stabilityLimitDt() const;
   /// One substep of dt (s, finite, > 0).
   MpmStepReport step(double dt);
   /// Substeps until the time has advanced by frameDuration (s); the last
@@ -236,12 +256,33 @@ class MpmSolver {
   /// (gatherToSupport's dropped part), N.
   Vec3d magneticForceDropped() const { return magneticDropped_; }
 
+  /// Forget the magnetic stage's warm start: the next field solve starts
+  /// from phi = 0, as it does in a solver restored from a checkpoint (which
+  /// is why the `lodestone` command calls it after writing one: a resumed
+  /// run then repeats the uninterrupted one bit for bit).
+  void resetMagneticWarmStart();
+
+  /// Substeps taken since construction (or restored from a checkpoint).
+  long long substepCount() const { return substeps_; }
+
+  /// The effects planner's decisions for the magnetic stages in the current
+  /// state (what the next field solve would do), without solving.
+  MagneticPlan planMagneticNow() const;
+  /// The plan of the last field solve (empty decisions before the first, or
+  /// when the planner is off).
+  const MagneticPlan& lastMagneticPlan() const { return lastPlan_; }
+
  private:
+  friend struct MpmCheckpointAccess;  // mpm_checkpoint.cpp reads and restores the private state
+  void checkFiniteParticles(const char* where) const;
+  double cflDt(double cfl, bool bound) const;
+  void checkFiniteGrid(const char* where) const;
   class SceneField;
   std::size_t enforceDomain(std::size_t& removedOut, std::size_t& nonFiniteOut);
   ParticleBounds domainBounds() const;
   bool anyMagneticParticles() const;
   void solveMagnetic(MpmStepReport& rep);
+  bool magneticStateChanged();
   void gridUpdate(double dt, MpmStepReport& rep);
 
   MpmSettings settings_;
@@ -262,6 +303,10 @@ class MpmSolver {
   bool frameStart_ = false;
   bool particlesDirty_ = true;
   int stepsSinceSolve_ = 0;
+  MagneticPlan lastPlan_;
+  std::vector<Vec3d> lastSolveX_;   // particle positions at the last solve (planner reuse), permuted with the particles
+  std::vector<Vec3d> lastSolveH_;   // applied field at sampled magnetic points at the last solve, A/m
+  std::vector<std::uint32_t> lastSolveSample_;  // particle indices of those samples
   long long substeps_ = 0;
   double time_ = 0;
 };

@@ -1,0 +1,30 @@
+#pragma once
+// What the effects planner decided, for people and for stats.json: the
+// mechanical stages (run or idle, from the scene's content) and the magnetic
+// plan of MpmSolver::planMagneticNow / lastMagneticPlan (docs/planner.md).
+#include <cstdio>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "lodestone/core/effects_planner.h"
+#include "scene.h"
+
+namespace lodestone::examples {
+
+/// Mechanical stages with nothing to do in this scene (no gravity, no
+/// colliders, no fluid, no solid) and why; the MPM core is always on.
+std::vector<StageDecision> mechanicsDecisions(const Scene& scene, const MpmSolver& solver);
+
+/// Prints the plan of `solver` in its current state: every stage, on or
+/// off, the reason, the predicted error and the estimated cost per frame.
+void printPlan(const Scene& scene, const MpmSolver& solver, std::FILE* out);
+
+/// The decisions as JSON (stage, on, choice, reason, predicted_error, estimated_s).
+nlohmann::json decisionsJson(const std::vector<StageDecision>& decisions);
+
+/// A short string that changes when any decision's choice changes.
+std::string planSignature(const MagneticPlan& plan);
+
+}  // namespace lodestone::examples

@@ -1,0 +1,197 @@
+// The effects planner against full physics: for each automatic decision, a
+// scene where it is taken and the measured deviation from the full-physics
+// run stays within the budget, and one where the budget is too tight (or the
+// physics too strong) and it is not; stage-run counts for non-magnetic,
+// static and moving scenes.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <string>
+
+#include "lodestone/core/effects_planner.h"
+#include "lodestone/core/material.h"
+#include "lodestone/core/mpm_solver.h"
+#include "lodestone/core/sphere_magnet.h"
+#include "lodestone/core/uniform_field.h"
+
+using namespace lodestone;
+
+namespace {
+
+constexpr double kDx = 7.8e-3;  // m
+
+struct PlannerCase {
+  MagneticMaterial material = paperMaterial();
+  double remanence = 1.2;      // T, of the sphere magnet below the cube
+  double uniformH = 0;         // A/m, an extra uniform field along z (0: none)
+  bool magnet = true;
+  int nodes = 32;
+  double gravity = 0;          // m/s^2 along -z
+  int frames = 2;
+  bool planner = false;
+  double budget = 0.05;
+};
+
+struct Outcome {
+  double firstForce = 0;  // z force of the first solve, N
+  double moved = 0;       // centre-of-mass displacement along -z, m
+  int solves = 0, reused = 0, substeps = 0;
+  MagneticPlan plan;      // of the first solve
+};
+
+Outcome run(const PlannerCase& s) {
+  MpmSettings ms;
+  ms.grid.dx = kDx;
+  ms.grid.dims = {s.nodes, s.nodes, s.nodes};
+  ms.gravity = {0, 0, -s.gravity};
+  ms.fixedDt = 1e-4;
+  ms.magneticSolveInterval = 1;
+  ms.magnetic.solve.tolerance = 1e-9;
+  ms.planner.enabled = s.planner;
+  ms.planner.budget = s.budget;
+  MpmSolver solver(ms);
+  const std::uint32_t mat = solver.addMaterial(neoHookeanSolid(1e5, 0.3, 2500, s.material));
+  const double c = 0.5 * (s.nodes - 1) * kDx;
+  if (s.magnet)
+    solver.addMagnet(SphereMagnet(Pose::at({c, c, c - 0.045}), 0.02, {0, 0, magnetizationFromRemanence(s.remanence)}));
+  if (s.uniformH != 0) solver.sources().add(std::make_unique<UniformField>(Vec3d{0, 0, s.uniformH}));
+  solver.emit(EmitterShape::box(Pose::at({c, c, c}), {2 * kDx, 2 * kDx, 2 * kDx}), mat, {});
+  Outcome o;
+  const double z0 = solver.particles().centreOfMass().z;
+  for (int f = 0; f < s.frames; ++f) {
+    const MpmFrameReport r = solver.advanceFrame(0.002);
+    if (o.solves == 0 && !r.magneticReports.empty()) {
+      o.firstForce = r.magneticReports.front().totalForce.z;
+      o.plan = solver.lastMagneticPlan();
+    }
+    o.solves += int(r.magneticReports.size());
+    o.reused += r.magneticReused;
+    o.substeps += r.substeps;
+  }
+  o.moved = z0 - solver.particles().centreOfMass().z;
+  return o;
+}
+
+double relative(double a, double ref) { return std::fabs(a - ref) / std::fabs(ref); }
+
+void report(const char* what, const Outcome& full, const Outcome& planned, double budget) {
+  std::printf("%s (budget %.1f%%): force %.4g vs %.4g N (%.2e), moved %.4g vs %.4g m (%.2e), solves %d of %d "
+              "substeps (%d reused)\n%s",
+              what, 100 * budget, planned.firstForce, full.firstForce, relative(planned.firstForce, full.firstForce),
+              planned.moved, full.moved, full.moved != 0 ? relative(planned.moved, full.moved) : 0.0, planned.solves,
+              planned.substeps, planned.reused, planned.plan.summary().c_str());
+}
+
+}  // namespace
+
+TEST(EffectsPlanner, NonMagneticSceneRunsNoMagneticStage) {
+  PlannerCase s;
+  s.material = nonMagneticMaterial();
+  s.planner = true;
+  const Outcome o = run(s);
+  EXPECT_EQ(o.solves, 0);
+  // The plan says so, with the reason.
+  MpmSettings ms;
+  ms.grid.dx = kDx;
+  ms.grid.dims = {16, 16, 16};
+  ms.planner.enabled = true;
+  MpmSolver solver(ms);
+  solver.addMaterial(neoHookeanSolid(1e5, 0.3, 2500));
+  solver.emit(EmitterShape::box(Pose::at({0.06, 0.06, 0.06}), {0.02, 0.02, 0.02}), 0, {});
+  const MagneticPlan plan = solver.planMagneticNow();
+  EXPECT_FALSE(plan.magnetic);
+  ASSERT_EQ(plan.decisions.size(), 1u);
+  EXPECT_NE(plan.decisions[0].reason.find("no magnetic material"), std::string::npos) << plan.summary();
+}
+
+TEST(EffectsPlanner, StaticSceneSolvesOnceMovingSceneResolves) {
+  // Static: a cube in a uniform field (no net force, no gravity) stays put.
+  PlannerCase still;
+  still.magnet = false;
+  still.uniformH = 2e4;
+  still.planner = true;
+  const Outcome s = run(still);
+  std::printf("static: %d solves in %d substeps (%d reused), moved %.2e m\n", s.solves, s.substeps, s.reused, s.moved);
+  EXPECT_EQ(s.solves, 1);
+  EXPECT_EQ(s.reused, s.substeps - 1);
+  // Moving: pulled by the magnet, it re-solves as it moves, but not every substep.
+  PlannerCase moving;
+  moving.planner = true;
+  const Outcome m = run(moving);
+  const Outcome full = run(PlannerCase{});
+  report("moving cube", full, m, moving.budget);
+  EXPECT_GT(m.solves, 1);
+  EXPECT_LT(m.solves, m.substeps);
+  EXPECT_EQ(full.solves, full.substeps);
+  EXPECT_LE(relative(m.moved, full.moved), moving.budget);
+}
+
+TEST(EffectsPlanner, LinearLawWhenTheFieldIsWeak) {
+  PlannerCase weak;
+  weak.remanence = 0.003;  // |H| ~ 1e3 A/m at the cube: k2 |H| ~ 0.1
+  const Outcome full = run(weak);
+  weak.planner = true;
+  const Outcome planned = run(weak);
+  report("weak field", full, planned, weak.budget);
+  EXPECT_TRUE(planned.plan.linearLaw);
+  EXPECT_LE(relative(planned.firstForce, full.firstForce), weak.budget);
+  // A budget too tight for the linear law's a^2/15: Langevin stays.
+  weak.budget = 1e-5;
+  EXPECT_FALSE(run(weak).plan.linearLaw);
+  // A strong field: Langevin stays at the default budget.
+  PlannerCase strong;
+  strong.planner = true;
+  EXPECT_FALSE(run(strong).plan.linearLaw);
+}
+
+TEST(EffectsPlanner, AppliedFieldOnlyWhenTheSusceptibilityIsSmall) {
+  PlannerCase faint;
+  faint.material = linearMaterial(2e-3, paperMaterial().numberDensity);
+  const Outcome full = run(faint);
+  faint.planner = true;
+  const Outcome planned = run(faint);
+  report("chi = 2e-3", full, planned, faint.budget);
+  EXPECT_TRUE(planned.plan.appliedFieldOnly);
+  EXPECT_LE(relative(planned.firstForce, full.firstForce), faint.budget);
+  // chi = 0.5: the demagnetizing field matters, the solve runs.
+  PlannerCase strong;
+  strong.material = linearMaterial(0.5, paperMaterial().numberDensity);
+  strong.planner = true;
+  EXPECT_FALSE(run(strong).plan.appliedFieldOnly);
+  // The same faint material under a budget tighter than its chi.
+  faint.budget = 1e-3;
+  EXPECT_FALSE(run(faint).plan.appliedFieldOnly);
+}
+
+TEST(EffectsPlanner, ActiveRegionAroundTheMaterial) {
+  PlannerCase wide;
+  wide.nodes = 40;
+  wide.frames = 1;
+  const Outcome full = run(wide);
+  wide.planner = true;
+  const Outcome planned = run(wide);
+  report("40^3 domain", full, planned, wide.budget);
+  EXPECT_TRUE(planned.plan.activeRegion);
+  EXPECT_LT(planned.plan.region.nodeCount(), wide.nodes * wide.nodes * wide.nodes / 4);
+  EXPECT_LE(relative(planned.firstForce, full.firstForce), 0.005);  // the stated truncation error of 4 cells
+  EXPECT_LE(relative(planned.moved, full.moved), wide.budget);
+  wide.budget = 0.002;  // share 0.05%: below what a truncated domain costs
+  EXPECT_FALSE(run(wide).plan.activeRegion);
+}
+
+TEST(EffectsPlanner, ReuseFollowsTheBudget) {
+  PlannerCase loose;
+  loose.planner = true;
+  loose.budget = 0.1;
+  const Outcome full = run(PlannerCase{});
+  const Outcome planned = run(loose);
+  report("reuse at 10%", full, planned, loose.budget);
+  EXPECT_GT(planned.reused, 0);
+  EXPECT_LE(relative(planned.moved, full.moved), loose.budget);
+  PlannerCase tight = loose;
+  tight.budget = 1e-4;
+  const Outcome t = run(tight);
+  EXPECT_EQ(t.reused, 0);
+  EXPECT_EQ(t.solves, t.substeps);
+}
