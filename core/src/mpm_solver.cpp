@@ -340,20 +340,31 @@ std::size_t MpmSolver::enforceDomain(std::size_t& removedOut, std::size_t& nonFi
 // ---------------------------------------------------------------------------
 // Magnetism
 
+bool MpmSolver::isMagneticPoint(std::size_t p) const {
+  const std::uint32_t mat = particles_.material[p];
+  return particles_.count[p] > 0 && mat < materials_.size() && materials_[mat].isMagnetic();
+}
+
+const MagneticMaterial* MpmSolver::magneticLaw() const {
+  for (const MpmMaterial& m : materials_)
+    if (m.isMagnetic()) return &m.magnetic;
+  return nullptr;
+}
+
+void MpmSolver::poseMagnetsAt(double t) const {
+  for (std::size_t m = 0; m < magnets_.size(); ++m)
+    magnets_[m]->setPose(colliders_[magnetCollider_[m]].motion().poseAt(t));
+}
+
 bool MpmSolver::magneticStateChanged() {
   // Moved: any magnetic point farther than the reuse distance from where it
   // was at the last solve (a changed particle set counts as moved).
   if (lastSolveX_.size() != particles_.size() || lastSolveSample_.empty()) return true;
   const double d2 = lastPlan_.reuseDistance * lastPlan_.reuseDistance;
-  for (std::size_t p = 0; p < particles_.size(); ++p) {
-    const std::uint32_t mat = particles_.material[p];
-    if (particles_.count[p] > 0 && mat < materials_.size() && materials_[mat].isMagnetic() &&
-        norm2(particles_.x[p] - lastSolveX_[p]) > d2)
-      return true;
-  }
+  for (std::size_t p = 0; p < particles_.size(); ++p)
+    if (isMagneticPoint(p) && norm2(particles_.x[p] - lastSolveX_[p]) > d2) return true;
   // Applied field changed (magnets moved, time profiles) at the sampled points.
-  for (std::size_t m = 0; m < magnets_.size(); ++m)
-    magnets_[m]->setPose(colliders_[magnetCollider_[m]].motion().poseAt(time_));
+  poseMagnetsAt(time_);
   std::vector<Vec3d> H(lastSolveSample_.size());
   for (std::size_t q = 0; q < H.size(); ++q) H[q] = scene_->field(lastSolveX_[lastSolveSample_[q]], time_);
   return relativeFieldChange(H, lastSolveH_) > lastPlan_.reuseFieldChange;
@@ -361,16 +372,10 @@ bool MpmSolver::magneticStateChanged() {
 
 MagneticPlan MpmSolver::planMagneticNow() const {
   std::vector<Vec3d> positions;
-  const MagneticMaterial* law = nullptr;
-  for (const MpmMaterial& m : materials_)
-    if (m.isMagnetic() && !law) law = &m.magnetic;
-  for (std::size_t p = 0; p < particles_.size(); ++p) {
-    const std::uint32_t mat = particles_.material[p];
-    if (particles_.count[p] > 0 && mat < materials_.size() && materials_[mat].isMagnetic())
-      positions.push_back(particles_.x[p]);
-  }
-  for (std::size_t m = 0; m < magnets_.size(); ++m)
-    magnets_[m]->setPose(colliders_[magnetCollider_[m]].motion().poseAt(time_));
+  const MagneticMaterial* law = magneticLaw();
+  for (std::size_t p = 0; p < particles_.size(); ++p)
+    if (isMagneticPoint(p)) positions.push_back(particles_.x[p]);
+  poseMagnetsAt(time_);
   PlannerInputs in;
   in.positions = positions.data();
   in.count = positions.size();
@@ -397,12 +402,9 @@ void MpmSolver::solveMagnetic(MpmStepReport& rep) {
   std::vector<std::uint32_t> index;
   std::vector<Vec3d> positions;
   std::vector<double> counts;
-  const MagneticMaterial* law = nullptr;
-  for (const MpmMaterial& m : materials_)
-    if (m.isMagnetic() && !law) law = &m.magnetic;
+  const MagneticMaterial* law = magneticLaw();
   for (std::size_t p = 0; p < particles_.size(); ++p) {
-    const std::uint32_t mat = particles_.material[p];
-    if (particles_.count[p] > 0 && mat < materials_.size() && materials_[mat].isMagnetic()) {
+    if (isMagneticPoint(p)) {
       index.push_back(std::uint32_t(p));
       positions.push_back(particles_.x[p]);
       counts.push_back(particles_.count[p]);
@@ -415,8 +417,7 @@ void MpmSolver::solveMagnetic(MpmStepReport& rep) {
   stepsSinceSolve_ = 0;
   if (index.empty() || !law || scene_->empty()) return;
 
-  for (std::size_t m = 0; m < magnets_.size(); ++m)
-    magnets_[m]->setPose(colliders_[magnetCollider_[m]].motion().poseAt(time_));
+  poseMagnetsAt(time_);
   if (settings_.planner.enabled) {
     // The planner picks the law, whether to solve at all, and the solve grid.
     PlannerInputs in;

@@ -33,15 +33,6 @@ double gridMemoryGiB(double ni, double nj, double nk) {
   return ni * nj * nk * kBytesPerNode / (1024.0 * 1024.0 * 1024.0);
 }
 
-/// A pose at `centre` whose body z axis points along the unit vector `axis`.
-Pose poseAlong(const Vec3d& centre, const Vec3d& axis) {
-  const Vec3d z{0, 0, 1};
-  const Vec3d k = cross(z, axis);
-  const double s = norm(k), c = dot(z, axis);
-  if (s < 1e-12) return c > 0 ? Pose::at(centre) : Pose::fromAxisAngle(centre, {1, 0, 0}, kPi);
-  return Pose::fromAxisAngle(centre, k / s, std::atan2(s, c));
-}
-
 BoundaryCondition readBoundary(JsonReader& r, const BoundaryCondition& fallback) {
   BoundaryCondition bc = fallback;
   const std::string mode = r.string("boundary", {"sticky", "slip", "separate"},
@@ -62,7 +53,7 @@ ColliderMotion readMotion(JsonReader& r, const Pose& rest) {
     std::vector<Pose> poses;
     for (JsonReader& k : m.array("keyframes", 1)) {
       times.push_back(k.number("time", "s", Range::nonNegative()));
-      poses.push_back(poseAlong(k.vec3("center", "m"), k.direction("axis", rest.rotation * Vec3d{0, 0, 1})));
+      poses.push_back(plugin::poseAlong(k.vec3("center", "m"), k.direction("axis", rest.rotation * Vec3d{0, 0, 1})));
       k.finish();
     }
     motion = ColliderMotion::keyframed(std::move(times), std::move(poses));
@@ -88,7 +79,7 @@ bool isFileShape(const std::string& shape) { return shape == "level_set" || shap
 /// Body-frame placement of a file shape: the file's origin goes to `center`
 /// (default the world origin) and its z axis along `axis`.
 Pose readFilePose(JsonReader& r) {
-  return poseAlong(r.vec3("center", "m", Range::any(), Vec3d{}), r.direction("axis", {0, 0, 1}));
+  return plugin::poseAlong(r.vec3("center", "m", Range::any(), Vec3d{}), r.direction("axis", {0, 0, 1}));
 }
 
 /// The signed distance of a "level_set" (keys file, grid) or "mesh" (keys
