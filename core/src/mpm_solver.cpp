@@ -376,15 +376,19 @@ MagneticPlan MpmSolver::planMagneticNow() const {
   for (std::size_t p = 0; p < particles_.size(); ++p)
     if (isMagneticPoint(p)) positions.push_back(particles_.x[p]);
   poseMagnetsAt(time_);
+  return planMagnetic(settings_.planner, plannerInputs(positions, law ? *law : nonMagneticMaterial()));
+}
+
+PlannerInputs MpmSolver::plannerInputs(const std::vector<Vec3d>& positions, const MagneticMaterial& law) const {
   PlannerInputs in;
   in.positions = positions.data();
   in.count = positions.size();
-  in.material = law ? *law : nonMagneticMaterial();
+  in.material = law;
   in.applied = scene_.get();
   in.appliedEmpty = scene_->empty();
   in.time = time_;
   in.grid = magneticGrid_;
-  return planMagnetic(settings_.planner, in);
+  return in;
 }
 
 bool MpmSolver::anyMagneticParticles() const {
@@ -420,15 +424,7 @@ void MpmSolver::solveMagnetic(MpmStepReport& rep) {
   poseMagnetsAt(time_);
   if (settings_.planner.enabled) {
     // The planner picks the law, whether to solve at all, and the solve grid.
-    PlannerInputs in;
-    in.positions = positions.data();
-    in.count = positions.size();
-    in.material = *law;
-    in.applied = scene_.get();
-    in.appliedEmpty = scene_->empty();
-    in.time = time_;
-    in.grid = magneticGrid_;
-    lastPlan_ = planMagnetic(settings_.planner, in);
+    lastPlan_ = planMagnetic(settings_.planner, plannerInputs(positions, *law));
     GridSpec solveGrid = magneticGrid_;
     if (lastPlan_.activeRegion) {
       // Keep the current region while it holds the material's; otherwise a

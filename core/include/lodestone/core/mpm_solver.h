@@ -286,6 +286,7 @@ class MpmSolver {
   bool isMagneticPoint(std::size_t p) const;    // a particle with n_p > 0 of a magnetic material
   const MagneticMaterial* magneticLaw() const;  // the (shared) law of the magnetic materials, or null
   void poseMagnetsAt(double t) const;           // move the magnets to their motion's pose at t (s)
+  PlannerInputs plannerInputs(const std::vector<Vec3d>& positions, const MagneticMaterial& law) const;
   void gridUpdate(double dt, MpmStepReport& rep);
 
   MpmSettings settings_;
