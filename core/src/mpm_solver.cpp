@@ -504,8 +504,10 @@ void MpmSolver::gridUpdate(double dt, MpmStepReport& rep) {
   const Vec3d dg = dt * settings_.gravity;
   const int W = settings_.wallNodes;
   const BoundaryCondition walls = settings_.walls;
-  const bool magnetic = sameGrid_ && haveMagneticForce_;
   const Vec3d* fmag = magneticForce_.empty() ? nullptr : magneticForce_.data();
+  // The nodal force applies only when it lives on this grid (a restored
+  // state may carry a cached force from another stage grid).
+  const bool magnetic = sameGrid_ && haveMagneticForce_ && fmag && magneticForce_.spec() == settings_.grid;
   const std::vector<MpmNode>& nodes = grid_.nodes();
   std::vector<Vec3d>& vel = grid_.velocity();
   const int nj = hi.j - lo.j;
