@@ -31,7 +31,7 @@ ours=0 upstream=0
 for a in "$findings/$h"-crash-* "$findings/$h"-leak-* "$findings/$h"-oom-*; do
   [ -e "$a" ] || continue
   frame=$("$bin" "$a" 2>&1 | grep -E '^ +#[0-9]+ ' |
-    grep -vE 'interceptor|__asan|__sanitizer|__ubsan| in malloc| in calloc| in realloc|operator new|operator delete|libc\.so|libstdc\+\+|fuzzer::|bounded_new\.h|abort|raise|pthread_kill|<unknown module>' |
+    grep -vE 'interceptor|__asan|__sanitizer|__ubsan| in malloc| in calloc| in realloc|operator new|operator delete|libc\.so|libstdc\+\+|fuzzer::|bounded_new\.h|abort|raise|pthread_kill|__assert_fail|<unknown module>' |
     head -1)
   case $frame in
     *openvdb*) upstream=$((upstream + 1)); echo "  upstream (OpenVDB): $(basename "$a"): $frame" ;;
