@@ -31,13 +31,6 @@ constexpr GramAtGauss makeGramAtGauss() {
 }
 constexpr GramAtGauss kGramAtGauss = makeGramAtGauss();
 
-// Per-cell partial sums of evaluate(): the energies are reduced over all
-// cells, the multipole moments per block, both in a fixed order.
-struct CellSums {
-  double energy = 0, energyAbs = 0;
-  Multipole multipole;
-  bool finite = true;
-};
 struct EnergyTotals {
   double energy = 0, energyAbs = 0;
   bool finite = true;
@@ -249,15 +242,26 @@ void MagnetostaticProblem::removeMean(double* v) const {
 // ---------------------------------------------------------------------------
 // Material terms.
 
-MagnetostaticProblem::Evaluation MagnetostaticProblem::evaluate(const double* phi, double* F, bool jacobian) {
-  applyVacuum(phi, F);
+MagnetostaticProblem::Evaluation MagnetostaticProblem::evaluate(const double* phi, double* F, bool jacobian,
+                                                                const double* vacuumPart) {
+  if (vacuumPart) {
+    const std::size_t count = grid_.nodeCount();
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, 1 << 14),
+                      [&](const tbb::blocked_range<std::size_t>& r) {
+                        std::copy(vacuumPart + r.begin(), vacuumPart + r.end(), F + r.begin());
+                      });
+  } else {
+    applyVacuum(phi, F);
+  }
   const double h = grid_.dx, w = grid_.cellVolume() / 8.0, fScale = h * h / 8.0, jScale = h / 8.0;
-  std::vector<CellSums> sums(cellBase_.size());
+  std::vector<CellSums>& sums = sums_;
+  sums.resize(cellBase_.size());
   scatterCells(F, [&](std::size_t s, double local[8]) {
     double pc[8];
     gatherCorners(cellBase_[s], phi, pc);
     const Vec3d o = cellOrigin(cellBase_[s]);
     CellSums& cs = sums[s];
+    cs = CellSums{};
     if (jacobian) {
       std::fill(&elem_[s * kPacked], &elem_[s * kPacked] + kPacked, 0.0);
       cellTensor_[s] = SymMat3d{};
@@ -396,12 +400,41 @@ void MagnetostaticProblem::applyOpenBoundary(const std::vector<Multipole>& multi
       }
     });
   };
+  // The blocks as arrays, padded to a multiple of 4 with empty blocks, so
+  // that the sum over blocks runs in 4 independent lanes (which the compiler
+  // vectorizes) and in a fixed order. With r = x - c:
+  //   4 pi phi = (m.r - tr N) / r^3 + 3 r^T N r / r^5.
+  enum { kCx, kCy, kCz, kMx, kMy, kMz, kNxx, kNyy, kNzz, kNxy, kNxz, kNyz, kTr, kFields };
+  const std::size_t nb = multipoles.size(), padded = (nb + 3) / 4 * 4;
+  std::vector<double> soa(std::size_t(kFields) * padded, 0.0);
+  for (std::size_t b = 0; b < nb; ++b) {
+    const Multipole& mp = multipoles[b];
+    const auto& N = mp.quadrupole;
+    const double v[kFields] = {mp.centre.x, mp.centre.y, mp.centre.z, mp.dipole.x, mp.dipole.y, mp.dipole.z,
+                               N[0][0], N[1][1], N[2][2], N[0][1] + N[1][0], N[0][2] + N[2][0], N[1][2] + N[2][1],
+                               N[0][0] + N[1][1] + N[2][2]};
+    for (int f = 0; f < kFields; ++f) soa[std::size_t(f) * padded + b] = v[f];
+  }
+  const auto field = [&](int f) { return soa.data() + std::size_t(f) * padded; };
+  const double *cx = field(kCx), *cy = field(kCy), *cz = field(kCz), *mx = field(kMx), *my = field(kMy),
+               *mz = field(kMz), *nxx = field(kNxx), *nyy = field(kNyy), *nzz = field(kNzz), *nxy = field(kNxy),
+               *nxz = field(kNxz), *nyz = field(kNyz), *tr = field(kTr);
   forWallNodes([&](int i, int j, int k) {
     if (!onLattice(i, nx) || !onLattice(j, ny) || !onLattice(k, nz)) return;
     const Vec3d x = grid_.nodePosition(i, j, k);
-    double v = 0;
-    for (const Multipole& mp : multipoles) v += mp.potential(x);
-    phi[grid_.index(i, j, k)] = v;
+    double acc[4] = {0, 0, 0, 0};
+    for (std::size_t b = 0; b < padded; b += 4)
+      for (std::size_t l = 0; l < 4; ++l) {
+        const std::size_t q = b + l;
+        const double rx = x.x - cx[q], ry = x.y - cy[q], rz = x.z - cz[q];
+        const double r2 = rx * rx + ry * ry + rz * rz;
+        const double inv2 = r2 > 0 ? 1.0 / r2 : 0.0;  // a node at a block centre: no contribution
+        const double inv3 = inv2 * std::sqrt(inv2), inv5 = inv3 * inv2;
+        const double quad = nxx[q] * rx * rx + nyy[q] * ry * ry + nzz[q] * rz * rz + nxy[q] * rx * ry +
+                            nxz[q] * rx * rz + nyz[q] * ry * rz;
+        acc[l] += inv3 * (mx[q] * rx + my[q] * ry + mz[q] * rz - tr[q]) + 3.0 * inv5 * quad;
+      }
+    phi[grid_.index(i, j, k)] = ((acc[0] + acc[1]) + (acc[2] + acc[3])) / (4.0 * kPi);
   });
   // Off-lattice wall nodes: along each off-lattice axis, between the lattice
   // coordinates lo = s floor(c/s) and hi = min(lo + s, count - 1). The wall's
@@ -439,6 +472,47 @@ void MagnetostaticProblem::applyOpenBoundary(const std::vector<Multipole>& multi
       if (w != 0) v += w * phi[grid_.index(p[0], p[1], p[2])];
     }
     phi[grid_.index(i, j, k)] = v;
+  });
+}
+
+std::vector<std::size_t> MagnetostaticProblem::fixedNodes() const {
+  std::vector<std::size_t> out;
+  if (boundary_ != BoundaryKind::Open) return out;
+  const int nx = grid_.dims.i, ny = grid_.dims.j, nz = grid_.dims.k;
+  out.reserve(grid_.nodeCount() - freeNodeCount());
+  for (int k = 0; k < nz; ++k)
+    for (int j = 0; j < ny; ++j) {
+      const bool wallRow = k == 0 || k == nz - 1 || j == 0 || j == ny - 1;
+      for (int i = 0; i < nx; i += (wallRow || i == nx - 1) ? 1 : nx - 1) out.push_back(grid_.index(i, j, k));
+    }
+  return out;
+}
+
+void MagnetostaticProblem::addWallCoupling(const double* v, double* out) const {
+  if (boundary_ != BoundaryKind::Open) return;
+  const int nx = grid_.dims.i, ny = grid_.dims.j, nz = grid_.dims.k;
+  const auto onWall = [&](int i, int j, int k) {
+    return i == 0 || j == 0 || k == 0 || i == nx - 1 || j == ny - 1 || k == nz - 1;
+  };
+  // Row (i, j, k) of K restricted to the wall columns. Free rows are
+  // interior rows: face neighbours weigh 0, edge neighbours -dx/6, corner
+  // neighbours -dx/12 (q1_stencil.h), and the centre is never on the wall.
+  const double weight[4] = {0.0, 0.0, -grid_.dx / 6.0, -grid_.dx / 12.0};
+  const auto row = [&](int i, int j, int k) {
+    double sum = 0;
+    for (int c = -1; c <= 1; ++c)
+      for (int b = -1; b <= 1; ++b)
+        for (int a = -1; a <= 1; ++a) {
+          const int order = (a != 0) + (b != 0) + (c != 0);
+          if (order >= 2 && onWall(i + a, j + b, k + c)) sum += weight[order] * v[grid_.index(i + a, j + b, k + c)];
+        }
+    return sum;
+  };
+  tbb::parallel_for(1, nz - 1, [&](int k) {
+    for (int j = 1; j < ny - 1; ++j) {
+      const bool shellRow = k == 1 || k == nz - 2 || j == 1 || j == ny - 2;
+      for (int i = 1; i < nx - 1; i += (shellRow || i == nx - 2) ? 1 : nx - 3) out[grid_.index(i, j, k)] += row(i, j, k);
+    }
   });
 }
 

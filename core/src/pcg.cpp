@@ -42,8 +42,10 @@ PcgResult solvePcg(std::size_t n, const std::function<void(const double*, double
   ws.p.resize(n);
   ws.Ap.resize(n);
   std::vector<double>&r = ws.r, &z = ws.z, &p = ws.p, &Ap = ws.Ap;
-  forEach(n, [&](std::size_t m) { r[m] = b[m]; });
-  forEach(n, [&](std::size_t m) { x[m] = 0.0; });
+  forEach(n, [&](std::size_t m) {
+    r[m] = b[m];
+    x[m] = 0.0;
+  });
   if (project) project(r.data());
   const double bnorm = std::sqrt(deterministicDot(r.data(), r.data(), n));
   if (!(bnorm > 0)) {
@@ -64,13 +66,23 @@ PcgResult solvePcg(std::size_t n, const std::function<void(const double*, double
       break;
     }
     const double alpha = rz / pAp;
-    forEach(n, [&](std::size_t m) {
-      x[m] += alpha * p[m];
-      r[m] -= alpha * Ap[m];
-    });
-    if (project) project(r.data());
     ++res.iterations;
-    rnorm = std::sqrt(deterministicDot(r.data(), r.data(), n));
+    if (project) {
+      forEach(n, [&](std::size_t m) {
+        x[m] += alpha * p[m];
+        r[m] -= alpha * Ap[m];
+      });
+      project(r.data());
+      rnorm = std::sqrt(deterministicDot(r.data(), r.data(), n));
+    } else {
+      // One pass over the vectors: the update and |r|^2 together (each index
+      // is visited exactly once; the sum is as deterministic as deterministicDot).
+      rnorm = std::sqrt(deterministicSum<double>(n, [&](std::size_t m) {
+        x[m] += alpha * p[m];
+        r[m] -= alpha * Ap[m];
+        return r[m] * r[m];
+      }));
+    }
     if (rnorm <= relTol * bnorm) {
       res.converged = true;
       break;

@@ -222,3 +222,52 @@ TEST(FeOperator, ProjectedGradientIsExactForLinearAndSecondOrderInside) {
   const double order = std::log(e1 / e2) / std::log(2.0);
   EXPECT_GT(order, 1.8) << e1 << " -> " << e2;
 }
+
+// The Newton loop updates K phi after a wall update through the wall layer
+// only: addWallCoupling must add exactly what applyVacuum gives for the wall
+// values alone, fixedNodes must list exactly the non-free nodes, and the
+// evaluation from a given vacuum part must equal the full one.
+TEST(FeOperator, WallCouplingEqualsTheVacuumStencilOfTheWallValues) {
+  SmallProblem s = randomMaterial(7, 3);
+  MagnetostaticProblem p(s.grid, s.material.law, BoundaryKind::Open);
+  p.setMaterial(s.n.view(), uniform({1e4, 2e4, -3e4}));
+  const GridSpec& g = s.grid;
+  std::vector<double> v(g.nodeCount()), wallOnly(g.nodeCount(), 0.0);
+  std::mt19937 rng(4);
+  std::uniform_real_distribution<double> U(-1, 1);
+  for (double& x : v) x = U(rng);
+  const std::vector<std::size_t> wall = p.fixedNodes();
+  std::size_t expected = 0;
+  for (int k = 0; k < g.dims.k; ++k)
+    for (int j = 0; j < g.dims.j; ++j)
+      for (int i = 0; i < g.dims.i; ++i) expected += p.isFree(i, j, k) ? 0 : 1;
+  ASSERT_EQ(wall.size(), expected);
+  for (std::size_t m = 1; m < wall.size(); ++m) ASSERT_LT(wall[m - 1], wall[m]);
+  for (std::size_t m : wall) {
+    const int i = int(m % std::size_t(g.dims.i)), j = int(m / std::size_t(g.dims.i) % std::size_t(g.dims.j)),
+              k = int(m / (std::size_t(g.dims.i) * std::size_t(g.dims.j)));
+    ASSERT_FALSE(p.isFree(i, j, k)) << "node " << m;
+    wallOnly[m] = v[m];
+  }
+  std::vector<double> ref(g.nodeCount()), out(g.nodeCount(), 0.5);
+  p.applyVacuum(wallOnly.data(), ref.data());
+  std::vector<double> base = out;
+  p.addWallCoupling(v.data(), out.data());  // free values of v must be ignored
+  double worst = 0, scale = 0;
+  for (std::size_t m = 0; m < g.nodeCount(); ++m) {
+    worst = std::max(worst, std::fabs((out[m] - base[m]) - ref[m]));
+    scale = std::max(scale, std::fabs(ref[m]));
+  }
+  EXPECT_GT(scale, 0.0);
+  EXPECT_LT(worst, 1e-14 * scale + 1e-300);
+
+  std::vector<double> Kphi(g.nodeCount()), F1(g.nodeCount()), F2(g.nodeCount());
+  p.applyVacuum(v.data(), Kphi.data());
+  const auto e1 = p.evaluate(v.data(), F1.data());
+  const auto e2 = p.evaluate(v.data(), F2.data(), true, Kphi.data());
+  EXPECT_EQ(F1, F2);
+  EXPECT_EQ(e1.materialEnergy, e2.materialEnergy);
+
+  MagnetostaticProblem shield(s.grid, s.material.law, BoundaryKind::Shield);
+  EXPECT_TRUE(shield.fixedNodes().empty());
+}

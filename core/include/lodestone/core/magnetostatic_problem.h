@@ -73,7 +73,10 @@ class MagnetostaticProblem {
   /// Evaluates M and W at every material Gauss point for potential phi and
   /// writes the residual F = dE/dphi (A m) on free nodes (0 on fixed nodes).
   /// With `jacobian`, also rebuilds the element matrices of applyJacobian.
-  Evaluation evaluate(const double* phi, double* F, bool jacobian = true);
+  /// `vacuumPart`, when given, is applyVacuum(phi) already computed by the
+  /// caller (the Newton loop keeps it up to date); it is copied into F
+  /// instead of applying the stencil again.
+  Evaluation evaluate(const double* phi, double* F, bool jacobian = true, const double* vacuumPart = nullptr);
 
   /// Residual of the material part alone at phi = 0 (the reference scale of
   /// relative residuals): F0 = -G^T w M(H_ext). Does not change the stored Jacobian.
@@ -84,6 +87,13 @@ class MagnetostaticProblem {
   void applyVacuum(const double* v, double* out) const;
   /// out = J v with the Jacobian blocks of the last evaluate().
   void applyJacobian(const double* v, double* out) const;
+  /// out += K v_w on the free rows next to the wall, where v_w is v on the
+  /// fixed (wall) nodes and 0 elsewhere: what a change of the wall values
+  /// does to applyVacuum, at the cost of the wall layer only. Nothing for
+  /// Shield (no fixed nodes).
+  void addWallCoupling(const double* v, double* out) const;
+  /// Flat indices of the fixed (wall) nodes, in index order (empty for Shield).
+  std::vector<std::size_t> fixedNodes() const;
   /// diag(J) on free nodes (1 on fixed nodes).
   void jacobianDiagonal(double* out) const;
 
@@ -122,6 +132,16 @@ class MagnetostaticProblem {
   void zeroFixed(double* v) const;
 
  private:
+  // Per-cell partial sums of evaluate(): the energies are reduced over all
+  // cells, the multipole moments per block, both in a fixed order. Kept
+  // between calls (no allocation in the Newton loop).
+  struct CellSums {
+    double energy = 0, energyAbs = 0;
+    Multipole multipole;
+    bool finite = true;
+  };
+  std::vector<CellSums> sums_;
+
   template <typename CellFn>
   void scatterCells(double* out, const CellFn& cellFn) const;
   void gatherCorners(std::size_t base, const double* v, double c[8]) const;
