@@ -116,51 +116,69 @@ FieldSolveReport solveField(MagnetostaticProblem& problem, std::vector<double>& 
   if (problem.boundary() == BoundaryKind::Shield) project = [&](double* v) { problem.removeMean(v); };
 
   double prevNorm = 0, prevEta = settings.forcingMax;
-  std::vector<double> lastGood = phi, Ftrial(n), wallStep(n, 0.0);
+  std::vector<double> lastGood = phi, Ftrial(n);
+  // K phi (the vacuum part of F) is kept up to date through every change of
+  // phi (Newton steps: + lambda K delta; wall updates: the wall layer only),
+  // so the stencil is applied once per Newton iteration (to delta) instead of
+  // once for the line search and once more in each evaluation.
+  std::vector<double> Kphi(n), Kdelta(n), Ktrial(n);
+  problem.applyVacuum(phi.data(), Kphi.data());
+  const bool open = problem.boundary() == BoundaryKind::Open;
+  const std::vector<std::size_t> wall = problem.fixedNodes();
+  std::vector<double> wallOld(wall.size()), wallStep(wall.size()), wallPrev(wall.size(), 0.0);
+  const auto forWall = [&](const auto& fn) {
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, wall.size(), 1 << 12),
+                      [&](const tbb::blocked_range<std::size_t>& r) {
+                        for (std::size_t w = r.begin(); w != r.end(); ++w) fn(w);
+                      });
+  };
   // Each iteration starts from an evaluation at phi (residual, energy, the
   // Jacobian's element matrices): the first here, later ones are the
   // accepted line-search trial.
-  MagnetostaticProblem::Evaluation ev = problem.evaluate(phi.data(), F.data());
+  MagnetostaticProblem::Evaluation ev = problem.evaluate(phi.data(), F.data(), true, Kphi.data());
+  rep.secondsInitial = secondsSince(t0);
   for (int it = 0;; ++it) {
     const auto ti = Clock::now();
-    if (problem.boundary() == BoundaryKind::Open && ev.finite) {
-      // Far-field values from the magnetization just evaluated. When no
-      // material cell touches the wall they enter the residual only through
-      // the vacuum stencil, so F is corrected instead of re-evaluated.
-      work = phi;
+    double secondsWall = 0;
+    if (open && ev.finite) {
+      // Far-field values from the magnetization just evaluated.
+      forWall([&](std::size_t w) { wallOld[w] = phi[wall[w]]; });
       problem.applyOpenBoundary(ev.multipoles, phi.data());
-      forEach(n, [&](std::size_t m) { work[m] = phi[m] - work[m]; });
+      forWall([&](std::size_t w) { wallStep[w] = phi[wall[w]] - wallOld[w]; });
       // The wall values follow M one iteration late: a fixed-point
       // iteration whose steps d_k shrink by rho = <d_k, d_k-1>/|d_k-1|^2
       // per iteration (|rho| ~ 0.05 normally). A strongly magnetizable
       // body (chi0 ~ 100) makes it oscillate (rho < -1) and diverge;
       // relaxing the step by 1/(1 - rho) restores the contraction.
       if (it >= 1) {
-        const double dd = deterministicDot(work.data(), wallStep.data(), n);
-        const double pp = deterministicDot(wallStep.data(), wallStep.data(), n);
+        const double dd = deterministicDot(wallStep.data(), wallPrev.data(), wall.size());
+        const double pp = deterministicDot(wallPrev.data(), wallPrev.data(), wall.size());
         const double rho = pp > 0 ? dd / pp : 0.0;
         if (rho < -0.5) {
           const double theta = std::clamp(1.0 / (1.0 - rho), 0.05, 1.0);
-          forEach(n, [&](std::size_t m) {
-            phi[m] -= (1.0 - theta) * work[m];
-            work[m] *= theta;
+          forWall([&](std::size_t w) {
+            phi[wall[w]] -= (1.0 - theta) * wallStep[w];
+            wallStep[w] *= theta;
           });
         }
       }
-      wallStep = work;
-      // When no material cell touches the wall the wall values enter the
-      // residual only through the vacuum stencil: F is corrected instead of
-      // re-evaluated.
+      wallPrev = wallStep;
+      // The wall values enter K phi only in the free rows next to the wall.
+      forWall([&](std::size_t w) { delta[wall[w]] = wallStep[w]; });
+      problem.addWallCoupling(delta.data(), Kphi.data());
+      // When no material cell touches the wall they enter the residual only
+      // through the vacuum stencil: F is corrected instead of re-evaluated.
       if (problem.materialWallClearance() >= 1) {
-        problem.applyVacuum(work.data(), delta.data());
-        forEach(n, [&](std::size_t m) { F[m] += delta[m]; });
+        problem.addWallCoupling(delta.data(), F.data());
       } else {
-        ev = problem.evaluate(phi.data(), F.data());
+        ev = problem.evaluate(phi.data(), F.data(), true, Kphi.data());
       }
+      secondsWall = secondsSince(ti);
     }
     const double fn = norm(F);
     NewtonIterationRecord rec;
     rec.iteration = it;
+    rec.secondsWall = secondsWall;
     rec.relativeResidual = fn / r0;
     rep.relativeResidual = rec.relativeResidual;
     rep.materialEnergy = ev.materialEnergy;
@@ -203,10 +221,15 @@ FieldSolveReport solveField(MagnetostaticProblem& problem, std::vector<double>& 
     rec.forcing = eta;
 
     // Newton step.
+    auto tp = Clock::now();
     pre->update(problem);
+    rec.secondsSetup = secondsSince(tp);
+    tp = Clock::now();
     forEach(n, [&](std::size_t m) { work[m] = -F[m]; });
     const PcgResult cg =
         solvePcg(n, applyJ, *pre, work.data(), delta.data(), eta, settings.maxCgIterations, project, &pcgWork);
+    rec.secondsCg = secondsSince(tp);
+    tp = Clock::now();
     rec.cgIterations = cg.iterations;
     rec.cgRelativeResidual = cg.relativeResidual;
     rep.cgIterations += cg.iterations;
@@ -220,10 +243,9 @@ FieldSolveReport solveField(MagnetostaticProblem& problem, std::vector<double>& 
     }
 
     // Line search on E(phi + lambda delta) - E(phi) = lambda s1 + lambda^2 s2 / 2 + dW.
-    problem.applyVacuum(phi.data(), work.data());
-    const double s1 = deterministicDot(delta.data(), work.data(), n);
-    problem.applyVacuum(delta.data(), work.data());
-    const double s2 = deterministicDot(delta.data(), work.data(), n);
+    problem.applyVacuum(delta.data(), Kdelta.data());
+    const double s1 = deterministicDot(delta.data(), Kphi.data(), n);
+    const double s2 = deterministicDot(delta.data(), Kdelta.data(), n);
     const double armijoSlope = settings.armijo * g0;
     // Sufficient decrease: on the energy while it resolves the step, else on
     // the residual norm (`Ft` = residual at the trial point).
@@ -240,8 +262,11 @@ FieldSolveReport solveField(MagnetostaticProblem& problem, std::vector<double>& 
     // always) this is the next iteration's evaluation.
     double lambda = 1.0;
     bool accepted = false;
-    forEach(n, [&](std::size_t m) { trial[m] = phi[m] + delta[m]; });
-    MagnetostaticProblem::Evaluation evT = problem.evaluate(trial.data(), Ftrial.data());
+    forEach(n, [&](std::size_t m) {
+      trial[m] = phi[m] + delta[m];
+      Ktrial[m] = Kphi[m] + Kdelta[m];
+    });
+    MagnetostaticProblem::Evaluation evT = problem.evaluate(trial.data(), Ftrial.data(), true, Ktrial.data());
     double dE = s1 + 0.5 * s2 + (evT.materialEnergy - ev.materialEnergy);
     {
       bool rm = false;
@@ -251,6 +276,7 @@ FieldSolveReport solveField(MagnetostaticProblem& problem, std::vector<double>& 
     if (accepted) {
       phi.swap(trial);
       F.swap(Ftrial);
+      Kphi.swap(Ktrial);
       ev = std::move(evT);
     } else {
       for (int cut = 1; cut <= settings.maxLineSearchCuts && !accepted; ++cut) {
@@ -274,9 +300,12 @@ FieldSolveReport solveField(MagnetostaticProblem& problem, std::vector<double>& 
         rec.residualMerit = rm && accepted;
       }
       if (accepted) {
-        forEach(n, [&](std::size_t m) { phi[m] += lambda * delta[m]; });
-        if (project) project(phi.data());
-        ev = problem.evaluate(phi.data(), F.data());
+        forEach(n, [&](std::size_t m) {
+          phi[m] += lambda * delta[m];
+          Kphi[m] += lambda * Kdelta[m];
+        });
+        if (project) project(phi.data());  // a constant shift: K phi is unchanged (rows sum to 0)
+        ev = problem.evaluate(phi.data(), F.data(), true, Kphi.data());
       }
     }
     rep.lineSearchCuts += rec.lineSearchCuts;
@@ -289,6 +318,7 @@ FieldSolveReport solveField(MagnetostaticProblem& problem, std::vector<double>& 
       break;
     }
     rec.step = lambda;
+    rec.secondsLineSearch = secondsSince(tp);
     prevNorm = fn;
     prevEta = eta;
     ++rep.newtonIterations;

@@ -105,7 +105,8 @@ int main(int argc, char** argv) {
     std::ofstream csv(csvPath);
     require(bool(csv), "cannot write ", csvPath);
     csv << "body,nodes_per_axis,H0_A_per_m,start,newton_iterations,cg_iterations,line_search_cuts,relative_residual,"
-           "status,material_cells,seconds_solve,seconds_stage,threads\n";
+           "status,material_cells,seconds_solve,seconds_stage,threads,tolerance,seconds_initial,seconds_wall,"
+           "seconds_setup,seconds_cg,seconds_line_search\n";
     const int threads = tbb::info::default_concurrency();
     std::printf("Lodestone field-solve benchmark (%d threads, preconditioner %s, tolerance %.0e)\n", threads,
                 toString(settings.solve.preconditioner), settings.solve.tolerance);
@@ -130,9 +131,11 @@ int main(int argc, char** argv) {
                         r.converged() ? "" : "  NOT CONVERGED");
             if (history)
               for (const NewtonIterationRecord& h : r.solve.history)
-                std::printf("    newton %2d  residual %9.2e  eta %8.1e  cg %3d (%8.1e)  step %5.3f  cuts %d  %.3f s\n",
+                std::printf("    newton %2d  residual %9.2e  eta %8.1e  cg %3d (%8.1e)  step %5.3f  cuts %d  %.3f s"
+                            "  (wall %.3f, set-up %.3f, cg %.3f, line search %.3f)\n",
                             h.iteration, h.relativeResidual, h.forcing, h.cgIterations, h.cgRelativeResidual, h.step,
-                            h.lineSearchCuts, h.seconds);
+                            h.lineSearchCuts, h.seconds, h.secondsWall, h.secondsSetup, h.secondsCg,
+                            h.secondsLineSearch);
             std::fflush(stdout);
             if (crop > 0 && !warm) {
               // The material's box plus `crop` free cells, cold.
@@ -177,7 +180,18 @@ int main(int argc, char** argv) {
             csv << body << ',' << N << ',' << H0 << ',' << (warm ? "warm" : "cold") << ',' << r.solve.newtonIterations
                 << ',' << r.solve.cgIterations << ',' << r.solve.lineSearchCuts << ',' << r.solve.relativeResidual
                 << ',' << toString(r.solve.status) << ',' << r.solve.materialCells << ',' << r.secondsSolve << ','
-                << r.secondsTotal << ',' << threads << '\n';
+                << r.secondsTotal << ',' << threads << ',' << settings.solve.tolerance << ',' << r.solve.secondsInitial;
+            {
+              // Solve time by phase, summed over the Newton iterations.
+              double wall = 0, setup = 0, cgs = 0, search = 0;
+              for (const NewtonIterationRecord& h : r.solve.history) {
+                wall += h.secondsWall;
+                setup += h.secondsSetup;
+                cgs += h.secondsCg;
+                search += h.secondsLineSearch;
+              }
+              csv << ',' << wall << ',' << setup << ',' << cgs << ',' << search << '\n';
+            }
           }
         }
     std::printf("CSV written to %s\n", csvPath.c_str());

@@ -58,7 +58,11 @@ struct NewtonIterationRecord {
   double step = 0;              ///< accepted line-search step lambda
   int lineSearchCuts = 0;
   bool residualMerit = false;   ///< step accepted on the residual norm (energy at round-off)
-  double seconds = 0;           ///< wall time of the iteration
+  double seconds = 0;           ///< wall time of the iteration, of which:
+  double secondsWall = 0;       ///<   open-wall update (far-field sum and residual correction)
+  double secondsSetup = 0;      ///<   preconditioner set-up
+  double secondsCg = 0;         ///<   preconditioned CG
+  double secondsLineSearch = 0; ///<   line search, including the evaluation at the accepted point
 };
 
 struct FieldSolveReport {
@@ -70,6 +74,7 @@ struct FieldSolveReport {
   double referenceResidual = 0;    ///< ||F_ref||, A*m
   double materialEnergy = 0;       ///< sum w W at the solution, A^2*m
   double seconds = 0;
+  double secondsInitial = 0;       ///< reference residual and first evaluation (before the iterations)
   std::size_t materialCells = 0;
   std::string preconditioner;
   std::string message;             ///< human-readable outcome
