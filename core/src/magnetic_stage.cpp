@@ -68,11 +68,17 @@ void MagneticForceStage::resetWarmStart() { std::fill(phi_.begin(), phi_.end(), 
 
 void MagneticForceStage::setSettings(const MagneticStageSettings& settings) {
   settings.validate();
-  if (settings.boundary != settings_.boundary) resetWarmStart();
+  if (settings.boundary != settings_.boundary) {
+    resetWarmStart();
+    problem_.reset();
+  }
   settings_ = settings;
 }
 
-void MagneticForceStage::setMaterial(const MagneticMaterial& material) { material_ = material; }
+void MagneticForceStage::setMaterial(const MagneticMaterial& material) {
+  material_ = material;
+  problem_.reset();  // the law lives in the problem
+}
 
 MagneticStageReport MagneticForceStage::run(const ParticleView& particles, const FieldSource& sources, double time) {
   const auto t0 = Clock::now();
@@ -112,7 +118,9 @@ MagneticStageReport MagneticForceStage::solveAndForce(const FieldSource& sources
       applied(x.data(), x.size(), &hext_(0, j, k));
     }
   });
-  MagnetostaticProblem problem(grid_, material_.law, settings_.boundary);
+  if (!problem_) problem_ = std::make_unique<MagnetostaticProblem>(grid_, material_.law, settings_.boundary);
+  if (!workspace_) workspace_ = std::make_unique<FieldSolveWorkspace>();
+  MagnetostaticProblem& problem = *problem_;
   problem.setMaterial(n_.view(), applied);
   rep.secondsAppliedField = secondsSince(t);
   rep.totalCount = problem.totalCount();
@@ -131,7 +139,7 @@ MagneticStageReport MagneticForceStage::solveAndForce(const FieldSource& sources
     rep.solve.materialCells = problem.materialCellCount();
     rep.solve.message = "skipped (applied field only): phi = 0, H = H_ext";
   } else {
-    rep.solve = solveField(problem, phi_, settings_.solve, progress_);
+    rep.solve = solveField(problem, phi_, settings_.solve, progress_, workspace_.get());
   }
   rep.secondsSolve = secondsSince(t);
   if (!rep.solve.converged()) rep.warnings.push_back("field solve: " + rep.solve.message);

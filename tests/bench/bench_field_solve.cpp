@@ -6,7 +6,7 @@
 //
 //   lodestone-bench-field-solve [--sizes 64,128] [--fields 1e4,1e5] [--csv FILE]
 //                               [--preconditioner multigrid|jacobi] [--tolerance 1e-8]
-//                               [--crop M] [--history]
+//                               [--crop M] [--history] [--law langevin|linear]
 //
 // --crop M adds, per case, a cold solve on the material's bounding box plus
 // M free cells (what the effects planner's active region does) and the
@@ -64,7 +64,7 @@ int main(int argc, char** argv) {
     std::vector<double> sizes{64, 128}, fields{1e4, 1e5};
     std::string csvPath = "bench_field_solve.csv";
     MagneticStageSettings settings;
-    bool history = false;
+    bool history = false, linear = false;
     int crop = 0;
     for (int a = 1; a < argc; ++a) {
       const std::string arg = argv[a];
@@ -76,6 +76,11 @@ int main(int argc, char** argv) {
       else if (arg == "--fields") fields = parseList(next(), "--fields");
       else if (arg == "--csv") csvPath = next();
       else if (arg == "--history") history = true;
+      else if (arg == "--law") {
+        const std::string l = next();
+        if (l == "linear") linear = true;
+        else if (l != "langevin") throw InvalidArgument(concat("--law: expected langevin or linear, got '", l, "'"));
+      }
       else if (arg == "--crop") crop = int(parseList(next(), "--crop").at(0));
       else if (arg == "--preconditioner") {
         const std::string p = next();
@@ -92,6 +97,7 @@ int main(int argc, char** argv) {
             "  --tolerance X     relative Newton residual (default 1e-8)\n"
             "  --csv FILE        CSV output (default bench_field_solve.csv)\n"
             "  --history         print every Newton iteration\n"
+            "  --law L           langevin (default) or linear (the paper's chi0 = 0.91 linearization)\n"
             "  --crop M          also solve on the material box plus M cells and compare H\n");
         return 0;
       } else {
@@ -101,15 +107,15 @@ int main(int argc, char** argv) {
     for (double s : sizes) require(s >= 16 && s <= 512 && s == std::floor(s), "--sizes: ", s, " is not in 16..512");
     settings.validate();
 
-    const MagneticMaterial mat = paperMaterial();
+    const MagneticMaterial mat = linear ? linearized(paperMaterial()) : paperMaterial();
     std::ofstream csv(csvPath);
     require(bool(csv), "cannot write ", csvPath);
     csv << "body,nodes_per_axis,H0_A_per_m,start,newton_iterations,cg_iterations,line_search_cuts,relative_residual,"
            "status,material_cells,seconds_solve,seconds_stage,threads,tolerance,seconds_initial,seconds_wall,"
-           "seconds_setup,seconds_cg,seconds_line_search\n";
+           "seconds_setup,seconds_cg,seconds_line_search,law\n";
     const int threads = tbb::info::default_concurrency();
-    std::printf("Lodestone field-solve benchmark (%d threads, preconditioner %s, tolerance %.0e)\n", threads,
-                toString(settings.solve.preconditioner), settings.solve.tolerance);
+    std::printf("Lodestone field-solve benchmark (%d threads, %s law, preconditioner %s, tolerance %.0e)\n", threads,
+                linear ? "linear" : "Langevin", toString(settings.solve.preconditioner), settings.solve.tolerance);
     std::printf("%-6s %5s %8s %5s %7s %6s %5s %10s %9s %9s\n", "body", "N", "H0", "start", "newton", "cg", "cuts",
                 "residual", "solve s", "stage s");
     for (double sN : sizes)
@@ -190,7 +196,8 @@ int main(int argc, char** argv) {
                 cgs += h.secondsCg;
                 search += h.secondsLineSearch;
               }
-              csv << ',' << wall << ',' << setup << ',' << cgs << ',' << search << '\n';
+              csv << ',' << wall << ',' << setup << ',' << cgs << ',' << search << ',' << (linear ? "linear" : "langevin")
+                  << '\n';
             }
           }
         }

@@ -86,9 +86,23 @@ struct FieldSolveReport {
 /// Called after each Newton iteration; return false to cancel the solve.
 using SolveProgress = std::function<bool(const NewtonIterationRecord&)>;
 
+/// Storage a caller can keep between solves (the magnetic stage does): the
+/// Newton and CG vectors and the preconditioner, whose multigrid hierarchy
+/// then only refreshes its values when the grid and the material cells are
+/// unchanged. Results are the same with or without it.
+struct FieldSolveWorkspace {
+  std::vector<double> F, Fref, delta, work, trial, lastGood, Ftrial, Kphi, Kdelta, Ktrial;
+  PcgWorkspace pcg;
+  std::unique_ptr<Preconditioner> preconditioner;
+  PreconditionerKind kind = PreconditionerKind::Jacobi;  ///< what `preconditioner` is
+  MultigridSettings multigrid;                           ///< the settings it was made with
+};
+
 /// Solves for phi in place (phi holds the warm start on entry: one value per
 /// node; pass zeros for a cold start). Never leaves non-finite values in phi.
+/// `workspace` (optional) is reused storage, see FieldSolveWorkspace.
 FieldSolveReport solveField(MagnetostaticProblem& problem, std::vector<double>& phi,
-                            const FieldSolveSettings& settings, const SolveProgress& progress = {});
+                            const FieldSolveSettings& settings, const SolveProgress& progress = {},
+                            FieldSolveWorkspace* workspace = nullptr);
 
 }  // namespace lodestone

@@ -9,6 +9,7 @@
 // and can sample the force density back to particle positions for hosts
 // whose grid differs from ours. No I/O; nothing MPM-specific beyond the
 // particle arrays. The potential is kept between calls as the warm start.
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -110,6 +111,11 @@ class MagneticForceStage {
   DenseGrid<double> n_;
   std::vector<double> phi_;
   DenseGrid<Vec3d> hext_, h_, m_, b_, t_, f_;
+  // Kept between runs so that a run on the same grid allocates nothing
+  // large and the multigrid hierarchy only refreshes its values; rebuilt
+  // when the law or the boundary changes.
+  std::unique_ptr<MagnetostaticProblem> problem_;
+  std::unique_ptr<FieldSolveWorkspace> workspace_;
 };
 
 }  // namespace lodestone
