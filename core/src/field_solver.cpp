@@ -85,11 +85,15 @@ FieldSolveReport solveField(MagnetostaticProblem& problem, std::vector<double>& 
   rep.materialCells = problem.materialCellCount();
   rep.preconditioner = toString(settings.preconditioner);
   if (phi.size() != n) phi.assign(n, 0.0);
-  for (double& v : phi)
+  bool cold = true;
+  for (double& v : phi) {
     if (!std::isfinite(v)) {
       std::fill(phi.begin(), phi.end(), 0.0);  // a poisoned warm start is discarded
+      cold = true;
       break;
     }
+    cold = cold && v == 0.0;
+  }
 
   FieldSolveWorkspace localWorkspace;
   FieldSolveWorkspace& ws = workspace ? *workspace : localWorkspace;
@@ -100,8 +104,18 @@ FieldSolveReport solveField(MagnetostaticProblem& problem, std::vector<double>& 
   std::vector<double>&F = ws.F, &Fref = ws.Fref, &delta = ws.delta, &work = ws.work, &trial = ws.trial,
   &lastGood = ws.lastGood, &Ftrial = ws.Ftrial, &Kphi = ws.Kphi, &Kdelta = ws.Kdelta, &Ktrial = ws.Ktrial;
   PcgWorkspace& pcgWork = ws.pcg;
-  problem.residualAtZero(Fref.data());
-  rep.referenceResidual = norm(Fref);
+  // The reference residual is F at phi = 0. From a cold start that is the
+  // first evaluation itself (K phi = 0), which then also serves the first
+  // iteration; a warm start evaluates the material part at phi = 0 alone.
+  MagnetostaticProblem::Evaluation ev;
+  if (cold) {
+    std::fill(Kphi.begin(), Kphi.end(), 0.0);
+    ev = problem.evaluate(phi.data(), F.data(), true, Kphi.data());
+    rep.referenceResidual = ev.finite ? norm(F) : std::numeric_limits<double>::quiet_NaN();
+  } else {
+    problem.residualAtZero(Fref.data());
+    rep.referenceResidual = norm(Fref);
+  }
   if (!std::isfinite(rep.referenceResidual)) {
     rep.status = SolveStatus::NonFinite;
     rep.message = "the magnetization of the applied field is not finite";
@@ -140,7 +154,7 @@ FieldSolveReport solveField(MagnetostaticProblem& problem, std::vector<double>& 
   // phi (Newton steps: + lambda K delta; wall updates: the wall layer only),
   // so the stencil is applied once per Newton iteration (to delta) instead of
   // once for the line search and once more in each evaluation.
-  problem.applyVacuum(phi.data(), Kphi.data());
+  if (!cold) problem.applyVacuum(phi.data(), Kphi.data());
   const bool open = problem.boundary() == BoundaryKind::Open;
   const std::vector<std::size_t> wall = problem.fixedNodes();
   std::vector<double> wallOld(wall.size()), wallStep(wall.size()), wallPrev(wall.size(), 0.0);
@@ -153,7 +167,7 @@ FieldSolveReport solveField(MagnetostaticProblem& problem, std::vector<double>& 
   // Each iteration starts from an evaluation at phi (residual, energy, the
   // Jacobian's element matrices): the first here, later ones are the
   // accepted line-search trial.
-  MagnetostaticProblem::Evaluation ev = problem.evaluate(phi.data(), F.data(), true, Kphi.data());
+  if (!cold) ev = problem.evaluate(phi.data(), F.data(), true, Kphi.data());
   rep.secondsInitial = secondsSince(t0);
   for (int it = 0;; ++it) {
     const auto ti = Clock::now();
