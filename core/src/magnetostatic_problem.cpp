@@ -259,49 +259,69 @@ MagnetostaticProblem::Evaluation MagnetostaticProblem::evaluate(const double* ph
   scatterCells(F, [&](std::size_t s, double local[8]) {
     double pc[8];
     gatherCorners(cellBase_[s], phi, pc);
-    const Vec3d o = cellOrigin(cellBase_[s]);
+    // grad phi at the 8 Gauss points by sum factorization: the x-derivative
+    // is the edge difference along x interpolated in y and z (it does not
+    // depend on the x abscissa), likewise for y and z.
+    double gradient[8][3];
+    q1::gaussGradients(pc, gradient);
     CellSums& cs = sums[s];
     cs = CellSums{};
-    if (jacobian) {
-      std::fill(&elem_[s * kPacked], &elem_[s * kPacked] + kPacked, 0.0);
-      cellTensor_[s] = SymMat3d{};
-    }
+    double* E = &elem_[s * kPacked];
+    if (jacobian) std::fill(E, E + kPacked, 0.0);
+    SymMat3d tensorSum;
+    Vec3d upper[3];  // sum of w M over the Gauss points with bit a set (the upper abscissa on axis a)
+    double Mq[8][3];
     for (int q = 0; q < 8; ++q) {
       const std::size_t g = s * 8 + std::size_t(q);
-      const Vec3d H = hext_[g] - q1::referenceGradient(kQ1, q, pc) / h;
+      const Vec3d H{hext_[g].x - gradient[q][0] / h, hext_[g].y - gradient[q][1] / h,
+                    hext_[g].z - gradient[q][2] / h};
       const MagnetizationResponse<double> r = respond(law_, nq_[g], H);
-      SymMat3d jq = r.dMdH;
-      jq *= jScale;
       if (jacobian) {
-        SymMat3d mean = r.dMdH;
-        mean *= 0.125;
-        cellTensor_[s] += mean;
+        tensorSum += r.dMdH;
         // Element matrix E_cd += (dx/8) dN_qc . (dM/dH dN_qd), upper triangle
         // packed, with dM/dH = iso I + rank1 h h^T:
         // (dx/8) [iso (dN_qc . dN_qd) + rank1 (dN_qc . h)(dN_qd . h)].
         const double a = jScale * r.iso, b = jScale * r.rank1;
-        double* E = &elem_[s * kPacked];
         const double* G = kGramAtGauss.g[q];
         if (b != 0) {
           double u[8];
           for (int c = 0; c < 8; ++c) u[c] = dot(kQ1.dN[q][c], r.h);
-          for (int c = 0, e = 0; c < 8; ++c)
-            for (int d = c; d < 8; ++d, ++e) E[e] += a * G[e] + b * u[c] * u[d];
+          for (int c = 0, e = 0; c < 8; ++c) {
+            const double bu = b * u[c];
+            for (int d = c; d < 8; ++d, ++e) E[e] += a * G[e] + bu * u[d];
+          }
         } else {
           for (int e = 0; e < kPacked; ++e) E[e] += a * G[e];
         }
       }
-      cs.finite = cs.finite && isFinite(r.M) && std::isfinite(r.W) && std::isfinite(jq.trace());
+      cs.finite = cs.finite && isFinite(r.M) && std::isfinite(r.W) && std::isfinite(r.iso) && std::isfinite(r.rank1);
       cs.energy += w * r.W;
       cs.energyAbs += w * std::fabs(r.W);
       const Vec3d mw = w * r.M;
       cs.multipole.dipole += mw;
-      const Vec3d xq = o + h * Vec3d{q1::gaussAbscissa(q & 1), q1::gaussAbscissa((q >> 1) & 1),
-                                     q1::gaussAbscissa((q >> 2) & 1)} - blockCentre_[cellBlock_[s]];
-      for (int a = 0; a < 3; ++a)
-        for (int b = 0; b < 3; ++b) cs.multipole.quadrupole[a][b] += mw[a] * xq[b];
-      for (int c = 0; c < 8; ++c) local[c] -= fScale * dot(kQ1.dN[q][c], r.M);
+      for (int axis = 0; axis < 3; ++axis)
+        if ((q >> axis) & 1) upper[axis] += mw;
+      Mq[q][0] = r.M.x;
+      Mq[q][1] = r.M.y;
+      Mq[q][2] = r.M.z;
     }
+    if (jacobian) {
+      tensorSum *= 0.125;
+      cellTensor_[s] = tensorSum;
+    }
+    // Second moment about the block centre: the Gauss point at bits (qa, qb,
+    // qd) lies at o + dx (g[qa], g[qb], g[qd]), so sum_q w M_q (x_q - c)_a =
+    // dipole (o - c)_a + dx (g0 dipole + (g1 - g0) upper[a]).
+    const Vec3d rel = cellOrigin(cellBase_[s]) - blockCentre_[cellBlock_[s]];
+    const double g0 = q1::gaussAbscissa(0), g1 = q1::gaussAbscissa(1);
+    const Vec3d& dip = cs.multipole.dipole;
+    for (int i = 0; i < 3; ++i)
+      for (int a = 0; a < 3; ++a)
+        cs.multipole.quadrupole[i][a] = dip[i] * (rel[a] + h * g0) + h * (g1 - g0) * upper[a][i];
+    // Residual -fScale sum_q dN_qc . M_q, the transpose of the gradient.
+    double res[8];
+    q1::gaussDivergenceTranspose(Mq, res);
+    for (int c = 0; c < 8; ++c) local[c] -= fScale * res[c];
   });
   zeroFixed(F);
   const EnergyTotals total = deterministicSum<EnergyTotals>(

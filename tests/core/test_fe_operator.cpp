@@ -12,6 +12,7 @@
 #include "lodestone/core/material.h"
 #include "lodestone/core/nodal_field.h"
 #include "lodestone/core/parallel.h"
+#include "lodestone/core/q1_element.h"
 
 using namespace lodestone;
 
@@ -270,4 +271,28 @@ TEST(FeOperator, WallCouplingEqualsTheVacuumStencilOfTheWallValues) {
 
   MagnetostaticProblem shield(s.grid, s.material.law, BoundaryKind::Shield);
   EXPECT_TRUE(shield.fixedNodes().empty());
+}
+
+// The sum-factorized Gauss-point gradients and their transpose must equal
+// the element tables' dN sums (what the residual and energy are defined by).
+TEST(FeOperator, SumFactorizedGaussGradientsMatchTheShapeTables) {
+  const q1::Tables t = q1::makeTables();
+  std::mt19937 rng(9);
+  std::uniform_real_distribution<double> U(-1, 1);
+  for (int trial = 0; trial < 20; ++trial) {
+    double v[8], grad[8][3], f[8][3], out[8];
+    for (double& x : v) x = U(rng);
+    q1::gaussGradients(v, grad);
+    for (int q = 0; q < 8; ++q) {
+      const Vec3d ref = q1::referenceGradient(t, q, v);
+      for (int a = 0; a < 3; ++a) EXPECT_NEAR(grad[q][a], ref[a], 1e-15) << "q " << q << " axis " << a;
+      for (int a = 0; a < 3; ++a) f[q][a] = U(rng);
+    }
+    q1::gaussDivergenceTranspose(f, out);
+    for (int c = 0; c < 8; ++c) {
+      double ref = 0;
+      for (int q = 0; q < 8; ++q) ref += dot(t.dN[q][c], Vec3d{f[q][0], f[q][1], f[q][2]});
+      EXPECT_NEAR(out[c], ref, 1e-14) << "corner " << c;
+    }
+  }
 }

@@ -72,5 +72,67 @@ LODESTONE_HOSTDEV inline double interpolate(const Tables& t, int q, const double
   return s;
 }
 
+/// Reference gradients sum_c dN[q][c] v[c] at all 8 Gauss points at once,
+/// by sum factorization (the Q1 x-derivative is the x edge difference
+/// interpolated bilinearly in y and z, and so on): 60 operations instead of
+/// 8 x 24. Equal to referenceGradient up to round-off.
+LODESTONE_HOSTDEV inline void gaussGradients(const double v[kCorners], double out[kGaussPoints][3]) {
+  const double g0 = gaussAbscissa(0), g1 = gaussAbscissa(1);
+  // Linear interpolation of (u0, u1) at abscissa s: s = 0 -> g1 u0 + g0 u1.
+  const auto at = [g0, g1](int s, double u0, double u1) { return s ? g0 * u0 + g1 * u1 : g1 * u0 + g0 * u1; };
+  for (int axis = 0; axis < 3; ++axis) {
+    // The two other axes p < r, and the corner stride of each axis.
+    const int p = axis == 0 ? 1 : 0, r = axis == 2 ? 1 : 2;
+    const int sa = 1 << axis, sp = 1 << p, sr = 1 << r;
+    double d[2][2];  // edge differences along `axis`, indexed by the p and r bits
+    for (int bp = 0; bp < 2; ++bp)
+      for (int br = 0; br < 2; ++br) {
+        const int c = bp * sp + br * sr;
+        d[bp][br] = v[c + sa] - v[c];
+      }
+    for (int qp = 0; qp < 2; ++qp) {
+      const double e0 = at(qp, d[0][0], d[1][0]), e1 = at(qp, d[0][1], d[1][1]);
+      for (int qr = 0; qr < 2; ++qr) {
+        const double value = at(qr, e0, e1);
+        const int q = qp * sp + qr * sr;
+        out[q][axis] = value;
+        out[q + sa][axis] = value;
+      }
+    }
+  }
+}
+
+/// The transpose of gaussGradients: out[c] = sum_q dN[q][c] . f[q] for a
+/// vector f at each Gauss point (the weak divergence of f, reference units).
+LODESTONE_HOSTDEV inline void gaussDivergenceTranspose(const double f[kGaussPoints][3], double out[kCorners]) {
+  const double g0 = gaussAbscissa(0), g1 = gaussAbscissa(1);
+  for (int c = 0; c < kCorners; ++c) out[c] = 0;
+  for (int axis = 0; axis < 3; ++axis) {
+    const int p = axis == 0 ? 1 : 0, r = axis == 2 ? 1 : 2;
+    const int sa = 1 << axis, sp = 1 << p, sr = 1 << r;
+    // Sum over the abscissa along `axis` (the derivative does not depend on it).
+    double t[2][2];
+    for (int qp = 0; qp < 2; ++qp)
+      for (int qr = 0; qr < 2; ++qr) {
+        const int q = qp * sp + qr * sr;
+        t[qp][qr] = f[q][axis] + f[q + sa][axis];
+      }
+    // Transposed interpolation in r, then in p: weight of corner bit b at
+    // abscissa s is g1 when b == s, g0 otherwise.
+    double u[2][2];  // [qp][br]
+    for (int qp = 0; qp < 2; ++qp) {
+      u[qp][0] = g1 * t[qp][0] + g0 * t[qp][1];
+      u[qp][1] = g0 * t[qp][0] + g1 * t[qp][1];
+    }
+    for (int bp = 0; bp < 2; ++bp)
+      for (int br = 0; br < 2; ++br) {
+        const double value = bp ? g0 * u[0][br] + g1 * u[1][br] : g1 * u[0][br] + g0 * u[1][br];
+        const int c = bp * sp + br * sr;
+        out[c + sa] += value;
+        out[c] -= value;
+      }
+  }
+}
+
 }  // namespace q1
 }  // namespace lodestone
