@@ -280,7 +280,21 @@ FieldSolveReport solveField(MagnetostaticProblem& problem, std::vector<double>& 
     rec.cgIterations = cg.iterations;
     rec.cgRelativeResidual = cg.relativeResidual;
     rep.cgIterations += cg.iterations;
-    const double g0 = deterministicDot(delta.data(), F.data(), n);
+    // The slope g0 = delta . F and the line search's s1 = delta . K phi and
+    // s2 = delta . K delta, in one pass over the vectors.
+    problem.applyVacuum(delta.data(), Kdelta.data());
+    struct Slopes {
+      double g0 = 0, s1 = 0, s2 = 0;
+      Slopes& operator+=(const Slopes& o) {
+        g0 += o.g0;
+        s1 += o.s1;
+        s2 += o.s2;
+        return *this;
+      }
+    };
+    const Slopes slopes = deterministicSum<Slopes>(
+        n, [&](std::size_t m) { return Slopes{delta[m] * F[m], delta[m] * Kphi[m], delta[m] * Kdelta[m]}; });
+    const double g0 = slopes.g0;
     if (cg.breakdown || !(g0 < 0)) {
       rep.status = SolveStatus::LinearSolverFailed;
       rep.history.push_back(rec);
@@ -290,9 +304,7 @@ FieldSolveReport solveField(MagnetostaticProblem& problem, std::vector<double>& 
     }
 
     // Line search on E(phi + lambda delta) - E(phi) = lambda s1 + lambda^2 s2 / 2 + dW.
-    problem.applyVacuum(delta.data(), Kdelta.data());
-    const double s1 = deterministicDot(delta.data(), Kphi.data(), n);
-    const double s2 = deterministicDot(delta.data(), Kdelta.data(), n);
+    const double s1 = slopes.s1, s2 = slopes.s2;
     const double armijoSlope = settings.armijo * g0;
     // Sufficient decrease: on the energy while it resolves the step, else on
     // the residual norm (`Ft` = residual at the trial point).

@@ -345,11 +345,17 @@ void MagnetostaticProblem::residualAtZero(double* F0) const {
   std::fill(F0, F0 + grid_.nodeCount(), 0.0);
   const double fScale = grid_.dx * grid_.dx / 8.0;
   scatterCells(F0, [&](std::size_t s, double local[8]) {
+    double Mq[8][3];
     for (int q = 0; q < 8; ++q) {
       const std::size_t g = s * 8 + std::size_t(q);
       const Vec3d M = magnetization(law_, nq_[g], hext_[g]);
-      for (int c = 0; c < 8; ++c) local[c] -= fScale * dot(kQ1.dN[q][c], M);
+      Mq[q][0] = M.x;
+      Mq[q][1] = M.y;
+      Mq[q][2] = M.z;
     }
+    double res[8];
+    q1::gaussDivergenceTranspose(Mq, res);
+    for (int c = 0; c < 8; ++c) local[c] -= fScale * res[c];
   });
   zeroFixed(F0);
 }
