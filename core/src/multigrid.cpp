@@ -71,36 +71,6 @@ void unpack(const double* packed, T* full) {
     for (int d = c; d < 8; ++d, ++e) full[8 * d + c] = full[8 * c + d] = T(packed[e]);
 }
 
-// 1D stiffness and mass weights of the node at p of count (the walls have one
-// cell), as in q1_stencil.cpp, for the wall rows of a free (Shield) boundary.
-struct Axis1D {
-  double k[3], m[3];
-};
-inline Axis1D axisWeights(int p, int count) {
-  const bool left = p > 0, right = p < count - 1;
-  const double cells = double(left) + double(right);
-  return {{left ? -1.0 : 0.0, cells, right ? -1.0 : 0.0},
-          {left ? 1.0 / 6 : 0.0, cells * (2.0 / 6), right ? 1.0 / 6 : 0.0}};
-}
-template <typename T>
-double laplacianRow(const GridSpec& grid, int i, int j, int k, const T* v) {
-  const Axis1D x = axisWeights(i, grid.dims.i), y = axisWeights(j, grid.dims.j), z = axisWeights(k, grid.dims.k);
-  double s = 0;
-  for (int c = -1; c <= 1; ++c) {
-    if (z.m[c + 1] == 0) continue;
-    for (int b = -1; b <= 1; ++b) {
-      if (y.m[b + 1] == 0) continue;
-      for (int a = -1; a <= 1; ++a) {
-        if (x.m[a + 1] == 0) continue;
-        const double wgt = x.k[a + 1] * y.m[b + 1] * z.m[c + 1] + x.m[a + 1] * y.k[b + 1] * z.m[c + 1] +
-                           x.m[a + 1] * y.m[b + 1] * z.k[c + 1];
-        s += wgt * double(v[grid.index(i + a, j + b, k + c)]);
-      }
-    }
-  }
-  return grid.dx * s;
-}
-
 // diag(K) at one node, the same value q1LaplacianDiagonalAll gives there.
 inline double laplacianDiagonalAt(const GridSpec& grid, int i, int j, int k) {
   return grid.isBoundaryNode(i, j, k) ? q1LaplacianDiagonal(grid, i, j, k) : grid.dx * 8.0 / 3.0;
@@ -578,10 +548,10 @@ void MultigridPreconditioner::Hierarchy<T>::product(const Level& L, const T* v, 
     const std::size_t row = g.index(0, j, k);
     const bool wallRow = k == 0 || k == nz - 1 || j == 0 || j == ny - 1;
     if (wallRow) {
-      for (int i = 0; i < nx; ++i) y[i] = shield ? T(laplacianRow(g, i, j, k, v)) : T(0);
+      for (int i = 0; i < nx; ++i) y[i] = shield ? T(q1LaplacianRow(g, i, j, k, v)) : T(0);
     } else {
-      y[0] = shield ? T(laplacianRow(g, 0, j, k, v)) : T(0);
-      y[nx - 1] = shield ? T(laplacianRow(g, nx - 1, j, k, v)) : T(0);
+      y[0] = shield ? T(q1LaplacianRow(g, 0, j, k, v)) : T(0);
+      y[nx - 1] = shield ? T(q1LaplacianRow(g, nx - 1, j, k, v)) : T(0);
       // As applyQ1Laplacian: per x position the 4 in-plane face neighbours A
       // and the 4 diagonal ones D in (y, z); edges(i) = A(i-1) + A(i+1) + D(i),
       // corners(i) = D(i-1) + D(i+1); face neighbours weigh 0. A and D live

@@ -60,6 +60,9 @@ double q1LaplacianRowT(const GridSpec& grid, int i, int j, int k, const T* v) {
 double q1LaplacianRow(const GridSpec& grid, int i, int j, int k, const double* v) {
   return q1LaplacianRowT(grid, i, j, k, v);
 }
+double q1LaplacianRow(const GridSpec& grid, int i, int j, int k, const float* v) {
+  return q1LaplacianRowT(grid, i, j, k, v);
+}
 
 namespace {
 template <typename T>

@@ -18,6 +18,8 @@ void applyQ1Laplacian(const GridSpec& grid, BoundaryKind boundary, const float* 
 
 /// Row (i,j,k) of K times v, for any node including the walls.
 double q1LaplacianRow(const GridSpec& grid, int i, int j, int k, const double* v);
+/// The same for single-precision v (summed in double).
+double q1LaplacianRow(const GridSpec& grid, int i, int j, int k, const float* v);
 
 /// Diagonal entry of K at node (i,j,k).
 double q1LaplacianDiagonal(const GridSpec& grid, int i, int j, int k);
