@@ -276,6 +276,20 @@ TEST(Langevin, TripleMatchesTheSeparateKernels) {
     EXPECT_NEAR(t.derivative, lodestone::langevinDerivative(a), 4e-15 * std::fabs(lodestone::langevinDerivative(a)) + 1e-300) << a;
     EXPECT_NEAR(t.logSinhc, lodestone::logSinhOverArg(a), 4e-16 * std::fabs(lodestone::logSinhOverArg(a)) + 1e-300) << a;
   }
+  // Against long double references on the exponential branch, where the
+  // triple shares reciprocals and one logarithm instead of calling the
+  // separate kernels' forms.
+  for (double a : sampleArguments()) {
+    if (a < 1.0 || a > 1e4) continue;
+    const long double al = a, e = std::exp(-2.0L * al);
+    const long double ref = refL(al);
+    const long double dref = 1.0L / (al * al) - 4.0L * e / ((1.0L - e) * (1.0L - e));
+    const long double wref = al - std::log(2.0L) - std::log(al) + std::log1p(-e);
+    const auto t = lodestone::langevinTriple(a);
+    EXPECT_NEAR(t.overArg, double(ref / al), 1e-15 * double(ref / al)) << a;
+    EXPECT_NEAR(t.derivative, double(dref), 2e-15 * double(dref)) << a;
+    EXPECT_NEAR(t.logSinhc, double(wref), 1e-15 * double(wref)) << a;
+  }
   for (float a : {0.0f, 0.5f, 1.0f, 20.0f, 1e30f}) {
     const auto t = lodestone::langevinTriple(a);
     EXPECT_TRUE(std::isfinite(t.overArg) && std::isfinite(t.derivative) && std::isfinite(t.logSinhc)) << a;

@@ -173,10 +173,13 @@ LODESTONE_HOSTDEV inline LangevinTriple<T> langevinTriple(T a) {
   }
   const T e = exp(T(-2) * b);  // in (0, e^-2]; underflows to 0 for large b
   const T u = T(1) - e;        // >= 1 - e^-2: no cancellation
-  // coth b = (1 + e)/(1 - e) = 1 + 2e/u.
-  r.overArg = (T(1) - T(1) / b + T(2) * e / u) / b;
-  r.derivative = T(1) / (b * b) - T(4) * e / (u * u);
-  r.logSinhc = b > T(1e30) ? b : b - T(0.69314718055994530942) - log(b) + log1p(-e);
+  // Two reciprocals and one logarithm serve all three (this runs at every
+  // Gauss point of every evaluation): coth b = (1 + e)/(1 - e) = 1 + 2e/u,
+  // and ln(sinh b / b) = b - ln 2 + ln(u / b) with u / b in (0, 1).
+  const T ib = T(1) / b, iu = T(1) / u, eu = e * iu;
+  r.overArg = (T(1) - ib + T(2) * eu) * ib;
+  r.derivative = ib * ib - T(4) * eu * iu;
+  r.logSinhc = b > T(1e30) ? b : b - T(0.69314718055994530942) + log(u * ib);
   return r;
 }
 

@@ -104,7 +104,7 @@ LODESTONE_HOSTDEV inline MagnetizationResponse<T> respond(const MagnetizationLaw
       const T a = law.k2 * Hn;
       const T chi0x3 = n * law.moment * law.k2;  // Ms k2 = 3 chi0
       const LangevinTriple<T> L = langevinTriple(a);
-      const Vec3<T> h = Hn > T(0) ? H / Hn : Vec3<T>{};
+      const Vec3<T> h = Hn > T(0) ? (T(1) / Hn) * H : Vec3<T>{};
       r.M = (chi0x3 * L.overArg) * H;
       r.iso = chi0x3 * L.overArg;
       r.rank1 = chi0x3 * (L.derivative - L.overArg);
