@@ -1,9 +1,12 @@
 #include "lodestone/core/magnetic_force.h"
 
+#include <algorithm>
 #include <cmath>
 #include <vector>
 
+#include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
 
 #include "lodestone/core/constants.h"
 #include "lodestone/core/error.h"
@@ -109,67 +112,121 @@ Vec3d gatherToSupport(GridView<const Vec3d> f, GridView<const double> n, GridVie
   require(maxDistance >= 0 && maxDistance <= 16, "gatherToSupport: maxDistance must be 0..16 nodes, got ", maxDistance);
   const std::size_t count = g.nodeCount();
   constexpr int kFar = 1 << 20;
-  // d: node distance (26-connectivity) to the support n > 0, up to maxDistance.
-  std::vector<int> d(count, kFar);
-  tbb::parallel_for(std::size_t(0), count, [&](std::size_t m) { d[m] = n[m] > 0 ? 0 : kFar; });
+  // Only the box of the support (n > 0) grown by maxDistance can hold a node
+  // within reach; every node outside it is farther (kFar). The passes run
+  // over that box alone (the material is usually a small part of the grid).
+  struct Box {
+    int lo[3] = {1 << 30, 1 << 30, 1 << 30}, hi[3] = {-1, -1, -1};
+    void add(const Box& o) {
+      for (int a = 0; a < 3; ++a) {
+        lo[a] = std::min(lo[a], o.lo[a]);
+        hi[a] = std::max(hi[a], o.hi[a]);
+      }
+    }
+  };
+  const Box support = tbb::parallel_reduce(
+      tbb::blocked_range<int>(0, g.dims.k), Box{},
+      [&](const tbb::blocked_range<int>& r, Box b) {
+        for (int k = r.begin(); k != r.end(); ++k)
+          for (int j = 0; j < g.dims.j; ++j)
+            for (int i = 0; i < g.dims.i; ++i)
+              if (n[g.index(i, j, k)] > 0) {
+                const int c[3] = {i, j, k};
+                for (int a = 0; a < 3; ++a) {
+                  b.lo[a] = std::min(b.lo[a], c[a]);
+                  b.hi[a] = std::max(b.hi[a], c[a]);
+                }
+              }
+        return b;
+      },
+      [](Box a, const Box& b) {
+        a.add(b);
+        return a;
+      });
+  if (support.hi[0] < 0) {  // no support: everything is dropped
+    Vec3d lost{};
+    for (std::size_t m = 0; m < count; ++m) lost += f[m];
+    std::fill(out.data, out.data + count, Vec3d{});
+    return lost;
+  }
+  int lo[3], dims[3];
+  for (int a = 0; a < 3; ++a) {
+    lo[a] = std::max(support.lo[a] - maxDistance, 0);
+    dims[a] = std::min(support.hi[a] + maxDistance, g.dims[a] - 1) - lo[a] + 1;
+  }
+  const std::size_t boxCount = std::size_t(dims[0]) * std::size_t(dims[1]) * std::size_t(dims[2]);
+  const auto local = [&](int i, int j, int k) {
+    return std::size_t(i) + std::size_t(dims[0]) * (std::size_t(j) + std::size_t(dims[1]) * std::size_t(k));
+  };
+  const auto global = [&](int i, int j, int k) { return g.index(i + lo[0], j + lo[1], k + lo[2]); };
+  const auto forBox = [&](const auto& fn) {  // fn(i, j, k) in box coordinates, z-slabs in parallel
+    tbb::parallel_for(0, dims[2], [&](int k) {
+      for (int j = 0; j < dims[1]; ++j)
+        for (int i = 0; i < dims[0]; ++i) fn(i, j, k);
+    });
+  };
+  // d: node distance (26-connectivity) to the support, up to maxDistance.
+  std::vector<int> d(boxCount, kFar);
+  forBox([&](int i, int j, int k) { d[local(i, j, k)] = n[global(i, j, k)] > 0 ? 0 : kFar; });
   const auto forNeighbours = [&](int i, int j, int k, const auto& fn) {
-    for (int c = std::max(k - 1, 0); c <= std::min(k + 1, g.dims.k - 1); ++c)
-      for (int b = std::max(j - 1, 0); b <= std::min(j + 1, g.dims.j - 1); ++b)
-        for (int a = std::max(i - 1, 0); a <= std::min(i + 1, g.dims.i - 1); ++a)
-          if (a != i || b != j || c != k) fn(g.index(a, b, c));
+    for (int c = std::max(k - 1, 0); c <= std::min(k + 1, dims[2] - 1); ++c)
+      for (int b = std::max(j - 1, 0); b <= std::min(j + 1, dims[1] - 1); ++b)
+        for (int a = std::max(i - 1, 0); a <= std::min(i + 1, dims[0] - 1); ++a)
+          if (a != i || b != j || c != k) fn(local(a, b, c));
   };
   for (int level = 1; level <= maxDistance; ++level) {
-    tbb::parallel_for(0, g.dims.k, [&](int k) {
-      for (int j = 0; j < g.dims.j; ++j)
-        for (int i = 0; i < g.dims.i; ++i) {
-          const std::size_t m = g.index(i, j, k);
-          if (d[m] != kFar) continue;
-          bool next = false;
-          forNeighbours(i, j, k, [&](std::size_t o) { next = next || d[o] == level - 1; });
-          if (next) d[m] = -level;  // mark; committed below so this pass reads only older levels
-        }
+    forBox([&](int i, int j, int k) {
+      const std::size_t m = local(i, j, k);
+      if (d[m] != kFar) return;
+      bool next = false;
+      forNeighbours(i, j, k, [&](std::size_t o) { next = next || d[o] == level - 1; });
+      if (next) d[m] = -level;  // mark; committed below so this pass reads only older levels
     });
-    tbb::parallel_for(std::size_t(0), count, [&](std::size_t m) {
+    tbb::parallel_for(std::size_t(0), boxCount, [&](std::size_t m) {
       if (d[m] < 0) d[m] = -d[m];
     });
   }
   // Each node at distance L > 0 splits what it holds equally among its
   // neighbours at distance L - 1, outermost level first.
-  std::vector<Vec3d> acc(f.data, f.data + count);
-  std::vector<int> inward(count, 0);
-  tbb::parallel_for(0, g.dims.k, [&](int k) {
-    for (int j = 0; j < g.dims.j; ++j)
-      for (int i = 0; i < g.dims.i; ++i) {
-        const std::size_t m = g.index(i, j, k);
-        if (d[m] == 0 || d[m] == kFar) continue;
-        int c = 0;
-        forNeighbours(i, j, k, [&](std::size_t o) { c += d[o] == d[m] - 1; });
-        inward[m] = c;
-      }
+  std::vector<Vec3d> acc(boxCount);
+  std::vector<int> inward(boxCount, 0);
+  forBox([&](int i, int j, int k) {
+    const std::size_t m = local(i, j, k);
+    acc[m] = f[global(i, j, k)];
+    if (d[m] == 0 || d[m] == kFar) return;
+    int c = 0;
+    forNeighbours(i, j, k, [&](std::size_t o) { c += d[o] == d[m] - 1; });
+    inward[m] = c;
   });
   for (int level = maxDistance - 1; level >= 0; --level) {
-    tbb::parallel_for(0, g.dims.k, [&](int k) {
-      for (int j = 0; j < g.dims.j; ++j)
-        for (int i = 0; i < g.dims.i; ++i) {
-          const std::size_t m = g.index(i, j, k);
-          if (d[m] != level) continue;
-          Vec3d pulled{};
-          forNeighbours(i, j, k, [&](std::size_t o) {
-            if (d[o] == level + 1) pulled += acc[o] / double(inward[o]);
-          });
-          acc[m] += pulled;
-        }
+    forBox([&](int i, int j, int k) {
+      const std::size_t m = local(i, j, k);
+      if (d[m] != level) return;
+      Vec3d pulled{};
+      forNeighbours(i, j, k, [&](std::size_t o) {
+        if (d[o] == level + 1) pulled += acc[o] / double(inward[o]);
+      });
+      acc[m] += pulled;
     });
   }
+  // Out of reach (outside the box, or in it beyond maxDistance): dropped,
+  // summed in index order.
   Vec3d lost{};
-  for (std::size_t m = 0; m < count; ++m) {
-    if (d[m] == 0) {
-      out[m] = acc[m];
-    } else {
-      if (d[m] == kFar) lost += f[m];
-      out[m] = Vec3d{};
+  for (int k = 0; k < g.dims.k; ++k)
+    for (int j = 0; j < g.dims.j; ++j) {
+      const bool rowInBox = k >= lo[2] && k < lo[2] + dims[2] && j >= lo[1] && j < lo[1] + dims[1];
+      const std::size_t row = g.index(0, j, k);
+      for (int i = 0; i < g.dims.i; ++i) {
+        const bool inBox = rowInBox && i >= lo[0] && i < lo[0] + dims[0];
+        const int dm = inBox ? d[local(i - lo[0], j - lo[1], k - lo[2])] : kFar;
+        if (dm == 0) {
+          out[row + std::size_t(i)] = acc[local(i - lo[0], j - lo[1], k - lo[2])];
+        } else {
+          if (dm == kFar) lost += f[row + std::size_t(i)];
+          out[row + std::size_t(i)] = Vec3d{};
+        }
+      }
     }
-  }
   return lost;
 }
 

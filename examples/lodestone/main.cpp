@@ -233,6 +233,10 @@ nlohmann::json frameJson(int frame, const MpmFrameReport& r, std::size_t particl
     s["relative_residual"] = jsonNumber(m.solve.relativeResidual);
     putQuantity(s, "solve", m.secondsSolve, "s");
     putQuantity(s, "stage", m.secondsTotal, "s");
+    putQuantity(s, "transfer", m.secondsTransfer, "s");
+    putQuantity(s, "applied_field", m.secondsAppliedField, "s");
+    putQuantity(s, "nodal_fields", m.secondsFields, "s");
+    putQuantity(s, "force", m.secondsForce, "s");
     putQuantity(s, "total_force", m.totalForce, "N");
     s["warnings"] = m.warnings;
     solves.push_back(s);

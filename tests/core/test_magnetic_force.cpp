@@ -7,6 +7,7 @@
 #include <cstdio>
 
 #include "lodestone/core/constants.h"
+#include "lodestone/core/magnetic_force.h"
 #include "lodestone/core/magnetic_stage.h"
 #include "lodestone/core/material.h"
 #include "lodestone/core/sphere_magnet.h"
@@ -155,4 +156,60 @@ TEST(MagneticForce, MaterialTouchingAMagnetIsPulledNotPushed) {
   // overlap gave 18.6 N < 19.6 N at contact.
   for (std::size_t k = 0; k + 1 < pull.size(); ++k) EXPECT_GT(pull[k], pull[k + 1]) << k;
   EXPECT_LT(pull[0], 3.0 * pull[2]);
+}
+
+TEST(MagneticForce, GatherToSupportMovesForcesInwardAndDropsThoseOutOfReach) {
+  // Support: a 2x2x2 block of nodes against the grid's low corner (so the
+  // working box is clipped by the grid) and one node in the middle.
+  GridSpec g;
+  g.dx = 0.01;
+  g.dims = {24, 20, 18};
+  DenseGrid<double> n(g, 0.0);
+  for (int k = 0; k < 2; ++k)
+    for (int j = 0; j < 2; ++j)
+      for (int i = 0; i < 2; ++i) n(i, j, k) = 1.0;
+  n(12, 10, 9) = 1.0;
+  DenseGrid<Vec3d> f(g, Vec3d{}), out(g, Vec3d{});
+  f(12, 10, 9) = {1, 0, 0};    // on the support: stays
+  f(12, 10, 12) = {0, 2, 0};   // 3 steps straight above the middle node: all of it arrives there
+  f(5, 1, 1) = {0, 0, 4};      // 4 steps from the block: split over the block's x = 1 face
+  f(12, 4, 9) = {0, 0, 32};    // exactly maxDistance = 6 steps: kept
+  f(12, 10, 16) = {8, 0, 0};   // 7 steps from any support node: beyond maxDistance 6, dropped
+  f(23, 19, 17) = {0, 16, 0};  // the far corner: dropped
+  const Vec3d lost = gatherToSupport(f.view(), n.view(), out.view(), 6);
+  EXPECT_EQ(lost.x, 8.0);
+  EXPECT_EQ(lost.y, 16.0);
+  EXPECT_EQ(lost.z, 0.0);
+  // Only support nodes hold force.
+  Vec3d sum{};
+  for (int k = 0; k < g.dims.k; ++k)
+    for (int j = 0; j < g.dims.j; ++j)
+      for (int i = 0; i < g.dims.i; ++i) {
+        if (n(i, j, k) == 0) {
+          EXPECT_EQ(norm(out(i, j, k)), 0.0) << i << " " << j << " " << k;
+        }
+        sum += out(i, j, k);
+      }
+  EXPECT_NEAR(out(12, 10, 9).x, 1.0, 1e-15);
+  EXPECT_NEAR(out(12, 10, 9).y, 2.0, 1e-15);
+  EXPECT_NEAR(out(12, 10, 9).z, 32.0, 1e-13);
+  // The block receives all of the z force, and only on its x = 1 face.
+  double block = 0;
+  for (int k = 0; k < 2; ++k)
+    for (int j = 0; j < 2; ++j) {
+      EXPECT_EQ(out(0, j, k).z, 0.0);
+      block += out(1, j, k).z;
+    }
+  EXPECT_NEAR(block, 4.0, 1e-14);
+  EXPECT_NEAR(sum.x + lost.x, 9.0, 1e-14);
+  EXPECT_NEAR(sum.y + lost.y, 18.0, 1e-14);
+  EXPECT_NEAR(sum.z + lost.z, 36.0, 1e-13);
+
+  // No support at all: everything is dropped, nothing is written.
+  DenseGrid<double> none(g, 0.0);
+  const Vec3d all = gatherToSupport(f.view(), none.view(), out.view(), 6);
+  EXPECT_EQ(all.x, 9.0);
+  EXPECT_EQ(all.y, 18.0);
+  EXPECT_EQ(all.z, 36.0);
+  for (std::size_t m = 0; m < g.nodeCount(); ++m) EXPECT_EQ(norm(out[m]), 0.0);
 }
