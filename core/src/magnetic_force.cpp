@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <vector>
 
 #include <tbb/blocked_range.h>
@@ -40,20 +41,36 @@ void stressDivergence(GridView<const Vec3d> H, GridView<const Vec3d> B, GridView
     r[a] -= 0.5 * kMu0 * norm2(Hd);
     return r;
   };
+  // The material mask: nodes within `dilation` nodes (per axis) of n > 0, a
+  // box dilation done as three one-axis passes.
+  std::vector<std::uint8_t> near;
+  if (mask == ForceMask::Material) {
+    const std::size_t count = g.nodeCount();
+    near.resize(count);
+    std::vector<std::uint8_t> next(count);
+    tbb::parallel_for(std::size_t(0), count, [&](std::size_t m) { near[m] = n[m] > 0; });
+    for (int axis = 0; axis < 3 && dilation > 0; ++axis) {
+      tbb::parallel_for(0, g.dims.k, [&](int k) {
+        for (int j = 0; j < g.dims.j; ++j)
+          for (int i = 0; i < g.dims.i; ++i) {
+            const std::size_t m = g.index(i, j, k);
+            const int p = axis == 0 ? i : (axis == 1 ? j : k);
+            const int from = std::max(p - dilation, 0) - p, to = std::min(p + dilation, dims[axis] - 1) - p;
+            std::uint8_t any = 0;
+            for (int s = from; s <= to && !any; ++s) any = near[std::size_t(std::ptrdiff_t(m) + s * stride[axis])];
+            next[m] = any;
+          }
+      });
+      near.swap(next);
+    }
+  }
   tbb::parallel_for(0, g.dims.k, [&](int k) {
     for (int j = 0; j < g.dims.j; ++j)
       for (int i = 0; i < g.dims.i; ++i) {
         const std::size_t m = g.index(i, j, k);
-        if (mask == ForceMask::Material) {
-          bool near = false;
-          for (int c = std::max(k - dilation, 0); c <= std::min(k + dilation, g.dims.k - 1) && !near; ++c)
-            for (int b = std::max(j - dilation, 0); b <= std::min(j + dilation, g.dims.j - 1) && !near; ++b)
-              for (int a = std::max(i - dilation, 0); a <= std::min(i + dilation, g.dims.i - 1) && !near; ++a)
-                near = n(a, b, c) > 0;
-          if (!near) {
-            t[m] = Vec3d{};
-            continue;
-          }
+        if (mask == ForceMask::Material && !near[m]) {
+          t[m] = Vec3d{};
+          continue;
         }
         const int p[3] = {i, j, k};
         // div T_self + mu0 (M . grad) H_ext, with M = B/mu0 - H.

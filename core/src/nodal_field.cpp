@@ -89,7 +89,10 @@ void recoverNodalFields(GridView<const double> phi, GridView<const Vec3d> Hext, 
     const std::size_t m1 = std::min(count, m0 + (std::size_t(1) << 12));
     for (std::size_t m = m0; m < m1; ++m) {
       const Vec3d h = Hext[m] - grad[m];
-      const Vec3d mag = magnetization(law, n[m], h);
+      // Empty nodes (most of a grid) skip the Langevin function: with n = 0
+      // it returns (0 * g) H = 0 * H for finite H, bit for bit.
+      const bool skip = n[m] == 0 && law.kind == LawKind::Langevin && isFinite(h);
+      const Vec3d mag = skip ? 0.0 * h : magnetization(law, n[m], h);
       if (H.data) H[m] = h;
       if (M.data) M[m] = mag;
       if (B.data) B[m] = kMu0 * (h + mag);
