@@ -6,7 +6,7 @@
 
 namespace lodestone {
 
-FieldSourceSet::FieldSourceSet(const FieldSourceSet& other) {
+FieldSourceSet::FieldSourceSet(const FieldSourceSet& other) : FieldSource(other) {
   sources_.reserve(other.sources_.size());
   for (const auto& s : other.sources_) sources_.push_back(s->clone());
 }
@@ -51,6 +51,13 @@ Vec3d FieldSourceSet::magnetization(const Vec3d& x, double t) const {
 void FieldSourceSet::accumulateField(const Vec3d* x, std::size_t count, double t,
                                      Vec3d* out) const {
   for (const auto& s : sources_) s->accumulateField(x, count, t, out);
+}
+
+bool FieldSourceSet::appendFieldSignature(double t, std::vector<double>& out) const {
+  out.push_back(double(sources_.size()));
+  for (const auto& s : sources_)
+    if (!s->appendFieldSignature(t, out)) return false;
+  return true;
 }
 
 bool FieldSourceSet::isUniform() const {

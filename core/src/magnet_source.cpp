@@ -43,6 +43,15 @@ void MagnetSource::setPose(const Pose& pose) {
   pose_ = pose;
 }
 
+bool MagnetSource::appendFieldSignature(double t, std::vector<double>& out) const {
+  out.push_back(double(instanceId()));
+  for (int a = 0; a < 3; ++a) out.push_back(pose_.position[a]);
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c) out.push_back(pose_.rotation.m[r][c]);
+  out.push_back(scale_(t));
+  return true;
+}
+
 Vec3d MagnetSource::field(const Vec3d& x, double t) const {
   return pose_.vectorToWorld(bodyField(pose_.toLocal(x))) * scale_(t);
 }

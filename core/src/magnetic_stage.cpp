@@ -2,6 +2,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <cstring>
 #include <sstream>
 
 #include <tbb/blocked_range.h>
@@ -42,8 +43,8 @@ std::string MagneticStageReport::summary() const {
      << solve.cgIterations << " CG iterations (" << solve.preconditioner << "), relative residual "
      << solve.relativeResidual << ", " << solve.materialCells << " material cells, " << secondsSolve << " s\n";
   if (!solve.message.empty()) os << "  " << solve.message << "\n";
-  os << "applied field " << secondsAppliedField << " s, nodal fields " << secondsFields << " s, force "
-     << secondsForce << " s, total " << secondsTotal << " s\n";
+  os << "applied field " << secondsAppliedField << " s" << (appliedFieldReused ? " (nodes reused: sources unchanged)" : "")
+     << ", nodal fields " << secondsFields << " s, force " << secondsForce << " s, total " << secondsTotal << " s\n";
   os << "total force (" << totalForce.x << ", " << totalForce.y << ", " << totalForce.z << ") N\n";
   for (const auto& w : warnings) os << "warning: " << w << "\n";
   return os.str();
@@ -108,16 +109,25 @@ MagneticStageReport MagneticForceStage::solveAndForce(const FieldSource& sources
   require(std::isfinite(time), "magnetic stage: time must be finite, got ", time, " s");
   const AppliedFieldFunction applied = appliedFieldOf(sources, time);
 
-  // Applied field at the nodes and the material Gauss points.
+  // Applied field at the nodes (kept when the sources are unchanged: a
+  // static magnet is evaluated once) and the material Gauss points.
   auto t = Clock::now();
   const std::size_t count = grid_.nodeCount();
-  tbb::parallel_for(0, grid_.dims.k, [&](int k) {
-    std::vector<Vec3d> x(std::size_t(grid_.dims.i));
-    for (int j = 0; j < grid_.dims.j; ++j) {
-      for (int i = 0; i < grid_.dims.i; ++i) x[std::size_t(i)] = grid_.nodePosition(i, j, k);
-      applied(x.data(), x.size(), &hext_(0, j, k));
-    }
-  });
+  std::vector<double> signature;
+  const bool signed_ = sources.appendFieldSignature(time, signature);
+  rep.appliedFieldReused = signed_ && !hextSignature_.empty() && signature.size() == hextSignature_.size() &&
+                           std::memcmp(signature.data(), hextSignature_.data(), signature.size() * sizeof(double)) == 0;
+  if (!rep.appliedFieldReused) {
+    hextSignature_.clear();  // hext_ is being overwritten: an exception below leaves nothing to reuse
+    tbb::parallel_for(0, grid_.dims.k, [&](int k) {
+      std::vector<Vec3d> x(std::size_t(grid_.dims.i));
+      for (int j = 0; j < grid_.dims.j; ++j) {
+        for (int i = 0; i < grid_.dims.i; ++i) x[std::size_t(i)] = grid_.nodePosition(i, j, k);
+        applied(x.data(), x.size(), &hext_(0, j, k));
+      }
+    });
+    if (signed_) hextSignature_ = std::move(signature);
+  }
   if (!problem_) problem_ = std::make_unique<MagnetostaticProblem>(grid_, material_.law, settings_.boundary);
   if (!workspace_) workspace_ = std::make_unique<FieldSolveWorkspace>();
   MagnetostaticProblem& problem = *problem_;

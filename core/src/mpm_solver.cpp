@@ -82,6 +82,13 @@ class MpmSolver::SceneField final : public FieldSource {
     for (const auto& m : magnets_) m->accumulateField(x, count, t, out);
   }
   bool isUniform() const override { return magnets_.empty() && sources_.isUniform(); }
+  bool appendFieldSignature(double t, std::vector<double>& out) const override {
+    if (!sources_.appendFieldSignature(t, out)) return false;
+    out.push_back(double(magnets_.size()));
+    for (const auto& m : magnets_)
+      if (!m->appendFieldSignature(t, out)) return false;
+    return true;
+  }
   std::string describe() const override {
     return concat(sources_.describe(), "; plus ", magnets_.size(), " magnet collider(s)");
   }

@@ -31,6 +31,12 @@ Vec3d PointDipole::field(const Vec3d& x, double t) const {
   return dipoleField(moment_ * scale_(t), x - position_);
 }
 
+bool PointDipole::appendFieldSignature(double t, std::vector<double>& out) const {
+  out.push_back(double(instanceId()));
+  out.push_back(scale_(t));
+  return true;
+}
+
 void PointDipole::accumulateField(const Vec3d* x, std::size_t count, double t, Vec3d* out) const {
   const Vec3d m = moment_ * scale_(t);
   for (std::size_t n = 0; n < count; ++n) out[n] += dipoleField(m, x[n] - position_);

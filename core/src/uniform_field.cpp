@@ -13,6 +13,12 @@ UniformField::UniformField(const Vec3d& H, TimeProfile scale) : H_(H), scale_(st
 
 Vec3d UniformField::field(const Vec3d& /*x*/, double t) const { return H_ * scale_(t); }
 
+bool UniformField::appendFieldSignature(double t, std::vector<double>& out) const {
+  out.push_back(double(instanceId()));
+  out.push_back(scale_(t));
+  return true;
+}
+
 void UniformField::accumulateField(const Vec3d* /*x*/, std::size_t count, double t,
                                    Vec3d* out) const {
   const Vec3d H = H_ * scale_(t);

@@ -235,6 +235,7 @@ nlohmann::json frameJson(int frame, const MpmFrameReport& r, std::size_t particl
     putQuantity(s, "stage", m.secondsTotal, "s");
     putQuantity(s, "transfer", m.secondsTransfer, "s");
     putQuantity(s, "applied_field", m.secondsAppliedField, "s");
+    s["applied_field_reused"] = m.appliedFieldReused;
     putQuantity(s, "nodal_fields", m.secondsFields, "s");
     putQuantity(s, "force", m.secondsForce, "s");
     putQuantity(s, "total_force", m.totalForce, "N");

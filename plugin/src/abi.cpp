@@ -258,6 +258,7 @@ std::string reportJson(const MagneticStageReport& r) {
   j["seconds"] = {{"transfer", r.secondsTransfer}, {"applied_field", r.secondsAppliedField},
                   {"solve", r.secondsSolve},       {"fields", r.secondsFields},
                   {"force", r.secondsForce},       {"total", r.secondsTotal}};
+  j["applied_field_reused"] = r.appliedFieldReused;
   j["warnings"] = r.warnings;
   return j.dump();
 }

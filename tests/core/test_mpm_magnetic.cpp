@@ -143,6 +143,9 @@ TEST(MpmMagnetic, MagneticCubeIsPulledTowardTheMagnetAndANonMagneticCubeOnlyFall
   const double t = solver.time();
   ASSERT_EQ(solves.size(), 5u);
   for (const MagneticStageReport& s : solves) EXPECT_TRUE(s.converged()) << s.summary();
+  // The magnet does not move: its field at the stage's nodes is evaluated
+  // by the first solve only.
+  for (std::size_t k = 0; k < solves.size(); ++k) EXPECT_EQ(solves[k].appliedFieldReused, k > 0) << k;
 
   const Sums m1 = sums(p, sc.magnetic), q1 = sums(p, sc.nonMagnetic);
   // Grid momentum balance for the magnetic cube: dP = M g t + sum dt f (no contact).
@@ -277,7 +280,12 @@ TEST(MpmMagnetic, MovingMagnetMovesItsFieldAndItsCollider) {
   const Vec3d velocity{0.5, 0, 0};  // m/s
   const std::size_t ci = solver.addMagnet(magnet, ColliderMotion::constantVelocity(magnet.pose(), velocity, {}));
   solver.emit(EmitterShape::box(Pose::at({c, c, 0.1}), {kHalf, kHalf, kHalf}), mag, {});
-  for (int f = 0; f < 3; ++f) solver.advanceFrame(0.002);
+  for (int f = 0; f < 3; ++f) {
+    const MpmFrameReport r = solver.advanceFrame(0.002);
+    // A moving magnet's field is evaluated again at every solve.
+    EXPECT_EQ(r.magneticReports.size(), 1u);
+    for (const MagneticStageReport& m : r.magneticReports) EXPECT_FALSE(m.appliedFieldReused) << f;
+  }
   // The last solve ran at the start of the last frame, t = 0.004 s.
   const Vec3d expect = magnet.pose().position + 0.004 * velocity;
   EXPECT_LT(norm(solver.magnet(0).pose().position - expect), 1e-12);

@@ -4,8 +4,10 @@
 // and divergence-free outside the source bodies. Sources are immutable apart
 // from their pose and are safe to evaluate from many threads at once.
 #include <cstddef>
+#include <cstdint>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "lodestone/core/vec3.h"
 
@@ -13,6 +15,10 @@ namespace lodestone {
 
 class FieldSource {
  public:
+  FieldSource();
+  /// A copy is a new instance (a new instanceId()).
+  FieldSource(const FieldSource&);
+  FieldSource& operator=(const FieldSource&);
   virtual ~FieldSource() = default;
 
   /// Applied field H (A/m) at world position x (m) and time t (s).
@@ -33,7 +39,22 @@ class FieldSource {
   /// One line naming the source and its parameters with units.
   virtual std::string describe() const = 0;
 
+  /// Appends to `out` numbers that fix this instance's field at time t (s):
+  /// two calls that append the same numbers give bit-identical fields
+  /// everywhere, so a caller may reuse values it computed before (the
+  /// magnetic stage reuses H_ext on its grid nodes). The numbers include
+  /// instanceId(); sources append their pose and time factor s(t), their
+  /// other parameters being immutable. Returns false (the default, for
+  /// sources that cannot tell) when nothing may be reused.
+  virtual bool appendFieldSignature(double /*t*/, std::vector<double>& /*out*/) const { return false; }
+
+  /// Unique per constructed or copied source in this process.
+  std::uint64_t instanceId() const { return instanceId_; }
+
   virtual std::unique_ptr<FieldSource> clone() const = 0;
+
+ private:
+  std::uint64_t instanceId_;
 };
 
 }  // namespace lodestone

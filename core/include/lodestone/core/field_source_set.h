@@ -41,6 +41,8 @@ class FieldSourceSet final : public FieldSource {
   void accumulateField(const Vec3d* x, std::size_t count, double t, Vec3d* out) const override;
   /// True when every source is uniform (and for an empty set, whose field is zero).
   bool isUniform() const override;
+  /// The count and every source's signature; false when any source has none.
+  bool appendFieldSignature(double t, std::vector<double>& out) const override;
   /// "N field sources: [0] ...; [1] ...".
   std::string describe() const override;
   std::unique_ptr<FieldSource> clone() const override;

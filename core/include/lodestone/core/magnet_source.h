@@ -31,6 +31,8 @@ class MagnetSource : public FieldSource {
   /// s(t) * R * M inside the closed body, zero outside (A/m, world frame).
   Vec3d magnetization(const Vec3d& x, double t) const final;
   void accumulateField(const Vec3d* x, std::size_t count, double t, Vec3d* out) const final;
+  /// Instance, pose (position and rotation) and s(t).
+  bool appendFieldSignature(double t, std::vector<double>& out) const final;
 
   const Pose& pose() const { return pose_; }
   /// Moves the magnet. Not synchronised: do not call while other threads

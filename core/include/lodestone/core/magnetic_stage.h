@@ -42,6 +42,10 @@ struct MagneticStageReport {
   FieldSolveReport solve;
   double secondsTransfer = 0;
   double secondsAppliedField = 0;  ///< sources evaluated at nodes and Gauss points
+  /// True when H_ext at the nodes was kept from the previous run: the same
+  /// sources, unmoved, with the same time factor (FieldSource::appendFieldSignature);
+  /// only the material's Gauss points were evaluated.
+  bool appliedFieldReused = false;
   double secondsSolve = 0;
   double secondsFields = 0;        ///< nodal H, M, B
   double secondsForce = 0;
@@ -116,6 +120,9 @@ class MagneticForceStage {
   // when the law or the boundary changes.
   std::unique_ptr<MagnetostaticProblem> problem_;
   std::unique_ptr<FieldSolveWorkspace> workspace_;
+  // What hext_ holds: the sources' signature at its evaluation (empty: not
+  // reusable).
+  std::vector<double> hextSignature_;
 };
 
 }  // namespace lodestone

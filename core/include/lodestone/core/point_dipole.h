@@ -28,6 +28,8 @@ class PointDipole final : public FieldSource {
   void accumulateField(const Vec3d* x, std::size_t count, double t, Vec3d* out) const override;
   std::string describe() const override;
   std::unique_ptr<FieldSource> clone() const override;
+  /// Instance and s(t).
+  bool appendFieldSignature(double t, std::vector<double>& out) const override;
 
   const Vec3d& position() const { return position_; }  ///< m
   const Vec3d& moment() const { return moment_; }      ///< A*m^2, before scaling

@@ -19,6 +19,8 @@ class UniformField final : public FieldSource {
   Vec3d field(const Vec3d& x, double t) const override;
   void accumulateField(const Vec3d* x, std::size_t count, double t, Vec3d* out) const override;
   bool isUniform() const override { return true; }
+  /// Instance and s(t).
+  bool appendFieldSignature(double t, std::vector<double>& out) const override;
   std::string describe() const override;
   std::unique_ptr<FieldSource> clone() const override;
 
