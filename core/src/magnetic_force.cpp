@@ -98,15 +98,29 @@ void stressDivergence(GridView<const Vec3d> H, GridView<const Vec3d> B, GridView
   });
 }
 
-void spreadForce(GridView<const Vec3d> t, GridView<Vec3d> f) {
+void spreadForce(GridView<const Vec3d> t, GridView<Vec3d> f, GridScratch* scratch) {
   const GridSpec& g = t.spec;
   require(f.spec == g, "spreadForce: grids differ");
   const std::size_t count = g.nodeCount();
-  std::vector<Vec3d> a(t.data, t.data + count), b(count);
+  GridScratch local;
+  GridScratch& sc = scratch ? *scratch : local;
+  sc.vector0.resize(count);
+  Vec3d* tmp = sc.vector0.data();
+  // Three one-axis passes, t -> f -> tmp -> f (t is first copied to tmp
+  // when it is f itself, so that no pass reads what it writes).
+  const Vec3d* first = t.data;
+  if (t.data == f.data) {
+    std::copy(t.data, t.data + count, tmp);
+    first = tmp;
+  }
   const int dims[3] = {g.dims.i, g.dims.j, g.dims.k};
   const std::size_t stride[3] = {1, std::size_t(g.dims.i), std::size_t(g.dims.i) * std::size_t(g.dims.j)};
   const double r0 = 2.0 * g.dx / 3.0, r1 = g.dx / 6.0;
+  const Vec3d* src[3] = {first, f.data, tmp};
+  Vec3d* dst[3] = {f.data, tmp, f.data};
   for (int axis = 0; axis < 3; ++axis) {
+    const Vec3d* a = src[axis];
+    Vec3d* b = dst[axis];
     tbb::parallel_for(0, g.dims.k, [&](int k) {
       for (int j = 0; j < g.dims.j; ++j)
         for (int i = 0; i < g.dims.i; ++i) {
@@ -118,9 +132,7 @@ void spreadForce(GridView<const Vec3d> t, GridView<Vec3d> f) {
           b[m] = s;
         }
     });
-    a.swap(b);
   }
-  std::copy(a.begin(), a.end(), f.data);
 }
 
 Vec3d gatherToSupport(GridView<const Vec3d> f, GridView<const double> n, GridView<Vec3d> out, int maxDistance) {

@@ -157,14 +157,14 @@ MagneticStageReport MagneticForceStage::solveAndForce(const FieldSource& sources
   // Nodal fields.
   t = Clock::now();
   recoverNodalFields(GridView<const double>{phi_.data(), grid_}, hext_.view(), n_.view(), material_.law, h_.view(),
-                     m_.view(), b_.view());
+                     m_.view(), b_.view(), &scratch_);
   rep.secondsFields = secondsSince(t);
 
   // Force.
   t = Clock::now();
   stressDivergence(h_.view(), b_.view(), hext_.view(), n_.view(), settings_.forceMask, t_.view(),
                    settings_.forceMaskDilation, &sources, time);
-  spreadForce(t_.view(), f_.view());
+  spreadForce(t_.view(), f_.view(), &scratch_);
   rep.totalForce = deterministicSum<Vec3d>(count, [&](std::size_t m) { return f_[m]; });
   rep.secondsForce = secondsSince(t);
   return rep;
@@ -178,7 +178,9 @@ TransferReport MagneticForceStage::sampleForceDensity(const Vec3d* positions, st
 }
 
 TransferReport MagneticForceStage::particleForces(const ParticleView& particles, Vec3d* out) const {
-  DenseGrid<Vec3d> onSupport(grid_);
+  // gatherToSupport writes every node: the kept grid needs no clearing.
+  if (!(onSupport_.spec() == grid_) || onSupport_.size() != grid_.nodeCount()) onSupport_.reset(grid_);
+  DenseGrid<Vec3d>& onSupport = onSupport_;
   gatherToSupport(f_.view(), n_.view(), onSupport.view());
   // g_i = f_i / (n_i dx^3): force per micro-particle at node i.
   const double inv = 1.0 / grid_.cellVolume();

@@ -60,11 +60,15 @@ void smoothAlong(const GridSpec& g, const double* src, double* dst, int axis) {
 }
 }  // namespace
 
-void projectedGradient(GridView<const double> phi, GridView<Vec3d> gradient) {
+void projectedGradient(GridView<const double> phi, GridView<Vec3d> gradient, GridScratch* scratch) {
   require(phi.spec == gradient.spec, "projectedGradient: grids differ");
   const GridSpec& g = phi.spec;
   const std::size_t n = g.nodeCount();
-  std::vector<double> a(n), b(n);
+  GridScratch local;
+  GridScratch& s = scratch ? *scratch : local;
+  s.scalar0.resize(n);  // every value is written before it is read
+  s.scalar1.resize(n);
+  std::vector<double>&a = s.scalar0, &b = s.scalar1;
   for (int axis = 0; axis < 3; ++axis) {
     const int s1 = (axis + 1) % 3, s2 = (axis + 2) % 3;
     differenceAlong(g, phi.data, a.data(), axis);
@@ -79,11 +83,14 @@ void projectedGradient(GridView<const double> phi, GridView<Vec3d> gradient) {
 
 void recoverNodalFields(GridView<const double> phi, GridView<const Vec3d> Hext, GridView<const double> n,
                         const MagnetizationLaw<double>& law, GridView<Vec3d> H, GridView<Vec3d> M,
-                        GridView<Vec3d> B) {
+                        GridView<Vec3d> B, GridScratch* scratch) {
   const GridSpec& g = phi.spec;
   require(Hext.spec == g && n.spec == g, "recoverNodalFields: input grids differ");
-  std::vector<Vec3d> grad(g.nodeCount());
-  projectedGradient(phi, GridView<Vec3d>{grad.data(), g});
+  GridScratch local;
+  GridScratch& s = scratch ? *scratch : local;
+  s.vector0.resize(g.nodeCount());
+  const std::vector<Vec3d>& grad = s.vector0;
+  projectedGradient(phi, GridView<Vec3d>{s.vector0.data(), g}, &s);
   const std::size_t count = g.nodeCount();
   tbb::parallel_for(std::size_t(0), count, std::size_t(1) << 12, [&](std::size_t m0) {
     const std::size_t m1 = std::min(count, m0 + (std::size_t(1) << 12));

@@ -157,6 +157,14 @@ TEST(MagneticStage, KeptSolverStorageChangesNoResult) {
   ASSERT_TRUE(reused.run(second.view(), src2, 0.0).converged());
   const std::vector<Vec3d> a = forces(fresh), b = forces(reused);
   for (std::size_t m = 0; m < a.size(); ++m) ASSERT_EQ(a[m], b[m]) << "node " << m;
+  // Per-particle forces from the kept grid of an earlier call equal a fresh stage's.
+  std::vector<Vec3d> pf(second.x.size()), pr(second.x.size()), p1(first.x.size());
+  ASSERT_TRUE(reused.run(first.view(), src1, 0.0).converged());
+  reused.particleForces(first.view(), p1.data());
+  ASSERT_TRUE(reused.run(second.view(), src2, 0.0).converged());
+  fresh.particleForces(second.view(), pf.data());
+  reused.particleForces(second.view(), pr.data());
+  for (std::size_t q = 0; q < pf.size(); ++q) ASSERT_EQ(pf[q], pr[q]) << "particle " << q;
 
   // A new law (linear) on the kept stage equals a fresh linear stage.
   const MagneticMaterial lin = linearized(mat);

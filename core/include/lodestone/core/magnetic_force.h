@@ -13,6 +13,7 @@
 // H_ext x (curl H_d)_h, whose truncation errors grow with the applied field
 // and at H_ext = 1e6 A/m swamp the force between two bodies.
 #include "lodestone/core/grid.h"
+#include "lodestone/core/grid_scratch.h"
 #include "lodestone/core/vec3.h"
 
 namespace lodestone {
@@ -52,7 +53,8 @@ void stressDivergence(GridView<const Vec3d> H, GridView<const Vec3d> B, GridView
 /// (N). Used to hand a host conservative per-particle forces.
 Vec3d gatherToSupport(GridView<const Vec3d> f, GridView<const double> n, GridView<Vec3d> out, int maxDistance = 6);
 
-/// f_i = sum_j R_ij t_j (N); rows at the walls lose the weight of missing neighbours.
-void spreadForce(GridView<const Vec3d> t, GridView<Vec3d> f);
+/// f_i = sum_j R_ij t_j (N); rows at the walls lose the weight of missing
+/// neighbours. t and f may be the same grid. `scratch` as for projectedGradient.
+void spreadForce(GridView<const Vec3d> t, GridView<Vec3d> f, GridScratch* scratch = nullptr);
 
 }  // namespace lodestone

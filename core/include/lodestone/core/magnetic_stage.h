@@ -74,7 +74,8 @@ class MagneticForceStage {
   /// first moved onto the support of n (gatherToSupport), then shared among
   /// the particles in proportion to their B-spline weight times n_p, so
   /// sum_p F_p = sum_i f_i. `particles` must be the ones of the last run()
-  /// (or ones whose deposit is the density given to runOnDensity).
+  /// (or ones whose deposit is the density given to runOnDensity). Uses a
+  /// grid kept in the stage: do not call it from two threads at once.
   TransferReport particleForces(const ParticleView& particles, Vec3d* out) const;
   /// Force density (N/m^3) at arbitrary positions: quadratic B-spline
   /// interpolation of f_i / dx^3. Not conservative near surfaces, where part
@@ -123,6 +124,8 @@ class MagneticForceStage {
   // What hext_ holds: the sources' signature at its evaluation (empty: not
   // reusable).
   std::vector<double> hextSignature_;
+  GridScratch scratch_;  // temporaries of the nodal fields and the force, kept between runs
+  mutable DenseGrid<Vec3d> onSupport_;  // particleForces' nodal forces moved onto the material
 };
 
 }  // namespace lodestone

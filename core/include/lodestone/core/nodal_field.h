@@ -9,19 +9,21 @@
 // never carries one because the element energy penalizes it, see
 // test_fe_operator.)
 #include "lodestone/core/grid.h"
+#include "lodestone/core/grid_scratch.h"
 #include "lodestone/core/magnetization_law.h"
 #include "lodestone/core/vec3.h"
 
 namespace lodestone {
 
-/// grad(phi) at every node, 1/m times the unit of phi.
-void projectedGradient(GridView<const double> phi, GridView<Vec3d> gradient);
+/// grad(phi) at every node, 1/m times the unit of phi. `scratch`, when
+/// given, holds the temporaries between calls (results are the same).
+void projectedGradient(GridView<const double> phi, GridView<Vec3d> gradient, GridScratch* scratch = nullptr);
 
 /// H (A/m), M (A/m) and B (T) at every node; any output view may be empty
 /// (data == nullptr) to skip it. Hext: applied field at the nodes (A/m);
-/// n: micro-particle density (1/m^3).
+/// n: micro-particle density (1/m^3). `scratch` as for projectedGradient.
 void recoverNodalFields(GridView<const double> phi, GridView<const Vec3d> Hext, GridView<const double> n,
                         const MagnetizationLaw<double>& law, GridView<Vec3d> H, GridView<Vec3d> M,
-                        GridView<Vec3d> B);
+                        GridView<Vec3d> B, GridScratch* scratch = nullptr);
 
 }  // namespace lodestone
