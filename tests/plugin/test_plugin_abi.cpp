@@ -280,6 +280,20 @@ TEST(PluginAbi, BadSizesStridesAndValuesGiveAStatus) {
   std::string json(needed, '\0');
   EXPECT_EQ(a->stage_report_json(f.stage, json.data(), json.size(), &needed), LODESTONE_OK);
   EXPECT_NE(json.find("\"converged\":true"), std::string::npos) << json;
+  // The same fields object again: H_ext at the nodes is kept. After a field
+  // is added it is evaluated again.
+  const auto reused = [&] {
+    EXPECT_EQ(a->stage_run_particles(f.stage, &p, f.fields, 0, nullptr), LODESTONE_OK) << a->context_last_error(f.ctx);
+    std::string j(4096, '\0');
+    size_t n = 0;
+    EXPECT_EQ(a->stage_report_json(f.stage, j.data(), j.size(), &n), LODESTONE_OK);
+    return j.find("\"applied_field_reused\":true") != std::string::npos;
+  };
+  EXPECT_TRUE(reused());
+  const double H[3] = {0, 0, 1e3};
+  ASSERT_EQ(a->fields_add_uniform(f.fields, H), LODESTONE_OK);
+  EXPECT_FALSE(reused());
+  EXPECT_TRUE(reused());
 
   // Stage parameters.
   const std::vector<std::pair<const char*, std::function<void(lodestone_stage_params&)>>> paramCases = {
