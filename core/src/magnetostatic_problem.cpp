@@ -123,6 +123,8 @@ void MagnetostaticProblem::setMaterial(GridView<const double> n, const AppliedFi
   hext_.assign(cells * 8, Vec3d{});
   elem_.assign(cells * kPacked, 0.0);
   cellTensor_.assign(cells, SymMat3d{});
+  if (!stencil_.sameCells(grid_, cellBase_.data(), cells)) stencil_.build(grid_, cellBase_.data(), cells);
+  stencil_.clear();
 
   const double h = grid_.dx;
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, cells, 256), [&](const tbb::blocked_range<std::size_t>& r) {
@@ -324,6 +326,7 @@ MagnetostaticProblem::Evaluation MagnetostaticProblem::evaluate(const double* ph
     for (int c = 0; c < 8; ++c) local[c] -= fScale * res[c];
   });
   zeroFixed(F);
+  if (jacobian) stencil_.assemble(elem_.data());
   const EnergyTotals total = deterministicSum<EnergyTotals>(
       sums.size(), [&](std::size_t s) { return EnergyTotals{sums[s].energy, sums[s].energyAbs, sums[s].finite}; },
       256);
@@ -362,27 +365,13 @@ void MagnetostaticProblem::residualAtZero(double* F0) const {
 
 void MagnetostaticProblem::applyJacobian(const double* v, double* out) const {
   applyVacuum(v, out);
-  scatterCells(out, [&](std::size_t s, double local[8]) {
-    double vc[8];
-    gatherCorners(cellBase_[s], v, vc);
-    const double* E = &elem_[s * kPacked];
-    for (int c = 0, e = 0; c < 8; ++c) {
-      local[c] += E[e++] * vc[c];
-      for (int d = c + 1; d < 8; ++d, ++e) {
-        local[c] += E[e] * vc[d];
-        local[d] += E[e] * vc[c];
-      }
-    }
-  });
+  stencil_.addProduct(v, out);
   zeroFixed(out);
 }
 
 void MagnetostaticProblem::jacobianDiagonal(double* out) const {
   q1LaplacianDiagonalAll(grid_, out);
-  scatterCells(out, [&](std::size_t s, double local[8]) {
-    const double* E = &elem_[s * kPacked];
-    for (int c = 0, e = 0; c < 8; e += 8 - c, ++c) local[c] += E[e];
-  });
+  stencil_.addDiagonal(out);
   setFixedNodes(grid_, boundary_, 1.0, out);  // fixed rows: identity
 }
 

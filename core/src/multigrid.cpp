@@ -11,6 +11,7 @@
 
 #include "lodestone/core/coloured_scatter.h"  // cornerOffsets
 #include "lodestone/core/error.h"
+#include "lodestone/core/hull_stencil.h"
 #include "lodestone/core/magnetostatic_problem.h"
 #include "lodestone/core/parallel.h"
 #include "lodestone/core/q1_element.h"
@@ -173,13 +174,18 @@ class MultigridPreconditioner::Hierarchy {
     std::vector<std::size_t> slabStart;
     std::size_t offsets[8] = {};
     std::vector<std::int32_t> problemSlot;  // level 0: the problem's slot of each cell
+    std::vector<std::size_t> problemCells;  // level 0: the problem's cell bases in its slot order
     // Coarse levels: each cell's children on the finer level that carry
     // material (their slots, then -1) and how many children lie inside the
     // finer grid (the divisor of the mean).
     std::vector<std::array<std::int32_t, 8>> children;
     std::vector<std::uint8_t> childCount;
     std::vector<SymMat3d> tensor;  // coarse levels: D of each correction cell
-    Buffer<T> elem;                // element matrices, full 8x8 (column-major) per cell
+    Buffer<T> elem;                // element matrices, full 8x8 (column-major) per cell (coarse levels)
+    // Level 0: the problem's assembled material rows in T (the problem's
+    // hulls, which are this level's); products read them row by row
+    // instead of scattering element products.
+    HullStencil<T> stencil;
     // Per node row j + ny k: [lo, hi) in i of the nodes the correction cells
     // touch (lo == hi: none). Only there do A and its diagonal differ from the
     // vacuum stencil, so only there are they recomputed or read from acc.
@@ -263,6 +269,8 @@ void MultigridPreconditioner::Hierarchy<T>::buildStructure(const MagnetostaticPr
   Level& fine = *levels_.front();
   const std::size_t materialCells = problem.materialCellCount();
   require(materialCells < std::size_t(INT32_MAX), "multigrid: too many material cells (", materialCells, ")");
+  fine.problemCells.resize(materialCells);
+  for (std::size_t s = 0; s < materialCells; ++s) fine.problemCells[s] = problem.materialCellBase(s);
   // Slot of every cell of the current finest level (-1: none), alternating
   // between two maps; on level 0 the problem's slot, whose tensor seeds level 1.
   Buffer<std::int32_t>* slotOfCell = &slotMaps_[0];
@@ -369,7 +377,7 @@ void MultigridPreconditioner::Hierarchy<T>::buildStructure(const MagnetostaticPr
     Level& L = *levels_[l];
     const GridSpec& g = L.grid;
     const std::size_t nodes = g.nodeCount();
-    L.elem.setSize(L.cellBase.size() * kFull);
+    L.elem.setSize(l == 0 ? 0 : L.cellBase.size() * kFull);
     // Hull of the correction nodes on each row.
     const int nx = g.dims.i, ny = g.dims.j;
     std::vector<std::int32_t> lo(std::size_t(ny) * std::size_t(g.dims.k), nx), hi(lo.size(), 0);
@@ -410,9 +418,9 @@ void MultigridPreconditioner::Hierarchy<T>::buildStructure(const MagnetostaticPr
     w.b.setSize(nodes);
     if (l + 1 < levels_.size()) {
       w.x2.setSize(nodes);
-      w.acc.setSize(nodes);
+      w.acc.setSize(l == 0 ? 0 : nodes);  // level 0 reads assembled rows instead
       T* acc = w.acc.data();
-      forEach(nodes, [&](std::size_t m) { acc[m] = T(0); });
+      forEach(w.acc.size(), [&](std::size_t m) { acc[m] = T(0); });
       w.half.setSize(std::size_t(levels_[l + 1]->grid.dims.i) * std::size_t(g.dims.j) * std::size_t(g.dims.k));
     } else {
       w.t1.setSize(nodes);
@@ -476,11 +484,23 @@ void MultigridPreconditioner::Hierarchy<T>::refreshValues(const MagnetostaticPro
   const ElementBasis& basis = elementBasis();
   // Level 0: a copy of the problem's element matrices in T, made while their
   // diagonals are scattered (one read of the problem's matrices).
+  // Level 0: the problem's assembled rows in T, and the diagonal from their
+  // centre taps (the same hull: both are made from the material cells).
   Level& F = *levels_.front();
-  refreshDiagonal(F, [&](std::size_t s, double local[8]) {
-    const double* E = problem.materialElementMatrix(std::size_t(F.problemSlot[s]));
-    unpack(E, &F.elem[s * kFull]);
-    for (int q = 0, e = 0; q < 8; e += 8 - q, ++q) local[q] += E[e];
+  const HullStencil<double>& P = problem.materialStencil();
+  if (!F.stencil.sameCells(F.grid, F.problemCells.data(), F.problemCells.size()))
+    F.stencil.build(F.grid, F.problemCells.data(), F.problemCells.size());
+  require(F.stencil.size() == P.size(), "multigrid: the problem's material rows (", P.size(),
+          " nodes) do not match the fine level's (", F.stencil.size(), ")");
+  {
+    const double* src = P.values();
+    T* dst = F.stencil.values();
+    forEach(std::size_t(HullStencil<T>::kTaps) * P.size(), [&](std::size_t m) { dst[m] = T(src[m]); });
+  }
+  const double* centre = P.values() + std::size_t(13) * P.size();
+  forEachHullNode(F, [&](std::size_t m, int i, int j, int k) {
+    F.diagonal[m] = laplacianDiagonalAt(F.grid, i, j, k) + centre[P.rowStart(j, k) + std::size_t(i - P.lo(j, k))];
+    setInverseDiagonal(F, m, i, j, k);
   });
   // Coarse levels: coefficient D = mean of the children's D (the problem's
   // cell tensors under level 1), element matrices rediscretized with it.
@@ -519,9 +539,13 @@ template <typename T>
 void MultigridPreconditioner::Hierarchy<T>::applyLevel(std::size_t level, const T* v, T* out) const {
   const Level& L = *levels_[level];
   applyQ1Laplacian(L.grid, L.boundary, v, out);
-  scatterBySlab(L, out, [&](std::size_t s, T local[8]) {
-    elementProduct(&L.elem[s * kFull], v + L.cellBase[s], L.offsets, local);
-  });
+  if (level == 0) {
+    L.stencil.addProduct(v, out);
+  } else {
+    scatterBySlab(L, out, [&](std::size_t s, T local[8]) {
+      elementProduct(&L.elem[s * kFull], v + L.cellBase[s], L.offsets, local);
+    });
+  }
   zeroFixedNodes(L.grid, L.boundary, out);
 }
 
@@ -532,10 +556,13 @@ void MultigridPreconditioner::Hierarchy<T>::product(const Level& L, const T* v, 
   // fixed rows, so the caller's pointwise update streams the vectors once.
   // The material part is scattered first (slab by slab: deterministic) into
   // acc, which the rows consume and clear within their hulls.
+  // Level 0 reads its assembled material rows instead (no scatter, no acc).
+  const bool rows = &L == levels_.front().get();
   T* acc = L.work.acc.data();
-  scatterBySlab(L, acc, [&](std::size_t s, T local[8]) {
-    elementProduct(&L.elem[s * kFull], v + L.cellBase[s], L.offsets, local);
-  });
+  if (!rows)
+    scatterBySlab(L, acc, [&](std::size_t s, T local[8]) {
+      elementProduct(&L.elem[s * kFull], v + L.cellBase[s], L.offsets, local);
+    });
   const GridSpec& g = L.grid;
   const int nx = g.dims.i, ny = g.dims.j, nz = g.dims.k;
   const std::ptrdiff_t sy = nx, sz = std::ptrdiff_t(nx) * ny;
@@ -577,12 +604,16 @@ void MultigridPreconditioner::Hierarchy<T>::product(const Level& L, const T* v, 
     const std::size_t hullRow = 2 * (std::size_t(j) + std::size_t(ny) * std::size_t(k));
     const int lo = L.hull[hullRow], hi = L.hull[hullRow + 1];
     if (lo < hi) {
-      T* a = acc + row;
       // Open: the wall nodes are fixed, their rows stay 0.
       const int from = shield ? lo : std::max(lo, 1), to = shield ? hi : std::min(hi, nx - 1);
-      if (shield || !wallRow)
-        for (int i = from; i < to; ++i) y[i] += a[i];
-      std::fill(a + lo, a + hi, T(0));
+      if (rows) {
+        if (shield || !wallRow) L.stencil.addRow(j, k, from, to, v + row, y);
+      } else {
+        T* a = acc + row;
+        if (shield || !wallRow)
+          for (int i = from; i < to; ++i) y[i] += a[i];
+        std::fill(a + lo, a + hi, T(0));
+      }
     }
     rowFn(j, k, row, static_cast<const T*>(y));
   });

@@ -26,6 +26,7 @@
 
 #include "lodestone/core/boundary_kind.h"
 #include "lodestone/core/grid.h"
+#include "lodestone/core/hull_stencil.h"
 #include "lodestone/core/magnetization_law.h"
 #include "lodestone/core/mat3.h"
 #include "lodestone/core/multipole.h"
@@ -72,7 +73,8 @@ class MagnetostaticProblem {
   };
   /// Evaluates M and W at every material Gauss point for potential phi and
   /// writes the residual F = dE/dphi (A m) on free nodes (0 on fixed nodes).
-  /// With `jacobian`, also rebuilds the element matrices of applyJacobian.
+  /// With `jacobian`, also rebuilds the element matrices and their assembled
+  /// rows (materialStencil()), which applyJacobian uses.
   /// `vacuumPart`, when given, is applyVacuum(phi) already computed by the
   /// caller (the Newton loop keeps it up to date); it is copied into F
   /// instead of applying the stencil again.
@@ -108,8 +110,13 @@ class MagnetostaticProblem {
   /// Values in the packed upper triangle of a symmetric 8x8 element matrix.
   static constexpr int kPacked = 36;
   /// Packed material element matrix of cell `slot` (m) at the last
-  /// evaluate(..., true): applyJacobian adds it to the vacuum stencil.
+  /// evaluate(..., true); materialStencil() holds their sum per node.
   const double* materialElementMatrix(std::size_t slot) const { return &elem_[slot * kPacked]; }
+  /// The material element matrices of the last evaluate(..., true)
+  /// assembled into 27-point rows at the nodes they touch (m): applyJacobian
+  /// adds their product to the vacuum stencil's, and the multigrid's level 0
+  /// copies them.
+  const HullStencil<double>& materialStencil() const { return stencil_; }
   /// Material cells are grouped by colour (cell parity): slots
   /// [materialColourStart()[c], materialColourStart()[c + 1]) have colour c.
   const std::size_t* materialColourStart() const { return colourStart_; }
@@ -160,6 +167,7 @@ class MagnetostaticProblem {
   // triangle of the symmetric 8x8, kPacked values per cell), rebuilt by evaluate().
   std::vector<double> elem_;
   std::vector<SymMat3d> cellTensor_;
+  HullStencil<double> stencil_;        // elem_ assembled per node, rebuilt by evaluate(..., true)
   int wallClearance_ = 1 << 30;
   Vec3d centroid_;
   int blockEdge_ = kMultipoleBlock;

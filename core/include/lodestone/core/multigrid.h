@@ -8,8 +8,12 @@
 // weighting R = P^T with trilinear P, CG on the coarsest grid: the cycle is a
 // fixed symmetric positive definite operator, as PCG requires.
 //
+// Level 0 reads the Jacobian's material part as the problem assembled it,
+// in 27-point rows at the material nodes (HullStencil): its products stream
+// those rows along the grid rows instead of scattering element products.
+//
 // Storage precision: by default every level, the fine one included (a copy
-// of the Jacobian's element matrices), is stored and cycled in single
+// of the Jacobian's assembled rows), is stored and cycled in single
 // precision. The preconditioner only shapes the CG search directions; the
 // Newton residual and the CG operator stay in double, so the solution is
 // unchanged (tests/core/test_multigrid.cpp compares both) while the cycle

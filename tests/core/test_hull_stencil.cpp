@@ -1,0 +1,140 @@
+// The assembled material rows (HullStencil) against the element-by-element
+// product they replace: random cells on a small grid, cells on every face of
+// it (where neighbours fall outside the grid), in double and float.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+#include <vector>
+
+#include "lodestone/core/hull_stencil.h"
+
+using namespace lodestone;
+
+namespace {
+
+struct Cells {
+  GridSpec grid;
+  std::vector<std::size_t> base;
+  std::vector<double> packed;  // 36 per cell: upper triangle of a random symmetric matrix
+};
+
+Cells randomCells(unsigned seed) {
+  Cells c;
+  c.grid.dx = 0.01;
+  c.grid.dims = {9, 7, 6};
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> U(-1, 1);
+  const Index3 cd = c.grid.cellDims();
+  for (int k = 0; k < cd.k; ++k)
+    for (int j = 0; j < cd.j; ++j)
+      for (int i = 0; i < cd.i; ++i) {
+        // About half the cells, and every cell of the first and last layers.
+        const bool face = i == 0 || j == 0 || k == 0 || i == cd.i - 1 || j == cd.j - 1 || k == cd.k - 1;
+        if (face || U(rng) > 0) c.base.push_back(c.grid.index(i, j, k));
+      }
+  // A shuffled slot order: the stencil must not depend on it.
+  std::shuffle(c.base.begin(), c.base.end(), rng);
+  c.packed.resize(c.base.size() * 36);
+  for (double& v : c.packed) v = U(rng);
+  return c;
+}
+
+// out += sum over cells of E v at the cell's corners.
+void elementProduct(const Cells& c, const double* v, double* out) {
+  std::size_t off[8];
+  for (int q = 0; q < 8; ++q) off[q] = c.grid.index(q & 1, (q >> 1) & 1, q >> 2);
+  for (std::size_t s = 0; s < c.base.size(); ++s) {
+    const double* E = &c.packed[s * 36];
+    for (int a = 0, e = 0; a < 8; ++a)
+      for (int b = a; b < 8; ++b, ++e) {
+        out[c.base[s] + off[a]] += E[e] * v[c.base[s] + off[b]];
+        if (b != a) out[c.base[s] + off[b]] += E[e] * v[c.base[s] + off[a]];
+      }
+  }
+}
+
+double relativeDifference(const std::vector<double>& a, const std::vector<double>& b) {
+  double num = 0, den = 0;
+  for (std::size_t m = 0; m < a.size(); ++m) {
+    num += (a[m] - b[m]) * (a[m] - b[m]);
+    den += b[m] * b[m];
+  }
+  return std::sqrt(num / den);
+}
+
+}  // namespace
+
+TEST(HullStencil, AssembledRowsEqualTheElementProduct) {
+  for (unsigned seed : {1u, 2u, 3u}) {
+    const Cells c = randomCells(seed);
+    HullStencil<double> st;
+    st.build(c.grid, c.base.data(), c.base.size());
+    st.assemble(c.packed.data());
+    const std::size_t n = c.grid.nodeCount();
+    std::vector<double> v(n), ref(n, 0.0), got(n, 0.0), diag(n, 0.0), refDiag(n, 0.0), e(n, 0.0);
+    std::mt19937 rng(seed + 10);
+    std::uniform_real_distribution<double> U(-1, 1);
+    for (double& x : v) x = U(rng);
+    elementProduct(c, v.data(), ref.data());
+    st.addProduct(v.data(), got.data());
+    EXPECT_LT(relativeDifference(got, ref), 1e-14) << "seed " << seed;
+    // The diagonal is the product with unit vectors, read at their node.
+    st.addDiagonal(diag.data());
+    for (std::size_t m = 0; m < n; ++m) {
+      e[m] = 1.0;
+      std::vector<double> col(n, 0.0);
+      elementProduct(c, e.data(), col.data());
+      refDiag[m] = col[m];
+      e[m] = 0.0;
+    }
+    EXPECT_LT(relativeDifference(diag, refDiag), 1e-14) << "seed " << seed;
+  }
+}
+
+TEST(HullStencil, ScatteredElementsEqualTheGatheredAssembly) {
+  const Cells c = randomCells(7);
+  HullStencil<double> gathered, scattered;
+  gathered.build(c.grid, c.base.data(), c.base.size());
+  gathered.assemble(c.packed.data());
+  scattered.build(c.grid, c.base.data(), c.base.size());
+  scattered.clear();
+  for (std::size_t s = 0; s < c.base.size(); ++s) scattered.addElement(s, &c.packed[s * 36]);
+  ASSERT_EQ(gathered.size(), scattered.size());
+  const std::size_t count = std::size_t(HullStencil<double>::kTaps) * gathered.size();
+  double worst = 0;
+  for (std::size_t m = 0; m < count; ++m)
+    worst = std::max(worst, std::fabs(gathered.values()[m] - scattered.values()[m]));
+  EXPECT_LT(worst, 1e-14);
+  EXPECT_TRUE(gathered.sameCells(c.grid, c.base.data(), c.base.size()));
+  std::vector<std::size_t> other(c.base.begin(), c.base.end() - 1);
+  EXPECT_FALSE(gathered.sameCells(c.grid, other.data(), other.size()));
+}
+
+TEST(HullStencil, FloatRowsMatchDoubleRowsToSinglePrecision) {
+  const Cells c = randomCells(4);
+  HullStencil<float> st;
+  st.build(c.grid, c.base.data(), c.base.size());
+  st.assemble(c.packed.data());
+  const std::size_t n = c.grid.nodeCount();
+  std::vector<double> v(n), ref(n, 0.0);
+  std::vector<float> vf(n), got(n, 0.0f);
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> U(-1, 1);
+  for (std::size_t m = 0; m < n; ++m) vf[m] = float(v[m] = U(rng));
+  elementProduct(c, v.data(), ref.data());
+  st.addProduct(vf.data(), got.data());
+  std::vector<double> gd(got.begin(), got.end());
+  EXPECT_LT(relativeDifference(gd, ref), 1e-5);
+  EXPECT_GT(relativeDifference(gd, ref), 0.0);  // it did run in float
+}
+
+TEST(HullStencil, RejectsACellOutsideTheGrid) {
+  GridSpec g;
+  g.dx = 0.01;
+  g.dims = {4, 4, 4};
+  const std::size_t bad = g.index(3, 1, 1);  // a base node on the last x layer has no cell
+  HullStencil<double> st;
+  EXPECT_THROW(st.build(g, &bad, 1), InvalidArgument);
+}
