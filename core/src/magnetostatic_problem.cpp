@@ -506,20 +506,27 @@ std::vector<std::size_t> MagnetostaticProblem::fixedNodes() const {
 void MagnetostaticProblem::addWallCoupling(const double* v, double* out) const {
   if (boundary_ != BoundaryKind::Open) return;
   const int nx = grid_.dims.i, ny = grid_.dims.j, nz = grid_.dims.k;
-  const auto onWall = [&](int i, int j, int k) {
-    return i == 0 || j == 0 || k == 0 || i == nx - 1 || j == ny - 1 || k == nz - 1;
-  };
   // Row (i, j, k) of K restricted to the wall columns. Free rows are
   // interior rows: face neighbours weigh 0, edge neighbours -dx/6, corner
   // neighbours -dx/12 (q1_stencil.h), and the centre is never on the wall.
+  // A neighbour is on the wall when one of its coordinates is; the three
+  // per-axis tests are made once per row, not per neighbour.
   const double weight[4] = {0.0, 0.0, -grid_.dx / 6.0, -grid_.dx / 12.0};
+  const std::ptrdiff_t sy = nx, sz = std::ptrdiff_t(nx) * ny;
   const auto row = [&](int i, int j, int k) {
+    bool wi[3], wj[3], wk[3];
+    for (int o = 0; o < 3; ++o) {
+      wi[o] = i + o - 1 == 0 || i + o - 1 == nx - 1;
+      wj[o] = j + o - 1 == 0 || j + o - 1 == ny - 1;
+      wk[o] = k + o - 1 == 0 || k + o - 1 == nz - 1;
+    }
+    const double* centre = v + grid_.index(i, j, k);
     double sum = 0;
     for (int c = -1; c <= 1; ++c)
       for (int b = -1; b <= 1; ++b)
         for (int a = -1; a <= 1; ++a) {
           const int order = (a != 0) + (b != 0) + (c != 0);
-          if (order >= 2 && onWall(i + a, j + b, k + c)) sum += weight[order] * v[grid_.index(i + a, j + b, k + c)];
+          if (order >= 2 && (wi[a + 1] || wj[b + 1] || wk[c + 1])) sum += weight[order] * centre[a + sy * b + sz * c];
         }
     return sum;
   };
