@@ -9,6 +9,8 @@
 
 #include "lodestone/core/coloured_scatter.h"
 #include "lodestone/core/error.h"
+#include "lodestone/core/element_build.h"
+#include "lodestone/core/langevin_batch.h"
 #include "lodestone/core/parallel.h"
 #include "lodestone/core/q1_element.h"
 #include "lodestone/core/q1_stencil.h"
@@ -17,19 +19,6 @@ namespace lodestone {
 
 namespace {
 constexpr q1::Tables kQ1 = q1::makeTables();
-
-// Packed upper triangles of dN_qc . dN_qd for each Gauss point q.
-struct GramAtGauss {
-  double g[8][36];
-};
-constexpr GramAtGauss makeGramAtGauss() {
-  GramAtGauss t{};
-  for (int q = 0; q < 8; ++q)
-    for (int c = 0, e = 0; c < 8; ++c)
-      for (int d = c; d < 8; ++d, ++e) t.g[q][e] = dot(kQ1.dN[q][c], kQ1.dN[q][d]);
-  return t;
-}
-constexpr GramAtGauss kGramAtGauss = makeGramAtGauss();
 
 struct EnergyTotals {
   double energy = 0, energyAbs = 0;
@@ -255,7 +244,7 @@ MagnetostaticProblem::Evaluation MagnetostaticProblem::evaluate(const double* ph
   } else {
     applyVacuum(phi, F);
   }
-  const double h = grid_.dx, w = grid_.cellVolume() / 8.0, fScale = h * h / 8.0, jScale = h / 8.0;
+  const double h = grid_.dx, w = grid_.cellVolume() / 8.0, fScale = h * h / 8.0;
   std::vector<CellSums>& sums = sums_;
   sums.resize(cellBase_.size());
   scatterCells(F, [&](std::size_t s, double local[8]) {
@@ -269,33 +258,22 @@ MagnetostaticProblem::Evaluation MagnetostaticProblem::evaluate(const double* ph
     CellSums& cs = sums[s];
     cs = CellSums{};
     double* E = &elem_[s * kPacked];
-    if (jacobian) std::fill(E, E + kPacked, 0.0);
     SymMat3d tensorSum;
     Vec3d upper[3];  // sum of w M over the Gauss points with bit a set (the upper abscissa on axis a)
     double Mq[8][3];
+    Vec3d Hq[8];
     for (int q = 0; q < 8; ++q) {
       const std::size_t g = s * 8 + std::size_t(q);
-      const Vec3d H{hext_[g].x - gradient[q][0] / h, hext_[g].y - gradient[q][1] / h,
-                    hext_[g].z - gradient[q][2] / h};
-      const MagnetizationResponse<double> r = respond(law_, nq_[g], H);
-      if (jacobian) {
-        tensorSum += r.dMdH;
-        // Element matrix E_cd += (dx/8) dN_qc . (dM/dH dN_qd), upper triangle
-        // packed, with dM/dH = iso I + rank1 h h^T:
-        // (dx/8) [iso (dN_qc . dN_qd) + rank1 (dN_qc . h)(dN_qd . h)].
-        const double a = jScale * r.iso, b = jScale * r.rank1;
-        const double* G = kGramAtGauss.g[q];
-        if (b != 0) {
-          double u[8];
-          for (int c = 0; c < 8; ++c) u[c] = dot(kQ1.dN[q][c], r.h);
-          for (int c = 0, e = 0; c < 8; ++c) {
-            const double bu = b * u[c];
-            for (int d = c; d < 8; ++d, ++e) E[e] += a * G[e] + bu * u[d];
-          }
-        } else {
-          for (int e = 0; e < kPacked; ++e) E[e] += a * G[e];
-        }
-      }
+      Hq[q] = {hext_[g].x - gradient[q][0] / h, hext_[g].y - gradient[q][1] / h, hext_[g].z - gradient[q][2] / h};
+    }
+    ResponseBatch rb;
+    respondBatch(law_, &nq_[s * 8], Hq, rb);
+    for (int q = 0; q < 8; ++q) {
+      struct {
+        Vec3d M, h;
+        double iso, rank1, W;
+      } r{{rb.Mx[q], rb.My[q], rb.Mz[q]}, {rb.hx[q], rb.hy[q], rb.hz[q]}, rb.iso[q], rb.rank1[q], rb.W[q]};
+      if (jacobian) tensorSum += SymMat3d::identityPlusOuter(r.iso, r.rank1, r.h);
       cs.finite = cs.finite && isFinite(r.M) && std::isfinite(r.W) && std::isfinite(r.iso) && std::isfinite(r.rank1);
       cs.energy += w * r.W;
       cs.energyAbs += w * std::fabs(r.W);
@@ -308,6 +286,8 @@ MagnetostaticProblem::Evaluation MagnetostaticProblem::evaluate(const double* ph
       Mq[q][2] = r.M.z;
     }
     if (jacobian) {
+      // Element matrix (dx/8) sum_q dN_q^T (iso I + rank1 h h^T) dN_q, packed.
+      buildElementMatrix(h, rb, E);
       tensorSum *= 0.125;
       cellTensor_[s] = tensorSum;
     }
