@@ -92,9 +92,10 @@ __attribute__((target("avx2,fma"))) void buildAvx2(double dx, const ResponseBatc
     alignas(32) double us[8];
     _mm256_store_pd(us, u[0]);
     _mm256_store_pd(us + 4, u[1]);
+    // Only the blocks that hold the upper triangle: rows 4..7 need columns 4..7 alone.
     for (int c = 0; c < 8; ++c) {
       const __m256d bu = _mm256_set1_pd(b * us[c]);
-      for (int half = 0; half < 2; ++half)
+      for (int half = c < 4 ? 0 : 1; half < 2; ++half)
         acc[c][half] = _mm256_fmadd_pd(bu, u[half],
                                        _mm256_fmadd_pd(a, _mm256_load_pd(&kFull.gram[q][c][4 * half]), acc[c][half]));
     }
