@@ -145,6 +145,7 @@ FieldSolveReport solveField(MagnetostaticProblem& problem, std::vector<double>& 
   }
   Preconditioner* pre = ws.preconditioner.get();
   const auto applyJ = [&](const double* v, double* out) { problem.applyJacobian(v, out); };
+  const auto applyJDot = [&](const double* v, double* out) { return problem.applyJacobianDot(v, out); };
   std::function<void(double*)> project;
   if (problem.boundary() == BoundaryKind::Shield) project = [&](double* v) { problem.removeMean(v); };
 
@@ -276,8 +277,8 @@ FieldSolveReport solveField(MagnetostaticProblem& problem, std::vector<double>& 
     rec.secondsSetup = secondsSince(tp);
     tp = Clock::now();
     forEach(n, [&](std::size_t m) { work[m] = -F[m]; });
-    const PcgResult cg =
-        solvePcg(n, applyJ, *pre, work.data(), delta.data(), eta, settings.maxCgIterations, project, &pcgWork);
+    const PcgResult cg = solvePcg(n, applyJ, *pre, work.data(), delta.data(), eta, settings.maxCgIterations, project,
+                                  &pcgWork, applyJDot);
     rec.secondsCg = secondsSince(tp);
     tp = Clock::now();
     rec.cgIterations = cg.iterations;

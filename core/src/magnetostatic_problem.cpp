@@ -349,6 +349,36 @@ void MagnetostaticProblem::applyJacobian(const double* v, double* out) const {
   zeroFixed(out);
 }
 
+double MagnetostaticProblem::applyJacobianDot(const double* v, double* out) const {
+  const int nx = grid_.dims.i, ny = grid_.dims.j, nz = grid_.dims.k;
+  const bool open = boundary_ == BoundaryKind::Open;
+  rowSums_.resize(std::size_t(ny) * std::size_t(nz));
+  tbb::parallel_for(tbb::blocked_range<int>(0, nz, 1), [&](const tbb::blocked_range<int>& kr) {
+    for (int k = kr.begin(); k != kr.end(); ++k)
+      for (int j = 0; j < ny; ++j) {
+        const std::size_t row = grid_.index(0, j, k);
+        double* o = out + row;
+        const double* x = v + row;
+        double& sum = rowSums_[std::size_t(j) + std::size_t(ny) * std::size_t(k)];
+        sum = 0;
+        if (open && (j == 0 || k == 0 || j == ny - 1 || k == nz - 1)) {
+          std::fill(o, o + nx, 0.0);  // a wall row: fixed nodes only
+          continue;
+        }
+        applyQ1LaplacianRow(grid_, boundary_, j, k, v, out);
+        // The material rows on this row's hull; for Open its end nodes are fixed.
+        const int lo = stencil_.lo(j, k), hi = stencil_.hi(j, k);
+        const int from = open ? std::max(lo, 1) : lo, to = open ? std::min(hi, nx - 1) : hi;
+        stencil_.addRow(j, k, from, to, x, o);
+        if (open) o[0] = o[nx - 1] = 0.0;
+        for (int i = 0; i < nx; ++i) sum += x[i] * o[i];
+      }
+  });
+  double total = 0;
+  for (const double r : rowSums_) total += r;
+  return total;
+}
+
 void MagnetostaticProblem::jacobianDiagonal(double* out) const {
   q1LaplacianDiagonalAll(grid_, out);
   stencil_.addDiagonal(out);

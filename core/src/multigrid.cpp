@@ -153,6 +153,7 @@ class MultigridPreconditioner::Hierarchy {
   explicit Hierarchy(const MultigridSettings& settings) : settings_(settings) {}
   void update(const MagnetostaticProblem& problem);
   void apply(const double* r, double* z) const;
+  double applyDot(const double* r, double* z) const;
   int levelCount() const { return int(levels_.size()); }
 
  private:
@@ -213,13 +214,16 @@ class MultigridPreconditioner::Hierarchy {
   template <typename Fn>
   void forEachSegment(const Level& L, int j, int k, const Fn& fn) const;
   template <typename U>
-  void sweep(const Level& L, const T* x, const T* b, U* out) const;
+  void sweep(const Level& L, const T* x, const T* b, U* out, const double* dotWith = nullptr,
+             double* rowDot = nullptr) const;
   void restrictResidual(const Level& L, const Level& C, const T* x, const T* b) const;
   void prolongAdd(const Level& L, const Level& C, T* x) const;
 
   MultigridSettings settings_;
   std::vector<std::unique_ptr<Level>> levels_;
   mutable std::vector<double> coarseIn_, coarseOut_;  // double copies for the coarsest CG
+  mutable const double* dotWith_ = nullptr;            // applyDot(): r, for the last fine sweep
+  mutable std::vector<double> rowDot_;                 // its per-row sums of r . z
   Buffer<std::int32_t> slotMaps_[2];                  // buildStructure(): cell -> slot on two levels
 };
 
@@ -643,8 +647,10 @@ void MultigridPreconditioner::Hierarchy<T>::forEachSegment(const Level& L, int j
 
 template <typename T>
 template <typename U>
-void MultigridPreconditioner::Hierarchy<T>::sweep(const Level& L, const T* x, const T* b, U* out) const {
-  // One damped-Jacobi sweep out = x + w D^-1 (b - A x), in one pass.
+void MultigridPreconditioner::Hierarchy<T>::sweep(const Level& L, const T* x, const T* b, U* out,
+                                                  const double* dotWith, double* rowDot) const {
+  // One damped-Jacobi sweep out = x + w D^-1 (b - A x), in one pass; with
+  // dotWith, also each row's sum of dotWith . out into rowDot[j + ny k].
   const T w = T(settings_.jacobiWeight);
   const T wv = w * L.vacuumInvDiagonal;
   const T* dinv = L.invDiagonal.data();
@@ -660,6 +666,13 @@ void MultigridPreconditioner::Hierarchy<T>::sweep(const Level& L, const T* x, co
         for (int i = from; i < to; ++i) o[i] = U(xr[i] + wv * (br[i] - y[i]));
       }
     });
+    if (dotWith) {
+      const double* d = dotWith + row;
+      const U* o = out + row;
+      double sum = 0;
+      for (int i = 0; i < L.grid.dims.i; ++i) sum += d[i] * double(o[i]);
+      rowDot[std::size_t(j) + std::size_t(L.grid.dims.j) * std::size_t(k)] = sum;
+    }
   });
 }
 
@@ -847,7 +860,12 @@ void MultigridPreconditioner::Hierarchy<T>::cycle(std::size_t level, const doubl
   // Post-smoothing; the last sweep may write the double result directly.
   for (int s = 0; s < settings_.postSmoothing; ++s) {
     if (out && s + 1 == settings_.postSmoothing) {
-      sweep(L, cur, b, out);
+      if (level == 0 && dotWith_) {
+        rowDot_.resize(std::size_t(L.grid.dims.j) * std::size_t(L.grid.dims.k));
+        sweep(L, cur, b, out, dotWith_, rowDot_.data());
+      } else {
+        sweep(L, cur, b, out);
+      }
     } else {
       sweep(L, cur, b, other);
       std::swap(cur, other);
@@ -859,6 +877,21 @@ template <typename T>
 void MultigridPreconditioner::Hierarchy<T>::apply(const double* r, double* z) const {
   require(!levels_.empty(), "multigrid: apply() before update()");
   cycle(0, r, z);
+}
+
+template <typename T>
+double MultigridPreconditioner::Hierarchy<T>::applyDot(const double* r, double* z) const {
+  require(!levels_.empty(), "multigrid: apply() before update()");
+  if (levels_.size() == 1) {  // the coarsest-grid solve alone: no sweep to fuse into
+    cycle(0, r, z);
+    return deterministicDot(r, z, levels_.front()->grid.nodeCount());
+  }
+  dotWith_ = r;
+  cycle(0, r, z);
+  dotWith_ = nullptr;
+  double total = 0;
+  for (const double d : rowDot_) total += d;
+  return total;
 }
 
 void MultigridSettings::validate() const {
@@ -893,6 +926,15 @@ void MultigridPreconditioner::apply(const double* r, double* z) const {
     require(bool(double_), "multigrid: apply() before update()");
     double_->apply(r, z);
   }
+}
+
+double MultigridPreconditioner::applyDot(std::size_t, const double* r, double* z) const {
+  if (settings_.singlePrecision) {
+    require(bool(single_), "multigrid: apply() before update()");
+    return single_->applyDot(r, z);
+  }
+  require(bool(double_), "multigrid: apply() before update()");
+  return double_->applyDot(r, z);
 }
 
 int MultigridPreconditioner::levelCount() const {

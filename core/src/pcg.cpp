@@ -31,9 +31,15 @@ void JacobiPreconditioner::apply(const double* r, double* z) const {
   forEach(inverseDiagonal_.size(), [&](std::size_t m) { z[m] = d[m] * r[m]; });
 }
 
+double Preconditioner::applyDot(std::size_t n, const double* r, double* z) const {
+  apply(r, z);
+  return deterministicDot(r, z, n);
+}
+
 PcgResult solvePcg(std::size_t n, const std::function<void(const double*, double*)>& applyA,
                    const Preconditioner& preconditioner, const double* b, double* x, double relTol,
-                   int maxIterations, const std::function<void(double*)>& project, PcgWorkspace* workspace) {
+                   int maxIterations, const std::function<void(double*)>& project, PcgWorkspace* workspace,
+                   const std::function<double(const double*, double*)>& applyADot) {
   PcgResult res;
   PcgWorkspace local;
   PcgWorkspace& ws = workspace ? *workspace : local;
@@ -53,14 +59,26 @@ PcgResult solvePcg(std::size_t n, const std::function<void(const double*, double
     res.breakdown = !std::isfinite(bnorm);
     return res;
   }
-  preconditioner.apply(r.data(), z.data());
-  if (project) project(z.data());
+  // z = M^-1 r and r . z, fused when nothing is projected in between.
+  const auto precondition = [&]() {
+    if (project) {
+      preconditioner.apply(r.data(), z.data());
+      project(z.data());
+      return deterministicDot(r.data(), z.data(), n);
+    }
+    return preconditioner.applyDot(n, r.data(), z.data());
+  };
+  double rz = precondition();
   forEach(n, [&](std::size_t m) { p[m] = z[m]; });
-  double rz = deterministicDot(r.data(), z.data(), n);
   double rnorm = bnorm;
   while (res.iterations < maxIterations) {
-    applyA(p.data(), Ap.data());
-    const double pAp = deterministicDot(p.data(), Ap.data(), n);
+    double pAp;
+    if (applyADot) {
+      pAp = applyADot(p.data(), Ap.data());
+    } else {
+      applyA(p.data(), Ap.data());
+      pAp = deterministicDot(p.data(), Ap.data(), n);
+    }
     if (!(pAp > 0) || !std::isfinite(pAp) || !std::isfinite(rz)) {
       res.breakdown = true;
       break;
@@ -87,9 +105,7 @@ PcgResult solvePcg(std::size_t n, const std::function<void(const double*, double
       res.converged = true;
       break;
     }
-    preconditioner.apply(r.data(), z.data());
-    if (project) project(z.data());
-    const double rzNew = deterministicDot(r.data(), z.data(), n);
+    const double rzNew = precondition();
     const double beta = rzNew / rz;
     rz = rzNew;
     forEach(n, [&](std::size_t m) { p[m] = z[m] + beta * p[m]; });

@@ -64,46 +64,53 @@ double q1LaplacianRow(const GridSpec& grid, int i, int j, int k, const float* v)
   return q1LaplacianRowT(grid, i, j, k, v);
 }
 
-namespace {
 template <typename T>
-void applyQ1LaplacianT(const GridSpec& grid, BoundaryKind boundary, const T* v, T* out) {
+void applyQ1LaplacianRowT(const GridSpec& grid, BoundaryKind boundary, int j, int k, const T* v, T* out) {
   const int nx = grid.dims.i, ny = grid.dims.j, nz = grid.dims.k;
   const std::ptrdiff_t sy = nx, sz = std::ptrdiff_t(nx) * ny;
   const T h = T(grid.dx), cC = h * T(8.0 / 3.0), cE = -h / T(6), cK = -h / T(12);
   const bool shield = boundary == BoundaryKind::Shield;
-  tbb::parallel_for(tbb::blocked_range<int>(0, nz, 1), [&](const tbb::blocked_range<int>& kr) {
+  const std::size_t row = grid.index(0, j, k);
+  const bool wallRow = k == 0 || k == nz - 1 || j == 0 || j == ny - 1;
+  if (wallRow) {
+    for (int i = 0; i < nx; ++i) out[row + std::size_t(i)] = shield ? T(q1LaplacianRowT(grid, i, j, k, v)) : T(0);
+    return;
+  }
+  out[row] = shield ? T(q1LaplacianRowT(grid, 0, j, k, v)) : T(0);
+  out[row + std::size_t(nx - 1)] = shield ? T(q1LaplacianRowT(grid, nx - 1, j, k, v)) : T(0);
+  // Per x position, the 4 in-plane face neighbours A and the 4 in-plane
+  // diagonal neighbours D in (y, z); then edges(i) = A(i-1) + A(i+1) + D(i)
+  // and corners(i) = D(i-1) + D(i+1). Face neighbours weigh 0.
+  const T* p = v + row;
+  thread_local std::vector<T> A, D;
+  A.resize(std::size_t(nx));
+  D.resize(std::size_t(nx));
+  for (int i = 0; i < nx; ++i) {
+    const T* c = p + i;
+    A[std::size_t(i)] = c[sy] + c[-sy] + c[sz] + c[-sz];
+    D[std::size_t(i)] = c[sy + sz] + c[sy - sz] + c[-sy + sz] + c[-sy - sz];
+  }
+  for (int i = 1; i < nx - 1; ++i) {
+    const std::size_t u = std::size_t(i);
+    const T edges = A[u - 1] + A[u + 1] + D[u];
+    const T corners = D[u - 1] + D[u + 1];
+    out[row + u] = cC * p[i] + cE * edges + cK * corners;
+  }
+}
+
+namespace {
+template <typename T>
+void applyQ1LaplacianT(const GridSpec& grid, BoundaryKind boundary, const T* v, T* out) {
+  tbb::parallel_for(tbb::blocked_range<int>(0, grid.dims.k, 1), [&](const tbb::blocked_range<int>& kr) {
     for (int k = kr.begin(); k != kr.end(); ++k)
-      for (int j = 0; j < ny; ++j) {
-        const std::size_t row = grid.index(0, j, k);
-        const bool wallRow = k == 0 || k == nz - 1 || j == 0 || j == ny - 1;
-        if (wallRow) {
-          for (int i = 0; i < nx; ++i) out[row + std::size_t(i)] = shield ? T(q1LaplacianRowT(grid, i, j, k, v)) : T(0);
-          continue;
-        }
-        out[row] = shield ? T(q1LaplacianRowT(grid, 0, j, k, v)) : T(0);
-        out[row + std::size_t(nx - 1)] = shield ? T(q1LaplacianRowT(grid, nx - 1, j, k, v)) : T(0);
-        // Per x position, the 4 in-plane face neighbours A and the 4 in-plane
-        // diagonal neighbours D in (y, z); then edges(i) = A(i-1) + A(i+1) + D(i)
-        // and corners(i) = D(i-1) + D(i+1). Face neighbours weigh 0.
-        const T* p = v + row;
-        thread_local std::vector<T> A, D;
-        A.resize(std::size_t(nx));
-        D.resize(std::size_t(nx));
-        for (int i = 0; i < nx; ++i) {
-          const T* c = p + i;
-          A[std::size_t(i)] = c[sy] + c[-sy] + c[sz] + c[-sz];
-          D[std::size_t(i)] = c[sy + sz] + c[sy - sz] + c[-sy + sz] + c[-sy - sz];
-        }
-        for (int i = 1; i < nx - 1; ++i) {
-          const std::size_t u = std::size_t(i);
-          const T edges = A[u - 1] + A[u + 1] + D[u];
-          const T corners = D[u - 1] + D[u + 1];
-          out[row + u] = cC * p[i] + cE * edges + cK * corners;
-        }
-      }
+      for (int j = 0; j < grid.dims.j; ++j) applyQ1LaplacianRowT(grid, boundary, j, k, v, out);
   });
 }
 }  // namespace
+
+void applyQ1LaplacianRow(const GridSpec& grid, BoundaryKind boundary, int j, int k, const double* v, double* out) {
+  applyQ1LaplacianRowT(grid, boundary, j, k, v, out);
+}
 
 void applyQ1Laplacian(const GridSpec& grid, BoundaryKind boundary, const double* v, double* out) {
   applyQ1LaplacianT(grid, boundary, v, out);

@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Dense>
+#include <cmath>
 #include <random>
 #include <vector>
 
@@ -294,5 +295,35 @@ TEST(FeOperator, SumFactorizedGaussGradientsMatchTheShapeTables) {
       for (int q = 0; q < 8; ++q) ref += dot(t.dN[q][c], Vec3d{f[q][0], f[q][1], f[q][2]});
       EXPECT_NEAR(out[c], ref, 1e-14) << "corner " << c;
     }
+  }
+}
+
+TEST(FeOperator, FusedJacobianProductAndDotEqualTheSeparateOnes) {
+  // applyJacobianDot (one pass over the rows) against applyJacobian and a
+  // dot product, for both boundaries, with material touching the walls.
+  for (BoundaryKind b : {BoundaryKind::Open, BoundaryKind::Shield}) {
+    SmallProblem s = randomMaterial(9, 6);
+    MagnetostaticProblem p(s.grid, s.material.law, b);
+    p.setMaterial(s.n.view(), uniform({2e4, 5e4, -3e4}));
+    const std::size_t S = s.grid.nodeCount();
+    std::vector<double> phi(S), v(S), F(S), Jv(S), Jv2(S);
+    std::mt19937 rng(8);
+    std::uniform_real_distribution<double> U(-1, 1);
+    for (std::size_t m = 0; m < S; ++m) {
+      phi[m] = 100 * U(rng);
+      v[m] = U(rng);
+    }
+    p.evaluate(phi.data(), F.data());
+    p.applyJacobian(v.data(), Jv.data());
+    const double dot = p.applyJacobianDot(v.data(), Jv2.data());
+    double num = 0, den = 0;
+    for (std::size_t m = 0; m < S; ++m) {
+      num += (Jv2[m] - Jv[m]) * (Jv2[m] - Jv[m]);
+      den += Jv[m] * Jv[m];
+    }
+    EXPECT_LT(std::sqrt(num / den), 1e-14) << toString(b);
+    const double ref = deterministicDot(v.data(), Jv.data(), S);
+    EXPECT_NEAR(dot, ref, 1e-12 * std::fabs(ref)) << toString(b);
+    EXPECT_GT(dot, 0) << toString(b);
   }
 }

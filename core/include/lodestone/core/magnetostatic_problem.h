@@ -89,6 +89,9 @@ class MagnetostaticProblem {
   void applyVacuum(const double* v, double* out) const;
   /// out = J v with the Jacobian blocks of the last evaluate().
   void applyJacobian(const double* v, double* out) const;
+  /// out = J v as applyJacobian, in one pass over the rows that also
+  /// returns v . J v (deterministic: per-row sums added in row order).
+  double applyJacobianDot(const double* v, double* out) const;
   /// out += K v_w on the free rows next to the wall, where v_w is v on the
   /// fixed (wall) nodes and 0 elsewhere: what a change of the wall values
   /// does to applyVacuum, at the cost of the wall layer only. Nothing for
@@ -148,6 +151,7 @@ class MagnetostaticProblem {
     bool finite = true;
   };
   std::vector<CellSums> sums_;
+  mutable std::vector<double> rowSums_;  // applyJacobianDot's per-row partial sums
 
   template <typename CellFn>
   void scatterCells(double* out, const CellFn& cellFn) const;

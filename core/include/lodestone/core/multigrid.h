@@ -51,6 +51,8 @@ class MultigridPreconditioner final : public Preconditioner {
   /// and material cells are those of the previous call.
   void update(const MagnetostaticProblem& problem) override;
   void apply(const double* r, double* z) const override;
+  /// apply() with r . z summed in its last fine-level sweep (row by row).
+  double applyDot(std::size_t n, const double* r, double* z) const override;
   std::string name() const override { return "multigrid"; }
   /// Number of levels including the fine grid (after update()).
   int levelCount() const;

@@ -19,6 +19,9 @@ class Preconditioner {
   /// Called after every MagnetostaticProblem::evaluate (the Jacobian changed).
   virtual void update(const MagnetostaticProblem& problem) = 0;
   virtual void apply(const double* r, double* z) const = 0;
+  /// apply() and r . z over the n values, deterministic; preconditioners
+  /// that can form the sum while they write z override it.
+  virtual double applyDot(std::size_t n, const double* r, double* z) const;
   virtual std::string name() const = 0;
 };
 
@@ -47,9 +50,13 @@ struct PcgWorkspace {
 
 /// Solves A x = b from x = 0 until ||r|| <= relTol ||b|| or maxIterations.
 /// `project`, when set, removes the null space from residuals (singular A).
+/// `applyADot`, when set, is applyA returning p . A p as well (one pass
+/// instead of two); without `project` the preconditioner's applyDot() is
+/// used likewise.
 PcgResult solvePcg(std::size_t size, const std::function<void(const double*, double*)>& applyA,
                    const Preconditioner& preconditioner, const double* b, double* x, double relTol,
                    int maxIterations, const std::function<void(double*)>& project = {},
-                   PcgWorkspace* workspace = nullptr);
+                   PcgWorkspace* workspace = nullptr,
+                   const std::function<double(const double*, double*)>& applyADot = {});
 
 }  // namespace lodestone

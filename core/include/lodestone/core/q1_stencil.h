@@ -16,6 +16,10 @@ void applyQ1Laplacian(const GridSpec& grid, BoundaryKind boundary, const double*
 /// The same in single precision (the multigrid preconditioner's storage).
 void applyQ1Laplacian(const GridSpec& grid, BoundaryKind boundary, const float* v, float* out);
 
+/// applyQ1Laplacian on the node row (j, k) alone (out at that row's nodes),
+/// for callers that fuse more work into the same pass over the rows.
+void applyQ1LaplacianRow(const GridSpec& grid, BoundaryKind boundary, int j, int k, const double* v, double* out);
+
 /// Row (i,j,k) of K times v, for any node including the walls.
 double q1LaplacianRow(const GridSpec& grid, int i, int j, int k, const double* v);
 /// The same for single-precision v (summed in double).
