@@ -285,7 +285,9 @@ FieldSolveReport solveField(MagnetostaticProblem& problem, std::vector<double>& 
     rec.cgRelativeResidual = cg.relativeResidual;
     rep.cgIterations += cg.iterations;
     // The slope g0 = delta . F and the line search's s1 = delta . K phi and
-    // s2 = delta . K delta, in one pass over the vectors.
+    // s2 = delta . K delta, in one pass over the vectors that also forms the
+    // full step's trial point, its K phi and the vacuum part of its residual
+    // (the evaluation below adds the material part to Ftrial in place).
     problem.applyVacuum(delta.data(), Kdelta.data());
     struct Slopes {
       double g0 = 0, s1 = 0, s2 = 0;
@@ -296,8 +298,12 @@ FieldSolveReport solveField(MagnetostaticProblem& problem, std::vector<double>& 
         return *this;
       }
     };
-    const Slopes slopes = deterministicSum<Slopes>(
-        n, [&](std::size_t m) { return Slopes{delta[m] * F[m], delta[m] * Kphi[m], delta[m] * Kdelta[m]}; });
+    const Slopes slopes = deterministicSum<Slopes>(n, [&](std::size_t m) {
+      const double d = delta[m], kd = Kdelta[m], kp = Kphi[m];
+      trial[m] = phi[m] + d;
+      Ftrial[m] = Ktrial[m] = kp + kd;
+      return Slopes{d * F[m], d * kp, d * kd};
+    });
     const double g0 = slopes.g0;
     if (cg.breakdown || !(g0 < 0)) {
       rep.status = SolveStatus::LinearSolverFailed;
@@ -325,11 +331,7 @@ FieldSolveReport solveField(MagnetostaticProblem& problem, std::vector<double>& 
     // always) this is the next iteration's evaluation.
     double lambda = 1.0;
     bool accepted = false;
-    forEach(n, [&](std::size_t m) {
-      trial[m] = phi[m] + delta[m];
-      Ktrial[m] = Kphi[m] + Kdelta[m];
-    });
-    MagnetostaticProblem::Evaluation evT = problem.evaluate(trial.data(), Ftrial.data(), true, Ktrial.data());
+    MagnetostaticProblem::Evaluation evT = problem.evaluate(trial.data(), Ftrial.data(), true, Ftrial.data());
     double dE = s1 + 0.5 * s2 + (evT.materialEnergy - ev.materialEnergy);
     {
       bool rm = false;

@@ -235,7 +235,9 @@ void MagnetostaticProblem::removeMean(double* v) const {
 
 MagnetostaticProblem::Evaluation MagnetostaticProblem::evaluate(const double* phi, double* F, bool jacobian,
                                                                 const double* vacuumPart) {
-  if (vacuumPart) {
+  if (vacuumPart == F) {
+    // F holds the vacuum part already.
+  } else if (vacuumPart) {
     const std::size_t count = grid_.nodeCount();
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, 1 << 14),
                       [&](const tbb::blocked_range<std::size_t>& r) {

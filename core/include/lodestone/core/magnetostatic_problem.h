@@ -77,7 +77,7 @@ class MagnetostaticProblem {
   /// rows (materialStencil()), which applyJacobian uses.
   /// `vacuumPart`, when given, is applyVacuum(phi) already computed by the
   /// caller (the Newton loop keeps it up to date); it is copied into F
-  /// instead of applying the stencil again.
+  /// instead of applying the stencil again (vacuumPart == F: F holds it).
   Evaluation evaluate(const double* phi, double* F, bool jacobian = true, const double* vacuumPart = nullptr);
 
   /// Residual of the material part alone at phi = 0 (the reference scale of
