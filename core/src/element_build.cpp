@@ -1,5 +1,6 @@
 #include "lodestone/core/element_build.h"
 
+#include "lodestone/core/cpu_features.h"
 #include "lodestone/core/q1_element.h"
 
 #if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
@@ -66,13 +67,6 @@ constexpr FullTables makeFullTables() {
 }
 constexpr FullTables kFull = makeFullTables();
 
-bool cpuHasAvx2Fma() {
-  static const bool has = [] {
-    __builtin_cpu_init();
-    return __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
-  }();
-  return has;
-}
 
 __attribute__((target("avx2,fma"))) void buildAvx2(double dx, const ResponseBatch& r, double E[36]) {
   const double jScale = dx / 8.0;

@@ -2,6 +2,8 @@
 
 #include <cmath>
 
+#include "lodestone/core/cpu_features.h"
+
 #if defined(LODESTONE_HAVE_LIBMVEC) && defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
 #define LODESTONE_BATCH_AVX2 1
 #include <immintrin.h>
@@ -98,13 +100,6 @@ __attribute__((target("avx2,fma"))) void langevin4(const MagnetizationLaw<double
   _mm256_storeu_pd(out.W + at, _mm256_mul_pd(wScale, lsc));
 }
 
-bool cpuHasAvx2Fma() {
-  static const bool has = [] {
-    __builtin_cpu_init();
-    return __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
-  }();
-  return has;
-}
 }  // namespace
 
 bool respondBatchVector(const MagnetizationLaw<double>& law, const double n[8], const Vec3d H[8],
