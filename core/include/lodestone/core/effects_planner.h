@@ -93,7 +93,7 @@ struct PlannerInputs {
   bool appliedEmpty = true;
   double time = 0;                   ///< s
   GridSpec grid;                     ///< the full magnetic grid
-  double secondsPerNodeSolve = 7e-7; ///< field-solve cost per grid node, s (docs/benchmarks.md, 2 cores)
+  double secondsPerNodeSolve = 3e-7; ///< field-solve cost per grid node, s (docs/benchmarks.md: 2 cores, 1e-6, cold and warm)
 };
 
 /// Decides the magnetic stages for the state `in` (see the header comment).
