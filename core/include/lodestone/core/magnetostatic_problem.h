@@ -91,6 +91,7 @@ class MagnetostaticProblem {
   void applyJacobian(const double* v, double* out) const;
   /// out = J v as applyJacobian, in one pass over the rows that also
   /// returns v . J v (deterministic: per-row sums added in row order).
+  /// Uses storage kept in the problem: not for concurrent calls.
   double applyJacobianDot(const double* v, double* out) const;
   /// out += K v_w on the free rows next to the wall, where v_w is v on the
   /// fixed (wall) nodes and 0 elsewhere: what a change of the wall values
