@@ -446,22 +446,10 @@ void MagnetostaticProblem::applyOpenBoundary(const std::vector<Multipole>& multi
   const double *cx = field(kCx), *cy = field(kCy), *cz = field(kCz), *mx = field(kMx), *my = field(kMy),
                *mz = field(kMz), *nxx = field(kNxx), *nyy = field(kNyy), *nzz = field(kNzz), *nxy = field(kNxy),
                *nxz = field(kNxz), *nyz = field(kNyz), *tr = field(kTr);
+  const MultipoleArrays blocks{cx, cy, cz, mx, my, mz, nxx, nyy, nzz, nxy, nxz, nyz, tr, padded};
   forWallNodes([&](int i, int j, int k) {
     if (!onLattice(i, nx) || !onLattice(j, ny) || !onLattice(k, nz)) return;
-    const Vec3d x = grid_.nodePosition(i, j, k);
-    double acc[4] = {0, 0, 0, 0};
-    for (std::size_t b = 0; b < padded; b += 4)
-      for (std::size_t l = 0; l < 4; ++l) {
-        const std::size_t q = b + l;
-        const double rx = x.x - cx[q], ry = x.y - cy[q], rz = x.z - cz[q];
-        const double r2 = rx * rx + ry * ry + rz * rz;
-        const double inv2 = r2 > 0 ? 1.0 / r2 : 0.0;  // a node at a block centre: no contribution
-        const double inv3 = inv2 * std::sqrt(inv2), inv5 = inv3 * inv2;
-        const double quad = nxx[q] * rx * rx + nyy[q] * ry * ry + nzz[q] * rz * rz + nxy[q] * rx * ry +
-                            nxz[q] * rx * rz + nyz[q] * ry * rz;
-        acc[l] += inv3 * (mx[q] * rx + my[q] * ry + mz[q] * rz - tr[q]) + 3.0 * inv5 * quad;
-      }
-    phi[grid_.index(i, j, k)] = ((acc[0] + acc[1]) + (acc[2] + acc[3])) / (4.0 * kPi);
+    phi[grid_.index(i, j, k)] = multipoleSum(blocks, grid_.nodePosition(i, j, k)) / (4.0 * kPi);
   });
   // Off-lattice wall nodes: along each off-lattice axis, between the lattice
   // coordinates lo = s floor(c/s) and hi = min(lo + s, count - 1). The wall's
