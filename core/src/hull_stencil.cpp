@@ -114,6 +114,25 @@ bool HullStencil<T>::sameCells(const GridSpec& grid, const std::size_t* cellBase
 }
 
 template <typename T>
+template <typename U>
+void HullStencil<T>::assignConverted(const HullStencil<U>& other) {
+  grid_ = other.grid_;
+  lo_ = other.lo_;
+  hi_ = other.hi_;
+  rowStart_ = other.rowStart_;
+  corner_.clear();
+  cellBase_.clear();
+  cellSlot_.clear();
+  values_.resize(other.values_.size());
+  const U* src = other.values_.data();
+  T* dst = values_.data();
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, values_.size(), 1 << 15),
+                    [&](const tbb::blocked_range<std::size_t>& r) {
+                      for (std::size_t m = r.begin(); m != r.end(); ++m) dst[m] = T(src[m]);
+                    });
+}
+
+template <typename T>
 void HullStencil<T>::clear() {
   T* v = values_.data();
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, values_.size(), 1 << 15),
@@ -153,6 +172,8 @@ template class HullStencil<float>;
 template void HullStencil<double>::addProduct<double>(const double*, double*) const;
 template void HullStencil<float>::addProduct<float>(const float*, float*) const;
 template void HullStencil<double>::addDiagonal<double>(double*) const;
+template void HullStencil<float>::assignConverted<double>(const HullStencil<double>&);
+template void HullStencil<double>::assignConverted<double>(const HullStencil<double>&);
 template void HullStencil<float>::addDiagonal<float>(float*) const;
 
 }  // namespace lodestone

@@ -123,15 +123,12 @@ bool respondBatchVector(const MagnetizationLaw<double>& law, const double n[8], 
   return true;
 }
 
-bool respondBatchVectorized() { return cpuHasAvx2Fma(); }
 
 #else
 
 bool respondBatchVector(const MagnetizationLaw<double>&, const double*, const Vec3d*, ResponseBatch&) {
   return false;
 }
-
-bool respondBatchVectorized() { return false; }
 
 #endif
 

@@ -175,7 +175,6 @@ class MultigridPreconditioner::Hierarchy {
     std::vector<std::size_t> slabStart;
     std::size_t offsets[8] = {};
     std::vector<std::int32_t> problemSlot;  // level 0: the problem's slot of each cell
-    std::vector<std::size_t> problemCells;  // level 0: the problem's cell bases in its slot order
     // Coarse levels: each cell's children on the finer level that carry
     // material (their slots, then -1) and how many children lie inside the
     // finer grid (the divisor of the mean).
@@ -273,8 +272,6 @@ void MultigridPreconditioner::Hierarchy<T>::buildStructure(const MagnetostaticPr
   Level& fine = *levels_.front();
   const std::size_t materialCells = problem.materialCellCount();
   require(materialCells < std::size_t(INT32_MAX), "multigrid: too many material cells (", materialCells, ")");
-  fine.problemCells.resize(materialCells);
-  for (std::size_t s = 0; s < materialCells; ++s) fine.problemCells[s] = problem.materialCellBase(s);
   // Slot of every cell of the current finest level (-1: none), alternating
   // between two maps; on level 0 the problem's slot, whose tensor seeds level 1.
   Buffer<std::int32_t>* slotOfCell = &slotMaps_[0];
@@ -486,21 +483,11 @@ void MultigridPreconditioner::Hierarchy<T>::refreshDiagonal(Level& L, const Cell
 template <typename T>
 void MultigridPreconditioner::Hierarchy<T>::refreshValues(const MagnetostaticProblem& problem) {
   const ElementBasis& basis = elementBasis();
-  // Level 0: a copy of the problem's element matrices in T, made while their
-  // diagonals are scattered (one read of the problem's matrices).
   // Level 0: the problem's assembled rows in T, and the diagonal from their
   // centre taps (the same hull: both are made from the material cells).
   Level& F = *levels_.front();
   const HullStencil<double>& P = problem.materialStencil();
-  if (!F.stencil.sameCells(F.grid, F.problemCells.data(), F.problemCells.size()))
-    F.stencil.build(F.grid, F.problemCells.data(), F.problemCells.size());
-  require(F.stencil.size() == P.size(), "multigrid: the problem's material rows (", P.size(),
-          " nodes) do not match the fine level's (", F.stencil.size(), ")");
-  {
-    const double* src = P.values();
-    T* dst = F.stencil.values();
-    forEach(std::size_t(HullStencil<T>::kTaps) * P.size(), [&](std::size_t m) { dst[m] = T(src[m]); });
-  }
+  F.stencil.assignConverted(P);
   const double* centre = P.values() + std::size_t(13) * P.size();
   forEachHullNode(F, [&](std::size_t m, int i, int j, int k) {
     F.diagonal[m] = laplacianDiagonalAt(F.grid, i, j, k) + centre[P.rowStart(j, k) + std::size_t(i - P.lo(j, k))];

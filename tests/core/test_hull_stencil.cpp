@@ -100,7 +100,15 @@ TEST(HullStencil, ScatteredElementsEqualTheGatheredAssembly) {
   gathered.assemble(c.packed.data());
   scattered.build(c.grid, c.base.data(), c.base.size());
   scattered.clear();
-  for (std::size_t s = 0; s < c.base.size(); ++s) scattered.addElement(s, &c.packed[s * 36]);
+  // Element by element: E_cd into tap (c -> d) of corner c's node.
+  const std::size_t n = scattered.size();
+  for (std::size_t s = 0; s < c.base.size(); ++s)
+    for (int a = 0, e = 0; a < 8; ++a)
+      for (int b = a; b < 8; ++b, ++e) {
+        const double E = c.packed[s * 36 + std::size_t(e)];
+        scattered.values()[std::size_t(HullStencil<double>::tap(a, b)) * n + scattered.corner(s, a)] += E;
+        if (b != a) scattered.values()[std::size_t(HullStencil<double>::tap(b, a)) * n + scattered.corner(s, b)] += E;
+      }
   ASSERT_EQ(gathered.size(), scattered.size());
   const std::size_t count = std::size_t(HullStencil<double>::kTaps) * gathered.size();
   double worst = 0;
@@ -128,6 +136,16 @@ TEST(HullStencil, FloatRowsMatchDoubleRowsToSinglePrecision) {
   std::vector<double> gd(got.begin(), got.end());
   EXPECT_LT(relativeDifference(gd, ref), 1e-5);
   EXPECT_GT(relativeDifference(gd, ref), 0.0);  // it did run in float
+  // A float copy of the double rows (the multigrid's fine level) does the same.
+  HullStencil<double> d;
+  d.build(c.grid, c.base.data(), c.base.size());
+  d.assemble(c.packed.data());
+  HullStencil<float> copy;
+  copy.assignConverted(d);
+  std::vector<float> got2(n, 0.0f);
+  copy.addProduct(vf.data(), got2.data());
+  std::vector<double> gd2(got2.begin(), got2.end());
+  EXPECT_LT(relativeDifference(gd2, ref), 1e-5);
 }
 
 TEST(HullStencil, RejectsACellOutsideTheGrid) {

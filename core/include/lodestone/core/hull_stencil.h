@@ -59,20 +59,11 @@ class HullStencil {
   /// to build()): each hull node gathers its 8 cells in a fixed order, so
   /// every coefficient is written once, deterministically, in parallel.
   void assemble(const double* packed);
-  /// Adds the symmetric element matrix of cell `slot`, given as its packed
-  /// upper triangle (E[e] for c <= d, row by row: 36 values). Cells that
-  /// share no node may be added concurrently.
-  template <typename V>
-  void addElement(std::size_t slot, const V* E) {
-    const std::size_t n = size();
-    std::size_t a[8];
-    for (int c = 0; c < 8; ++c) a[c] = corner(slot, c);
-    for (int c = 0, e = 0; c < 8; ++c)
-      for (int d = c; d < 8; ++d, ++e) {
-        values_[std::size_t(tap(c, d)) * n + a[c]] += T(E[e]);
-        if (d != c) values_[std::size_t(tap(d, c)) * n + a[d]] += T(E[e]);
-      }
-  }
+  /// Takes the hulls and coefficients of `other` (values converted to T),
+  /// without its cell lists: enough for products and diagonals, not for
+  /// assemble().
+  template <typename U>
+  void assignConverted(const HullStencil<U>& other);
   /// out[row node i] += (assembled rows) v on row (j, k), for i in [from, to)
   /// within the row's hull; v and out point at node (0, j, k) of their grids.
   /// Neighbours outside the grid are skipped (their coefficients are 0).
@@ -93,6 +84,9 @@ class HullStencil {
   std::vector<std::size_t> cellBase_;  // what build() was given
   std::vector<std::int32_t> cellSlot_; // slot of each grid cell (-1: none)
   std::vector<T> values_;
+
+  template <typename>
+  friend class HullStencil;
 };
 
 template <typename T>

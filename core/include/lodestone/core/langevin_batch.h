@@ -37,7 +37,4 @@ void respondBatchScalar(const MagnetizationLaw<double>& law, const double n[8], 
 bool respondBatchVector(const MagnetizationLaw<double>& law, const double n[8], const Vec3d H[8],
                         ResponseBatch& out);
 
-/// True when respondBatch() takes the vector path for the Langevin law here.
-bool respondBatchVectorized();
-
 }  // namespace lodestone

@@ -113,9 +113,6 @@ class MagnetostaticProblem {
   const SymMat3d& materialCellTensor(std::size_t slot) const { return cellTensor_[slot]; }
   /// Values in the packed upper triangle of a symmetric 8x8 element matrix.
   static constexpr int kPacked = 36;
-  /// Packed material element matrix of cell `slot` (m) at the last
-  /// evaluate(..., true); materialStencil() holds their sum per node.
-  const double* materialElementMatrix(std::size_t slot) const { return &elem_[slot * kPacked]; }
   /// The material element matrices of the last evaluate(..., true)
   /// assembled into 27-point rows at the nodes they touch (m): applyJacobian
   /// adds their product to the vacuum stencil's, and the multigrid's level 0
