@@ -72,6 +72,8 @@ void FieldSolveSettings::validate() const {
           armijo);
   require(preconditioner == PreconditionerKind::Jacobi || preconditioner == PreconditionerKind::Multigrid,
           "field solve: unknown preconditioner ", int(preconditioner));
+  require(std::isfinite(wallPredictionTolerance) && wallPredictionTolerance > 0 && wallPredictionTolerance < 1,
+          "field solve: wallPredictionTolerance must be in (0, 1), got ", wallPredictionTolerance);
   multigrid.validate();
 }
 
@@ -99,7 +101,8 @@ FieldSolveReport solveField(MagnetostaticProblem& problem, std::vector<double>& 
   FieldSolveWorkspace& ws = workspace ? *workspace : localWorkspace;
   // Every vector is fully written before it is read: resizing a kept
   // workspace needs no clearing.
-  for (auto* v : {&ws.F, &ws.Fref, &ws.delta, &ws.work, &ws.trial, &ws.Ftrial, &ws.Kphi, &ws.Kdelta, &ws.Ktrial})
+  for (auto* v : {&ws.F, &ws.Fref, &ws.delta, &ws.work, &ws.trial, &ws.Ftrial, &ws.Kphi, &ws.Kdelta, &ws.Ktrial,
+                  &ws.wallRhs, &ws.wallDelta})
     v->resize(n);
   std::vector<double>&F = ws.F, &Fref = ws.Fref, &delta = ws.delta, &work = ws.work, &trial = ws.trial,
   &lastGood = ws.lastGood, &Ftrial = ws.Ftrial, &Kphi = ws.Kphi, &Kdelta = ws.Kdelta, &Ktrial = ws.Ktrial;
@@ -158,56 +161,91 @@ FieldSolveReport solveField(MagnetostaticProblem& problem, std::vector<double>& 
   if (!cold) problem.applyVacuum(phi.data(), Kphi.data());
   const bool open = problem.boundary() == BoundaryKind::Open;
   const std::vector<std::size_t> wall = problem.fixedNodes();
-  std::vector<double> wallOld(wall.size()), wallStep(wall.size()), wallPrev(wall.size(), 0.0);
+  std::vector<double> wallOld(wall.size()), wallStep(wall.size()), wallPrev(wall.size(), 0.0),
+      wallMove(wall.size());
+  int wallUpdates = 0;
   const auto forWall = [&](const auto& fn) {
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, wall.size(), 1 << 12),
                       [&](const tbb::blocked_range<std::size_t>& r) {
                         for (std::size_t w = r.begin(); w != r.end(); ++w) fn(w);
                       });
   };
+  std::vector<double>&wallRhs = ws.wallRhs, &wallDelta = ws.wallDelta;
+  // Moves the wall values of p to the far field of e's magnetization, and
+  // K p and the residual Fp with them.
+  const auto updateWall = [&](std::vector<double>& p, std::vector<double>& Fp, std::vector<double>& Kp,
+                              MagnetostaticProblem::Evaluation& e) {
+    forWall([&](std::size_t w) { wallOld[w] = p[wall[w]]; });
+    problem.applyOpenBoundary(e.multipoles, p.data());
+    forWall([&](std::size_t w) { wallStep[w] = p[wall[w]] - wallOld[w]; });
+    // Successive wall steps d_k shrink by rho = <d_k, d_k-1>/|d_k-1|^2
+    // (|rho| ~ 0.05 normally). A strongly magnetizable body (chi0 ~ 100)
+    // can make them oscillate (rho < -1) and diverge; relaxing the step by
+    // 1/(1 - rho) restores the contraction.
+    if (wallUpdates >= 1) {
+      const double dd = deterministicDot(wallStep.data(), wallPrev.data(), wall.size());
+      const double pp = deterministicDot(wallPrev.data(), wallPrev.data(), wall.size());
+      const double rho = pp > 0 ? dd / pp : 0.0;
+      if (rho < -0.5) {
+        const double theta = std::clamp(1.0 / (1.0 - rho), 0.05, 1.0);
+        forWall([&](std::size_t w) {
+          p[wall[w]] -= (1.0 - theta) * wallStep[w];
+          wallStep[w] *= theta;
+        });
+      }
+    }
+    ++wallUpdates;
+    wallPrev = wallStep;
+    // The wall values enter K p only in the free rows next to the wall.
+    forWall([&](std::size_t w) { wallRhs[wall[w]] = wallStep[w]; });
+    problem.addWallCoupling(wallRhs.data(), Kp.data());
+    // When no material cell touches the wall they enter the residual only
+    // through the vacuum stencil: Fp is corrected instead of re-evaluated.
+    if (problem.materialWallClearance() >= 1) {
+      problem.addWallCoupling(wallRhs.data(), Fp.data());
+    } else {
+      e = problem.evaluate(p.data(), Fp.data(), true, Kp.data());
+    }
+  };
+  // The slope g0 = delta . F and the line search's s1 = delta . K phi and
+  // s2 = delta . K delta, in one pass over the vectors that also forms the
+  // full step's trial point, its K phi and the vacuum part of its residual
+  // (the evaluation adds the material part to Ftrial in place).
+  struct Slopes {
+    double g0 = 0, s1 = 0, s2 = 0;
+    Slopes& operator+=(const Slopes& o) {
+      g0 += o.g0;
+      s1 += o.s1;
+      s2 += o.s2;
+      return *this;
+    }
+  };
+  const auto formTrial = [&]() {
+    problem.applyVacuum(delta.data(), Kdelta.data());
+    return deterministicSum<Slopes>(n, [&](std::size_t m) {
+      const double d = delta[m], kd = Kdelta[m], kp = Kphi[m];
+      trial[m] = phi[m] + d;
+      Ftrial[m] = Ktrial[m] = kp + kd;
+      return Slopes{d * F[m], d * kp, d * kd};
+    });
+  };
   // Each iteration starts from an evaluation at phi (residual, energy, the
   // Jacobian's element matrices): the first here, later ones are the
   // accepted line-search trial.
   if (!cold) ev = problem.evaluate(phi.data(), F.data(), true, Kphi.data());
   rep.secondsInitial = secondsSince(t0);
+  // The wall of phi already holds the far field of ev's magnetization (a
+  // step that predicted the wall updated it at the trial point).
+  bool wallCurrent = false;
   for (int it = 0;; ++it) {
     const auto ti = Clock::now();
     double secondsWall = 0;
-    if (open && ev.finite) {
+    if (open && ev.finite && !wallCurrent) {
       // Far-field values from the magnetization just evaluated.
-      forWall([&](std::size_t w) { wallOld[w] = phi[wall[w]]; });
-      problem.applyOpenBoundary(ev.multipoles, phi.data());
-      forWall([&](std::size_t w) { wallStep[w] = phi[wall[w]] - wallOld[w]; });
-      // The wall values follow M one iteration late: a fixed-point
-      // iteration whose steps d_k shrink by rho = <d_k, d_k-1>/|d_k-1|^2
-      // per iteration (|rho| ~ 0.05 normally). A strongly magnetizable
-      // body (chi0 ~ 100) makes it oscillate (rho < -1) and diverge;
-      // relaxing the step by 1/(1 - rho) restores the contraction.
-      if (it >= 1) {
-        const double dd = deterministicDot(wallStep.data(), wallPrev.data(), wall.size());
-        const double pp = deterministicDot(wallPrev.data(), wallPrev.data(), wall.size());
-        const double rho = pp > 0 ? dd / pp : 0.0;
-        if (rho < -0.5) {
-          const double theta = std::clamp(1.0 / (1.0 - rho), 0.05, 1.0);
-          forWall([&](std::size_t w) {
-            phi[wall[w]] -= (1.0 - theta) * wallStep[w];
-            wallStep[w] *= theta;
-          });
-        }
-      }
-      wallPrev = wallStep;
-      // The wall values enter K phi only in the free rows next to the wall.
-      forWall([&](std::size_t w) { delta[wall[w]] = wallStep[w]; });
-      problem.addWallCoupling(delta.data(), Kphi.data());
-      // When no material cell touches the wall they enter the residual only
-      // through the vacuum stencil: F is corrected instead of re-evaluated.
-      if (problem.materialWallClearance() >= 1) {
-        problem.addWallCoupling(delta.data(), F.data());
-      } else {
-        ev = problem.evaluate(phi.data(), F.data(), true, Kphi.data());
-      }
+      updateWall(phi, F, Kphi, ev);
       secondsWall = secondsSince(ti);
     }
+    wallCurrent = false;
     const double fn = norm(F);
     NewtonIterationRecord rec;
     rec.iteration = it;
@@ -250,16 +288,14 @@ FieldSolveReport solveField(MagnetostaticProblem& problem, std::vector<double>& 
       if (safeguard > 0.1) eta = std::max(eta, safeguard);
       eta = std::min(eta, settings.forcingMax);
     }
-    // With the open wall the wall values follow M one iteration behind, so
-    // one Newton step cannot reduce the residual much below that lag (about
-    // 0.01 per step at 32 free cells): it shows as a reduction far short of
-    // the step's forcing. Solving the inner system beyond a tenth of it only
-    // adds CG iterations (measured: Newton counts unchanged, CG -5..-10% for
-    // Langevin, -35..-45% for the linear law, whose first step would
-    // otherwise be solved to the final tolerance). Only with multigrid: a
-    // Jacobi-preconditioned CG stopped early leaves the smooth error almost
-    // untouched, so its residual overstates the step's quality (the linear
-    // law then took 12 Newton steps instead of 6).
+    // When the open wall lags behind M (predictWall off, or a prediction
+    // that missed), one Newton step cannot reduce the residual much below
+    // that lag: it shows as a reduction far short of the step's forcing.
+    // Solving the inner system beyond a tenth of it only adds CG
+    // iterations. Only with multigrid: a Jacobi-preconditioned CG stopped
+    // early leaves the smooth error almost untouched, so its residual
+    // overstates the step's quality (the linear law then took 12 Newton
+    // steps instead of 6).
     if (open && settings.preconditioner == PreconditionerKind::Multigrid) {
       if (it > 0) {
         const double achieved = fn / prevNorm;
@@ -269,6 +305,15 @@ FieldSolveReport solveField(MagnetostaticProblem& problem, std::vector<double>& 
       }
     }
     eta = std::max(eta, floorEta);
+    // With the wall predicted, a step reduces the residual by about its
+    // forcing, so when the forcing that reaches the tolerance in this step
+    // is within 30x of eta (one or two more CG iterations with multigrid),
+    // that is cheaper than another Newton step.
+    // (Not when material touches the wall: its wall nodes then also enter
+    // the material rows, which the vacuum coupling K_fw leaves out.)
+    const bool predicting =
+        open && settings.predictWall && !wall.empty() && problem.materialWallClearance() >= 1;
+    if (predicting && floorEta < eta && floorEta >= eta / 30.0) eta = floorEta;
     rec.forcing = eta;
 
     // Newton step.
@@ -280,32 +325,48 @@ FieldSolveReport solveField(MagnetostaticProblem& problem, std::vector<double>& 
     const PcgResult cg = solvePcg(n, applyJ, *pre, work.data(), delta.data(), eta, settings.maxCgIterations, project,
                                   &pcgWork, applyJDot);
     rec.secondsCg = secondsSince(tp);
-    tp = Clock::now();
     rec.cgIterations = cg.iterations;
     rec.cgRelativeResidual = cg.relativeResidual;
     rep.cgIterations += cg.iterations;
-    // The slope g0 = delta . F and the line search's s1 = delta . K phi and
-    // s2 = delta . K delta, in one pass over the vectors that also forms the
-    // full step's trial point, its K phi and the vacuum part of its residual
-    // (the evaluation below adds the material part to Ftrial in place).
-    problem.applyVacuum(delta.data(), Kdelta.data());
-    struct Slopes {
-      double g0 = 0, s1 = 0, s2 = 0;
-      Slopes& operator+=(const Slopes& o) {
-        g0 += o.g0;
-        s1 += o.s1;
-        s2 += o.s2;
-        return *this;
+
+    // Wall prediction: the step changes M, which moves the wall values by
+    // dw (linearized: the block multipoles of dM); left alone, that move
+    // would only be seen at the next iteration, as the residual K_fw dw in
+    // the free rows next to the wall. Solving J delta_w = -K_fw dw and
+    // moving the wall by dw with the step makes it the step of the system
+    // with the wall coupled in. Skipped when K_fw dw is below the step's
+    // own CG residual, or too small to keep the next iterate from meeting
+    // the tolerance.
+    bool coupled = false;
+    if (predicting && !cg.breakdown) {
+      tp = Clock::now();
+      problem.applyOpenBoundary(problem.linearizedMultipoles(delta.data()), wallDelta.data());
+      forWall([&](std::size_t w) {
+        wallMove[w] = wallDelta[wall[w]];
+        wallDelta[wall[w]] = -wallMove[w];
+      });
+      forEach(n, [&](std::size_t m) { wallRhs[m] = 0.0; });
+      problem.addWallCoupling(wallDelta.data(), wallRhs.data());
+      const double moveNorm = norm(wallRhs);
+      const double cgResidual = cg.relativeResidual * fn;
+      if (std::isfinite(moveNorm) && moveNorm > cgResidual && cgResidual + moveNorm > 0.5 * settings.tolerance * r0) {
+        const PcgResult cgw = solvePcg(n, applyJ, *pre, wallRhs.data(), wallDelta.data(),
+                                       settings.wallPredictionTolerance, settings.maxCgIterations, project, &pcgWork,
+                                       applyJDot);
+        rec.wallCgIterations = cgw.iterations;
+        rec.cgIterations += cgw.iterations;
+        rep.cgIterations += cgw.iterations;
+        if (!cgw.breakdown) {
+          forEach(n, [&](std::size_t m) { delta[m] += wallDelta[m]; });
+          forWall([&](std::size_t w) { delta[wall[w]] = wallMove[w]; });
+          coupled = true;
+        }
       }
-    };
-    const Slopes slopes = deterministicSum<Slopes>(n, [&](std::size_t m) {
-      const double d = delta[m], kd = Kdelta[m], kp = Kphi[m];
-      trial[m] = phi[m] + d;
-      Ftrial[m] = Ktrial[m] = kp + kd;
-      return Slopes{d * F[m], d * kp, d * kd};
-    });
-    const double g0 = slopes.g0;
-    if (cg.breakdown || !(g0 < 0)) {
+      rec.secondsWallPrediction = secondsSince(tp);
+    }
+    tp = Clock::now();
+    Slopes slopes = formTrial();
+    if (cg.breakdown || (!coupled && !(slopes.g0 < 0))) {
       rep.status = SolveStatus::LinearSolverFailed;
       rep.history.push_back(rec);
       rep.message = concat("CG ", cg.breakdown ? "broke down" : "returned a non-descent step", " at Newton iteration ",
@@ -313,64 +374,102 @@ FieldSolveReport solveField(MagnetostaticProblem& problem, std::vector<double>& 
       break;
     }
 
-    // Line search on E(phi + lambda delta) - E(phi) = lambda s1 + lambda^2 s2 / 2 + dW.
-    const double s1 = slopes.s1, s2 = slopes.s2;
-    const double armijoSlope = settings.armijo * g0;
-    // Sufficient decrease: on the energy while it resolves the step, else on
-    // the residual norm (`Ft` = residual at the trial point).
-    const auto accept = [&](double lambda, double dE, double absW, const std::function<double()>& trialNorm,
-                            bool* residualMerit) {
-      const double noise = 64.0 * std::numeric_limits<double>::epsilon() *
-                           (absW + ev.materialEnergyAbs + std::fabs(lambda * s1) + 0.5 * lambda * lambda * std::fabs(s2));
-      if (!std::isfinite(dE)) return false;
-      if (std::fabs(dE) > noise) return dE <= lambda * armijoSlope;
-      *residualMerit = true;
-      return trialNorm() <= (1.0 - settings.armijo * lambda) * fn;
-    };
     // Full step first, evaluated with the Jacobian: when accepted (nearly
     // always) this is the next iteration's evaluation.
     double lambda = 1.0;
     bool accepted = false;
     MagnetostaticProblem::Evaluation evT = problem.evaluate(trial.data(), Ftrial.data(), true, Ftrial.data());
-    double dE = s1 + 0.5 * s2 + (evT.materialEnergy - ev.materialEnergy);
-    {
-      bool rm = false;
-      accepted = evT.finite && accept(1.0, dE, evT.materialEnergyAbs, [&] { return norm(Ftrial); }, &rm);
-      rec.residualMerit = rm && accepted;
-    }
-    if (accepted) {
-      phi.swap(trial);
-      F.swap(Ftrial);
-      Kphi.swap(Ktrial);
-      ev = std::move(evT);
-    } else {
-      for (int cut = 1; cut <= settings.maxLineSearchCuts && !accepted; ++cut) {
-        // Safeguarded quadratic backtracking.
-        double next = 0.5 * lambda;
-        if (std::isfinite(dE)) {
-          const double denom = 2.0 * (dE - g0 * lambda);
-          if (denom > 0) next = -g0 * lambda * lambda / denom;
+    if (coupled) {
+      // The step changed the wall too, so the energy of the fixed-wall
+      // problem is no merit for it: it is accepted when the residual with
+      // the wall updated at the trial point (the next iteration's) decreases.
+      const std::vector<double> savedPrev = wallPrev;
+      const int savedUpdates = wallUpdates;
+      if (evT.finite) {
+        updateWall(trial, Ftrial, Ktrial, evT);
+        const double ft = norm(Ftrial);
+        accepted = evT.finite && std::isfinite(ft) && ft <= (1.0 - settings.armijo) * fn;
+      }
+      if (accepted) {
+        phi.swap(trial);
+        F.swap(Ftrial);
+        Kphi.swap(Ktrial);
+        ev = std::move(evT);
+        wallCurrent = true;
+        rec.wallPredicted = true;
+        rec.residualMerit = true;
+      } else {
+        // Back to the Newton step alone, with the wall fixed.
+        wallPrev = savedPrev;
+        wallUpdates = savedUpdates;
+        forEach(n, [&](std::size_t m) { delta[m] -= wallDelta[m]; });
+        forWall([&](std::size_t w) { delta[wall[w]] = 0.0; });
+        slopes = formTrial();
+        if (!(slopes.g0 < 0)) {
+          rep.status = SolveStatus::LinearSolverFailed;
+          rep.history.push_back(rec);
+          rep.message = concat("CG returned a non-descent step at Newton iteration ", it, " (", cg.iterations,
+                               " CG iterations, relative residual ", cg.relativeResidual, ")");
+          break;
         }
-        lambda = std::clamp(next, 0.1 * lambda, 0.5 * lambda);
-        ++rec.lineSearchCuts;
-        double absW = 0;
-        const double Wl = problem.materialEnergyAlong(phi.data(), delta.data(), lambda, &absW);
-        dE = lambda * s1 + 0.5 * lambda * lambda * s2 + (Wl - ev.materialEnergy);
+        evT = problem.evaluate(trial.data(), Ftrial.data(), true, Ftrial.data());
+      }
+    }
+    if (!accepted) {
+      // Line search on E(phi + lambda delta) - E(phi) = lambda s1 + lambda^2 s2 / 2 + dW.
+      const double g0 = slopes.g0, s1 = slopes.s1, s2 = slopes.s2;
+      const double armijoSlope = settings.armijo * g0;
+      // Sufficient decrease: on the energy while it resolves the step, else on
+      // the residual norm (`Ft` = residual at the trial point).
+      const auto accept = [&](double lam, double dE, double absW, const std::function<double()>& trialNorm,
+                              bool* residualMerit) {
+        const double noise = 64.0 * std::numeric_limits<double>::epsilon() *
+                             (absW + ev.materialEnergyAbs + std::fabs(lam * s1) + 0.5 * lam * lam * std::fabs(s2));
+        if (!std::isfinite(dE)) return false;
+        if (std::fabs(dE) > noise) return dE <= lam * armijoSlope;
+        *residualMerit = true;
+        return trialNorm() <= (1.0 - settings.armijo * lam) * fn;
+      };
+      double dE = s1 + 0.5 * s2 + (evT.materialEnergy - ev.materialEnergy);
+      {
         bool rm = false;
-        accepted = accept(lambda, dE, absW, [&] {
-          forEach(n, [&](std::size_t m) { trial[m] = phi[m] + lambda * delta[m]; });
-          const auto e = problem.evaluate(trial.data(), Ftrial.data(), false);
-          return e.finite ? norm(Ftrial) : std::numeric_limits<double>::infinity();
-        }, &rm);
+        accepted = evT.finite && accept(1.0, dE, evT.materialEnergyAbs, [&] { return norm(Ftrial); }, &rm);
         rec.residualMerit = rm && accepted;
       }
       if (accepted) {
-        forEach(n, [&](std::size_t m) {
-          phi[m] += lambda * delta[m];
-          Kphi[m] += lambda * Kdelta[m];
-        });
-        if (project) project(phi.data());  // a constant shift: K phi is unchanged (rows sum to 0)
-        ev = problem.evaluate(phi.data(), F.data(), true, Kphi.data());
+        phi.swap(trial);
+        F.swap(Ftrial);
+        Kphi.swap(Ktrial);
+        ev = std::move(evT);
+      } else {
+        for (int cut = 1; cut <= settings.maxLineSearchCuts && !accepted; ++cut) {
+          // Safeguarded quadratic backtracking.
+          double next = 0.5 * lambda;
+          if (std::isfinite(dE)) {
+            const double denom = 2.0 * (dE - g0 * lambda);
+            if (denom > 0) next = -g0 * lambda * lambda / denom;
+          }
+          lambda = std::clamp(next, 0.1 * lambda, 0.5 * lambda);
+          ++rec.lineSearchCuts;
+          double absW = 0;
+          const double Wl = problem.materialEnergyAlong(phi.data(), delta.data(), lambda, &absW);
+          dE = lambda * s1 + 0.5 * lambda * lambda * s2 + (Wl - ev.materialEnergy);
+          bool rm = false;
+          accepted = accept(lambda, dE, absW, [&] {
+            forEach(n, [&](std::size_t m) { trial[m] = phi[m] + lambda * delta[m]; });
+            const auto e = problem.evaluate(trial.data(), Ftrial.data(), false);
+            return e.finite ? norm(Ftrial) : std::numeric_limits<double>::infinity();
+          }, &rm);
+          rec.residualMerit = rm && accepted;
+        }
+        if (accepted) {
+          forEach(n, [&](std::size_t m) {
+            phi[m] += lambda * delta[m];
+            Kphi[m] += lambda * Kdelta[m];
+          });
+          if (project) project(phi.data());  // a constant shift: K phi is unchanged (rows sum to 0)
+          ev = problem.evaluate(phi.data(), F.data(), true, Kphi.data());
+        }
       }
     }
     rep.lineSearchCuts += rec.lineSearchCuts;

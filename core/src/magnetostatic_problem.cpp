@@ -408,6 +408,41 @@ double MagnetostaticProblem::materialEnergyAlong(const double* phi, const double
   return e.s;
 }
 
+std::vector<Multipole> MagnetostaticProblem::linearizedMultipoles(const double* dphi) const {
+  const double h = grid_.dx, w = grid_.cellVolume() / 8.0;
+  const double g0 = q1::gaussAbscissa(0), g1 = q1::gaussAbscissa(1);
+  std::vector<Multipole> out(blockCentre_.size());
+  tbb::parallel_for(std::size_t(0), blockCentre_.size(), [&](std::size_t b) {
+    Multipole& mp = out[b];
+    mp.centre = blockCentre_[b];
+    for (std::size_t m = blockStart_[b]; m < blockStart_[b + 1]; ++m) {
+      const std::size_t s = blockCells_[m];
+      double pc[8];
+      gatherCorners(cellBase_[s], dphi, pc);
+      double gradient[8][3];
+      q1::gaussGradients(pc, gradient);
+      // sum_q w dH_q and the same over the Gauss points with bit a set; dM
+      // is linear in dH with the cell's constant tensor.
+      Vec3d all, upper[3];
+      for (int q = 0; q < 8; ++q) {
+        const Vec3d dH{-gradient[q][0] / h, -gradient[q][1] / h, -gradient[q][2] / h};
+        all += dH;
+        for (int axis = 0; axis < 3; ++axis)
+          if ((q >> axis) & 1) upper[axis] += dH;
+      }
+      const SymMat3d& T = cellTensor_[s];
+      const Vec3d dip = w * (T * all);
+      Vec3d up[3];
+      for (int a = 0; a < 3; ++a) up[a] = w * (T * upper[a]);
+      const Vec3d rel = cellOrigin(cellBase_[s]) - mp.centre;
+      mp.dipole += dip;
+      for (int i = 0; i < 3; ++i)
+        for (int a = 0; a < 3; ++a) mp.quadrupole[i][a] += dip[i] * (rel[a] + h * g0) + h * (g1 - g0) * up[a][i];
+    }
+  });
+  return out;
+}
+
 void MagnetostaticProblem::applyOpenBoundary(const std::vector<Multipole>& multipoles, double* phi) const {
   if (boundary_ != BoundaryKind::Open) return;
   // The far-field potential is smooth on the wall on the scale of the

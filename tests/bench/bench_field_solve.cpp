@@ -8,6 +8,7 @@
 //   lodestone-bench-field-solve [--sizes 64,128] [--fields 1e4,1e5] [--csv FILE]
 //                               [--preconditioner multigrid|jacobi] [--tolerance 1e-8]
 //                               [--crop M] [--history] [--law langevin|linear]
+//                               [--wall-prediction on|off] [--wall-tolerance X]
 //
 // --crop M adds, per case, a cold solve on the material's bounding box plus
 // M free cells (what the effects planner's active region does) and the
@@ -89,6 +90,13 @@ int main(int argc, char** argv) {
         else if (p == "multigrid") settings.solve.preconditioner = PreconditionerKind::Multigrid;
         else throw InvalidArgument(concat("--preconditioner: expected jacobi or multigrid, got '", p, "'"));
       } else if (arg == "--tolerance") settings.solve.tolerance = parseList(next(), "--tolerance").at(0);
+      else if (arg == "--wall-prediction") {
+        const std::string w = next();
+        if (w == "on") settings.solve.predictWall = true;
+        else if (w == "off") settings.solve.predictWall = false;
+        else throw InvalidArgument(concat("--wall-prediction: expected on or off, got '", w, "'"));
+      } else if (arg == "--wall-tolerance")
+        settings.solve.wallPredictionTolerance = parseList(next(), "--wall-tolerance").at(0);
       else if (arg == "--help" || arg == "-h") {
         std::printf(
             "lodestone-bench-field-solve: times the nonlinear field solve\n"
@@ -99,7 +107,9 @@ int main(int argc, char** argv) {
             "  --csv FILE        CSV output (default bench_field_solve.csv)\n"
             "  --history         print every Newton iteration\n"
             "  --law L           langevin (default) or linear (the paper's chi0 = 0.91 linearization)\n"
-            "  --crop M          also solve on the material box plus M cells and compare H\n");
+            "  --crop M          also solve on the material box plus M cells and compare H\n"
+            "  --wall-prediction on|off  move the open wall with each Newton step (default on)\n"
+            "  --wall-tolerance X  relative CG tolerance of the wall-response solve (default 0.1)\n");
         return 0;
       } else {
         throw InvalidArgument(concat("unknown option '", arg, "' (see --help)"));
@@ -113,10 +123,12 @@ int main(int argc, char** argv) {
     require(bool(csv), "cannot write ", csvPath);
     csv << "body,nodes_per_axis,H0_A_per_m,start,newton_iterations,cg_iterations,line_search_cuts,relative_residual,"
            "status,material_cells,seconds_solve,seconds_stage,threads,tolerance,seconds_initial,seconds_wall,"
-           "seconds_setup,seconds_cg,seconds_line_search,law\n";
+           "seconds_setup,seconds_cg,seconds_line_search,law,wall_prediction,seconds_wall_prediction\n";
     const int threads = tbb::info::default_concurrency();
-    std::printf("Lodestone field-solve benchmark (%d threads, %s law, preconditioner %s, tolerance %.0e)\n", threads,
-                linear ? "linear" : "Langevin", toString(settings.solve.preconditioner), settings.solve.tolerance);
+    std::printf("Lodestone field-solve benchmark (%d threads, %s law, preconditioner %s, tolerance %.0e, wall "
+                "prediction %s)\n",
+                threads, linear ? "linear" : "Langevin", toString(settings.solve.preconditioner),
+                settings.solve.tolerance, settings.solve.predictWall ? "on" : "off");
     std::printf("%-6s %5s %8s %5s %7s %6s %5s %10s %9s %9s\n", "body", "N", "H0", "start", "newton", "cg", "cuts",
                 "residual", "solve s", "stage s");
     for (double sN : sizes)
@@ -145,11 +157,11 @@ int main(int argc, char** argv) {
                         r.converged() ? "" : "  NOT CONVERGED");
             if (history)
               for (const NewtonIterationRecord& h : r.solve.history)
-                std::printf("    newton %2d  residual %9.2e  eta %8.1e  cg %3d (%8.1e)  step %5.3f  cuts %d  %.3f s"
-                            "  (wall %.3f, set-up %.3f, cg %.3f, line search %.3f)\n",
-                            h.iteration, h.relativeResidual, h.forcing, h.cgIterations, h.cgRelativeResidual, h.step,
-                            h.lineSearchCuts, h.seconds, h.secondsWall, h.secondsSetup, h.secondsCg,
-                            h.secondsLineSearch);
+                std::printf("    newton %2d  residual %9.2e  eta %8.1e  cg %3d (%8.1e, wall %d)  step %5.3f%s  cuts %d"
+                            "  %.3f s  (wall %.3f, set-up %.3f, cg %.3f, wall prediction %.3f, line search %.3f)\n",
+                            h.iteration, h.relativeResidual, h.forcing, h.cgIterations, h.cgRelativeResidual,
+                            h.wallCgIterations, h.step, h.wallPredicted ? "+wall" : "", h.lineSearchCuts, h.seconds,
+                            h.secondsWall, h.secondsSetup, h.secondsCg, h.secondsWallPrediction, h.secondsLineSearch);
             std::fflush(stdout);
             if (crop > 0 && pass == 0) {
               // The material's box plus `crop` free cells, cold.
@@ -197,15 +209,16 @@ int main(int argc, char** argv) {
                 << r.secondsTotal << ',' << threads << ',' << settings.solve.tolerance << ',' << r.solve.secondsInitial;
             {
               // Solve time by phase, summed over the Newton iterations.
-              double wall = 0, setup = 0, cgs = 0, search = 0;
+              double wall = 0, setup = 0, cgs = 0, search = 0, predict = 0;
               for (const NewtonIterationRecord& h : r.solve.history) {
                 wall += h.secondsWall;
+                predict += h.secondsWallPrediction;
                 setup += h.secondsSetup;
                 cgs += h.secondsCg;
                 search += h.secondsLineSearch;
               }
               csv << ',' << wall << ',' << setup << ',' << cgs << ',' << search << ',' << (linear ? "linear" : "langevin")
-                  << '\n';
+                  << ',' << (settings.solve.predictWall ? "on" : "off") << ',' << predict << '\n';
             }
           }
         }

@@ -327,3 +327,85 @@ TEST(FeOperator, FusedJacobianProductAndDotEqualTheSeparateOnes) {
     EXPECT_GT(dot, 0) << toString(b);
   }
 }
+
+namespace {
+// Relative difference of two block-multipole lists (dipoles and quadrupoles
+// together), on the scale of the larger.
+double multipoleDifference(const std::vector<Multipole>& a, const std::vector<Multipole>& b) {
+  double diff = 0, scale = 0;
+  for (std::size_t m = 0; m < a.size(); ++m) {
+    diff += norm2(a[m].dipole - b[m].dipole);
+    scale += std::max(norm2(a[m].dipole), norm2(b[m].dipole));
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j) {
+        const double d = a[m].quadrupole[i][j] - b[m].quadrupole[i][j];
+        diff += d * d / 1e-4;  // N is a dipole times a length (~1 cm here)
+        scale += std::max(a[m].quadrupole[i][j] * a[m].quadrupole[i][j], b[m].quadrupole[i][j] * b[m].quadrupole[i][j]) / 1e-4;
+      }
+  }
+  return std::sqrt(diff / scale);
+}
+}  // namespace
+
+TEST(FeOperator, LinearizedMultipolesAreTheFirstOrderChangeOfTheEvaluatedOnes) {
+  // Material everywhere at one density, so that dM/dH is the same at the 8
+  // Gauss points of a cell where the field is (the linear law everywhere;
+  // the Langevin law at phi = 0 in a uniform applied field): there the
+  // cell-mean tensor is exact and linearizedMultipoles(dphi) must equal the
+  // change of Evaluation::multipoles to first order.
+  GridSpec g;
+  g.dx = 0.01;
+  g.dims = {20, 18, 17};  // more than one multipole block along each axis
+  const DenseGrid<double> n(g, paperMaterial().numberDensity);
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> U(-1, 1);
+  std::vector<double> dphi(g.nodeCount());
+  for (double& v : dphi) v = 30.0 * U(rng);
+  std::vector<double> F(g.nodeCount());
+  const auto multipolesAt = [&](MagnetostaticProblem& p, const std::vector<double>& phi) {
+    return p.evaluate(phi.data(), F.data(), true).multipoles;
+  };
+  {
+    MagnetostaticProblem p(g, linearized(paperMaterial()).law, BoundaryKind::Open);
+    p.setMaterial(n.view(), uniform({2e4, -1e4, 6e4}));
+    std::vector<double> phi(g.nodeCount());
+    for (double& v : phi) v = 200.0 * U(rng);
+    std::vector<double> shifted(phi);
+    for (std::size_t m = 0; m < phi.size(); ++m) shifted[m] += dphi[m];
+    const std::vector<Multipole> after = multipolesAt(p, shifted);
+    const std::vector<Multipole> before = multipolesAt(p, phi);  // the tensors at phi (the same: linear)
+    ASSERT_GT(p.multipoleBlockCount(), 1u);
+    std::vector<Multipole> change = after;
+    for (std::size_t b = 0; b < change.size(); ++b) {
+      change[b].dipole = after[b].dipole - before[b].dipole;
+      for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j) change[b].quadrupole[i][j] = after[b].quadrupole[i][j] - before[b].quadrupole[i][j];
+    }
+    const std::vector<Multipole> lin = p.linearizedMultipoles(dphi.data());
+    ASSERT_EQ(lin.size(), change.size());
+    for (std::size_t b = 0; b < lin.size(); ++b) EXPECT_EQ(norm(lin[b].centre - before[b].centre), 0.0);
+    EXPECT_LT(multipoleDifference(lin, change), 1e-11);
+  }
+  {
+    MagnetostaticProblem p(g, paperMaterial().law, BoundaryKind::Open);
+    p.setMaterial(n.view(), uniform({1e4, 3e4, -5e4}));
+    const std::vector<double> zero(g.nodeCount(), 0.0);
+    const double eps = 1e-3;
+    std::vector<double> plus(g.nodeCount()), minus(g.nodeCount());
+    for (std::size_t m = 0; m < zero.size(); ++m) {
+      plus[m] = eps * dphi[m];
+      minus[m] = -eps * dphi[m];
+    }
+    std::vector<Multipole> fd = multipolesAt(p, plus);
+    const std::vector<Multipole> lo = multipolesAt(p, minus);
+    for (std::size_t b = 0; b < fd.size(); ++b) {
+      fd[b].dipole = (fd[b].dipole - lo[b].dipole) / (2 * eps);
+      for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j) fd[b].quadrupole[i][j] = (fd[b].quadrupole[i][j] - lo[b].quadrupole[i][j]) / (2 * eps);
+    }
+    multipolesAt(p, zero);  // the tensors at phi = 0
+    const double err = multipoleDifference(p.linearizedMultipoles(dphi.data()), fd);
+    EXPECT_LT(err, 1e-6);
+    EXPECT_GT(err, 0.0);  // a genuine finite difference, not the same numbers
+  }
+}

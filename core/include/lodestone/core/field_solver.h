@@ -32,6 +32,14 @@ struct FieldSolveSettings {
   double armijo = 1e-4;           ///< sufficient-decrease constant
   PreconditionerKind preconditioner = PreconditionerKind::Multigrid;
   MultigridSettings multigrid;    ///< used by PreconditionerKind::Multigrid
+  /// Open wall: each Newton step also predicts how its change of M moves the
+  /// far-field wall values (linearized block multipoles) and solves for the
+  /// interior's response to that move, so that the wall no longer lags one
+  /// iteration behind M (docs/physics.md, "Open wall"). false: the wall
+  /// follows M one iteration late (more Newton steps, no extra CG solve).
+  bool predictWall = true;
+  /// Relative CG tolerance of that response solve, in (0, 1).
+  double wallPredictionTolerance = 0.1;
 
   /// Throws InvalidArgument naming the first bad value.
   void validate() const;
@@ -58,11 +66,15 @@ struct NewtonIterationRecord {
   double step = 0;              ///< accepted line-search step lambda
   int lineSearchCuts = 0;
   bool residualMerit = false;   ///< step accepted on the residual norm (energy at round-off)
+  bool wallPredicted = false;   ///< the step moved the open wall with it (FieldSolveSettings::predictWall)
+  int wallCgIterations = 0;     ///< CG iterations of the wall-response solve (also in cgIterations)
   double seconds = 0;           ///< wall time of the iteration, of which:
   double secondsWall = 0;       ///<   open-wall update (far-field sum and residual correction)
+  double secondsWallPrediction = 0;  ///< wall prediction (linearized far-field sum, response CG)
   double secondsSetup = 0;      ///<   preconditioner set-up
   double secondsCg = 0;         ///<   preconditioned CG
   double secondsLineSearch = 0; ///<   line search, including the evaluation at the accepted point
+                                ///<   (and, for a predicted wall, the wall update there)
 };
 
 struct FieldSolveReport {
@@ -91,7 +103,7 @@ using SolveProgress = std::function<bool(const NewtonIterationRecord&)>;
 /// then only refreshes its values when the grid and the material cells are
 /// unchanged. Results are the same with or without it.
 struct FieldSolveWorkspace {
-  std::vector<double> F, Fref, delta, work, trial, lastGood, Ftrial, Kphi, Kdelta, Ktrial;
+  std::vector<double> F, Fref, delta, work, trial, lastGood, Ftrial, Kphi, Kdelta, Ktrial, wallRhs, wallDelta;
   PcgWorkspace pcg;
   std::unique_ptr<Preconditioner> preconditioner;
   PreconditionerKind kind = PreconditionerKind::Jacobi;  ///< what `preconditioner` is

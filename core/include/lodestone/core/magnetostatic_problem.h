@@ -126,6 +126,14 @@ class MagnetostaticProblem {
   /// fixed nodes of phi.
   void applyOpenBoundary(const std::vector<Multipole>& multipoles, double* phi) const;
 
+  /// Block multipoles of the first-order change of M when phi changes by
+  /// dphi (one value per node), at the last evaluate(..., true):
+  /// dM = (dM/dH) dH with dH = -grad dphi at each Gauss point and dM/dH the
+  /// cell's mean tensor (materialCellTensor). The same blocks and centres
+  /// as Evaluation::multipoles; applyOpenBoundary of the result predicts how
+  /// the wall values will move.
+  std::vector<Multipole> linearizedMultipoles(const double* dphi) const;
+
   /// Smallest edge of the multipole blocks, in cells.
   static constexpr int kMultipoleBlock = 8;
   /// Edge of the multipole blocks of the current material, in cells.
