@@ -48,12 +48,22 @@ PcgResult solvePcg(std::size_t n, const std::function<void(const double*, double
   ws.p.resize(n);
   ws.Ap.resize(n);
   std::vector<double>&r = ws.r, &z = ws.z, &p = ws.p, &Ap = ws.Ap;
-  forEach(n, [&](std::size_t m) {
-    r[m] = b[m];
-    x[m] = 0.0;
-  });
-  if (project) project(r.data());
-  const double bnorm = std::sqrt(deterministicDot(r.data(), r.data(), n));
+  double bnorm2;
+  if (project) {
+    forEach(n, [&](std::size_t m) {
+      r[m] = b[m];
+      x[m] = 0.0;
+    });
+    project(r.data());
+    bnorm2 = deterministicDot(r.data(), r.data(), n);
+  } else {
+    bnorm2 = deterministicSum<double>(n, [&](std::size_t m) {
+      r[m] = b[m];
+      x[m] = 0.0;
+      return r[m] * r[m];
+    });
+  }
+  const double bnorm = std::sqrt(bnorm2);
   if (!(bnorm > 0)) {
     res.converged = std::isfinite(bnorm);
     res.breakdown = !std::isfinite(bnorm);
@@ -69,7 +79,7 @@ PcgResult solvePcg(std::size_t n, const std::function<void(const double*, double
     return preconditioner.applyDot(n, r.data(), z.data());
   };
   double rz = precondition();
-  forEach(n, [&](std::size_t m) { p[m] = z[m]; });
+  p.swap(z);  // p = z; z is overwritten by the next precondition()
   double rnorm = bnorm;
   while (res.iterations < maxIterations) {
     double pAp;
