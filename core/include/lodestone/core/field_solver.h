@@ -35,8 +35,9 @@ struct FieldSolveSettings {
   /// Open wall: each Newton step also predicts how its change of M moves the
   /// far-field wall values (linearized block multipoles) and solves for the
   /// interior's response to that move, so that the wall no longer lags one
-  /// iteration behind M (docs/physics.md, "Open wall"). false: the wall
-  /// follows M one iteration late (more Newton steps, no extra CG solve).
+  /// iteration behind M (docs/physics.md, "Open wall inside the Newton
+  /// step"). Multigrid only, and not when material touches the wall. false:
+  /// the wall follows M one iteration late (more Newton steps, no extra CG solve).
   bool predictWall = true;
   /// Relative CG tolerance of that response solve, in (0, 1).
   double wallPredictionTolerance = 0.1;
