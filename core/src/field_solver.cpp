@@ -314,7 +314,7 @@ FieldSolveReport solveField(MagnetostaticProblem& problem, std::vector<double>& 
     // with Jacobi: its response solve takes tens of CG iterations, and its
     // Newton steps are limited by the smooth error an early-stopped
     // Jacobi-CG leaves, not by the wall (measured at 128^3: 5-7 Newton
-    // steps either way, 20-50% more CG iterations with the prediction).
+    // steps either way, CG iterations -15% to +48% with the prediction).
     const bool predicting = open && settings.predictWall && !wall.empty() &&
                             problem.materialWallClearance() >= 1 &&
                             settings.preconditioner == PreconditionerKind::Multigrid;
