@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "lodestone/core/error.h"
+#include "lodestone/core/line_search.h"
 
 namespace lodestone {
 namespace gpu {
@@ -293,12 +294,7 @@ FieldSolveReport runNewton(FieldBackend& be, double* phiIn, const FieldSolveSett
       ev = evT;
     } else {
       for (int cut = 1; cut <= settings.maxLineSearchCuts && !accepted; ++cut) {
-        double next = 0.5 * lambda;
-        if (std::isfinite(dE)) {
-          const double denom = 2.0 * (dE - g0 * lambda);
-          if (denom > 0) next = -g0 * lambda * lambda / denom;
-        }
-        lambda = std::clamp(next, 0.1 * lambda, 0.5 * lambda);
+        lambda = backtrackedStep(dE, g0, lambda);
         ++cuts;
         double absW = 0;
         const double Wl = be.energyAlong(phi, delta, lambda, &absW);
