@@ -9,6 +9,7 @@
 #include <tbb/parallel_for.h>
 
 #include "lodestone/core/error.h"
+#include "lodestone/core/line_search.h"
 #include "lodestone/core/parallel.h"
 
 namespace lodestone {
@@ -162,7 +163,7 @@ FieldSolveReport solveField(MagnetostaticProblem& problem, std::vector<double>& 
   const bool open = problem.boundary() == BoundaryKind::Open;
   const std::vector<std::size_t> wall = problem.fixedNodes();
   std::vector<double> wallOld(wall.size()), wallStep(wall.size()), wallPrev(wall.size(), 0.0),
-      wallMove(wall.size());
+      wallPrevSaved(wall.size()), wallMove(wall.size());
   int wallUpdates = 0;
   const auto forWall = [&](const auto& fn) {
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, wall.size(), 1 << 12),
@@ -305,19 +306,20 @@ FieldSolveReport solveField(MagnetostaticProblem& problem, std::vector<double>& 
       }
     }
     eta = std::max(eta, floorEta);
+    // The wall is predicted (below) except when material touches it (its
+    // wall nodes then also enter the material rows, which the vacuum
+    // coupling K_fw leaves out) and with Jacobi: its response solve takes
+    // tens of CG iterations, and its Newton steps are limited by the smooth
+    // error an early-stopped Jacobi-CG leaves, not by the wall (measured at
+    // 128^3: 5-7 Newton steps either way, CG iterations -15% to +48% with
+    // the prediction).
+    const bool predicting = open && settings.predictWall && !wall.empty() &&
+                            problem.materialWallClearance() >= 1 &&
+                            settings.preconditioner == PreconditionerKind::Multigrid;
     // With the wall predicted, a step reduces the residual by about its
     // forcing, so when the forcing that reaches the tolerance in this step
     // is within 30x of eta (one or two more CG iterations with multigrid),
     // that is cheaper than another Newton step.
-    // Not when material touches the wall (its wall nodes then also enter
-    // the material rows, which the vacuum coupling K_fw leaves out), and not
-    // with Jacobi: its response solve takes tens of CG iterations, and its
-    // Newton steps are limited by the smooth error an early-stopped
-    // Jacobi-CG leaves, not by the wall (measured at 128^3: 5-7 Newton
-    // steps either way, CG iterations -15% to +48% with the prediction).
-    const bool predicting = open && settings.predictWall && !wall.empty() &&
-                            problem.materialWallClearance() >= 1 &&
-                            settings.preconditioner == PreconditionerKind::Multigrid;
     if (predicting && floorEta < eta && floorEta >= eta / 30.0) eta = floorEta;
     rec.forcing = eta;
 
@@ -370,12 +372,22 @@ FieldSolveReport solveField(MagnetostaticProblem& problem, std::vector<double>& 
       rec.secondsWallPrediction = secondsSince(tp);
     }
     tp = Clock::now();
-    Slopes slopes = formTrial();
-    if (cg.breakdown || (!coupled && !(slopes.g0 < 0))) {
+    const auto linearSolverFailed = [&] {
       rep.status = SolveStatus::LinearSolverFailed;
       rep.history.push_back(rec);
       rep.message = concat("CG ", cg.breakdown ? "broke down" : "returned a non-descent step", " at Newton iteration ",
                            it, " (", cg.iterations, " CG iterations, relative residual ", cg.relativeResidual, ")");
+    };
+    // The trial point becomes the iterate, its evaluation the next iteration's.
+    const auto takeTrial = [&](MagnetostaticProblem::Evaluation& e) {
+      phi.swap(trial);
+      F.swap(Ftrial);
+      Kphi.swap(Ktrial);
+      ev = std::move(e);
+    };
+    Slopes slopes = formTrial();
+    if (cg.breakdown || (!coupled && !(slopes.g0 < 0))) {
+      linearSolverFailed();
       break;
     }
 
@@ -388,7 +400,7 @@ FieldSolveReport solveField(MagnetostaticProblem& problem, std::vector<double>& 
       // The step changed the wall too, so the energy of the fixed-wall
       // problem is no merit for it: it is accepted when the residual with
       // the wall updated at the trial point (the next iteration's) decreases.
-      const std::vector<double> savedPrev = wallPrev;
+      wallPrevSaved = wallPrev;
       const int savedUpdates = wallUpdates;
       if (evT.finite) {
         updateWall(trial, Ftrial, Ktrial, evT);
@@ -396,25 +408,19 @@ FieldSolveReport solveField(MagnetostaticProblem& problem, std::vector<double>& 
         accepted = evT.finite && std::isfinite(ft) && ft <= (1.0 - settings.armijo) * fn;
       }
       if (accepted) {
-        phi.swap(trial);
-        F.swap(Ftrial);
-        Kphi.swap(Ktrial);
-        ev = std::move(evT);
+        takeTrial(evT);
         wallCurrent = true;
         rec.wallPredicted = true;
         rec.residualMerit = true;
       } else {
         // Back to the Newton step alone, with the wall fixed.
-        wallPrev = savedPrev;
+        wallPrev.swap(wallPrevSaved);
         wallUpdates = savedUpdates;
         forEach(n, [&](std::size_t m) { delta[m] -= wallDelta[m]; });
         forWall([&](std::size_t w) { delta[wall[w]] = 0.0; });
         slopes = formTrial();
         if (!(slopes.g0 < 0)) {
-          rep.status = SolveStatus::LinearSolverFailed;
-          rep.history.push_back(rec);
-          rep.message = concat("CG returned a non-descent step at Newton iteration ", it, " (", cg.iterations,
-                               " CG iterations, relative residual ", cg.relativeResidual, ")");
+          linearSolverFailed();
           break;
         }
         evT = problem.evaluate(trial.data(), Ftrial.data(), true, Ftrial.data());
@@ -442,19 +448,10 @@ FieldSolveReport solveField(MagnetostaticProblem& problem, std::vector<double>& 
         rec.residualMerit = rm && accepted;
       }
       if (accepted) {
-        phi.swap(trial);
-        F.swap(Ftrial);
-        Kphi.swap(Ktrial);
-        ev = std::move(evT);
+        takeTrial(evT);
       } else {
         for (int cut = 1; cut <= settings.maxLineSearchCuts && !accepted; ++cut) {
-          // Safeguarded quadratic backtracking.
-          double next = 0.5 * lambda;
-          if (std::isfinite(dE)) {
-            const double denom = 2.0 * (dE - g0 * lambda);
-            if (denom > 0) next = -g0 * lambda * lambda / denom;
-          }
-          lambda = std::clamp(next, 0.1 * lambda, 0.5 * lambda);
+          lambda = backtrackedStep(dE, g0, lambda);
           ++rec.lineSearchCuts;
           double absW = 0;
           const double Wl = problem.materialEnergyAlong(phi.data(), delta.data(), lambda, &absW);

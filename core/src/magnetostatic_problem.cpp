@@ -20,6 +20,21 @@ namespace lodestone {
 namespace {
 constexpr q1::Tables kQ1 = q1::makeTables();
 
+// A cell's moments about a block centre `rel` away from the cell's origin
+// (rel = origin - centre), from its dipole sum_q w M_q and upper[a], the
+// same sum over the Gauss points with bit a set (the upper abscissa on axis
+// a): the Gauss point at bits (qa, qb, qd) lies at o + dx (g[qa], g[qb],
+// g[qd]), so sum_q w M_q (x_q - c)_a = dipole (o - c)_a + dx (g0 dipole +
+// (g1 - g0) upper[a]). The centre field is left unset.
+Multipole cellMultipole(const Vec3d& dipole, const Vec3d upper[3], const Vec3d& rel, double h) {
+  const double g0 = q1::gaussAbscissa(0), g1 = q1::gaussAbscissa(1);
+  Multipole m;
+  m.dipole = dipole;
+  for (int i = 0; i < 3; ++i)
+    for (int a = 0; a < 3; ++a) m.quadrupole[i][a] = dipole[i] * (rel[a] + h * g0) + h * (g1 - g0) * upper[a][i];
+  return m;
+}
+
 struct EnergyTotals {
   double energy = 0, energyAbs = 0;
   bool finite = true;
@@ -293,15 +308,8 @@ MagnetostaticProblem::Evaluation MagnetostaticProblem::evaluate(const double* ph
       tensorSum *= 0.125;
       cellTensor_[s] = tensorSum;
     }
-    // Second moment about the block centre: the Gauss point at bits (qa, qb,
-    // qd) lies at o + dx (g[qa], g[qb], g[qd]), so sum_q w M_q (x_q - c)_a =
-    // dipole (o - c)_a + dx (g0 dipole + (g1 - g0) upper[a]).
-    const Vec3d rel = cellOrigin(cellBase_[s]) - blockCentre_[cellBlock_[s]];
-    const double g0 = q1::gaussAbscissa(0), g1 = q1::gaussAbscissa(1);
-    const Vec3d& dip = cs.multipole.dipole;
-    for (int i = 0; i < 3; ++i)
-      for (int a = 0; a < 3; ++a)
-        cs.multipole.quadrupole[i][a] = dip[i] * (rel[a] + h * g0) + h * (g1 - g0) * upper[a][i];
+    // Second moment about the block centre.
+    cs.multipole = cellMultipole(cs.multipole.dipole, upper, cellOrigin(cellBase_[s]) - blockCentre_[cellBlock_[s]], h);
     // Residual -fScale sum_q dN_qc . M_q, the transpose of the gradient.
     double res[8];
     q1::gaussDivergenceTranspose(Mq, res);
@@ -412,7 +420,6 @@ double MagnetostaticProblem::materialEnergyAlong(const double* phi, const double
 
 std::vector<Multipole> MagnetostaticProblem::linearizedMultipoles(const double* dphi) const {
   const double h = grid_.dx, w = grid_.cellVolume() / 8.0;
-  const double g0 = q1::gaussAbscissa(0), g1 = q1::gaussAbscissa(1);
   std::vector<Multipole> out(blockCentre_.size());
   tbb::parallel_for(std::size_t(0), blockCentre_.size(), [&](std::size_t b) {
     Multipole& mp = out[b];
@@ -436,10 +443,7 @@ std::vector<Multipole> MagnetostaticProblem::linearizedMultipoles(const double* 
       const Vec3d dip = w * (T * all);
       Vec3d up[3];
       for (int a = 0; a < 3; ++a) up[a] = w * (T * upper[a]);
-      const Vec3d rel = cellOrigin(cellBase_[s]) - mp.centre;
-      mp.dipole += dip;
-      for (int i = 0; i < 3; ++i)
-        for (int a = 0; a < 3; ++a) mp.quadrupole[i][a] += dip[i] * (rel[a] + h * g0) + h * (g1 - g0) * up[a][i];
+      mp += cellMultipole(dip, up, cellOrigin(cellBase_[s]) - mp.centre, h);
     }
   });
   return out;
