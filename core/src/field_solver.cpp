@@ -238,6 +238,8 @@ FieldSolveReport solveField(MagnetostaticProblem& problem, std::vector<double>& 
   // The wall of phi already holds the far field of ev's magnetization (a
   // step that predicted the wall updated it at the trial point).
   bool wallCurrent = false;
+  // ev's element matrices were not built (see aimsAtTolerance below).
+  bool jacobianDeferred = false;
   for (int it = 0;; ++it) {
     const auto ti = Clock::now();
     double secondsWall = 0;
@@ -325,6 +327,11 @@ FieldSolveReport solveField(MagnetostaticProblem& problem, std::vector<double>& 
 
     // Newton step.
     auto tp = Clock::now();
+    if (jacobianDeferred) {
+      ev = problem.evaluate(phi.data(), F.data(), true, Kphi.data());
+      jacobianDeferred = false;
+      rec.jacobianRebuilt = true;
+    }
     pre->update(problem);
     rec.secondsSetup = secondsSince(tp);
     tp = Clock::now();
@@ -345,6 +352,11 @@ FieldSolveReport solveField(MagnetostaticProblem& problem, std::vector<double>& 
     // own CG residual, or too small to keep the next iterate from meeting
     // the tolerance.
     bool coupled = false;
+    // The residual the step leaves if the linearization is exact (used to
+    // guess whether the trial will converge): what the CG solves left, plus
+    // the wall's move when it is not predicted. Unknown when the wall lags.
+    double expectedResidual = open && !predicting ? std::numeric_limits<double>::infinity()
+                                                  : cg.relativeResidual * fn;
     if (predicting && !cg.breakdown) {
       tp = Clock::now();
       problem.applyOpenBoundary(problem.linearizedMultipoles(delta.data()), wallDelta.data());
@@ -356,6 +368,7 @@ FieldSolveReport solveField(MagnetostaticProblem& problem, std::vector<double>& 
       problem.addWallCoupling(wallDelta.data(), wallRhs.data());
       const double moveNorm = norm(wallRhs);
       const double cgResidual = cg.relativeResidual * fn;
+      expectedResidual = cgResidual + moveNorm;
       if (std::isfinite(moveNorm) && moveNorm > cgResidual && cgResidual + moveNorm > 0.5 * settings.tolerance * r0) {
         const PcgResult cgw = solvePcg(n, applyJ, *pre, wallRhs.data(), wallDelta.data(),
                                        settings.wallPredictionTolerance, settings.maxCgIterations, project, &pcgWork,
@@ -367,6 +380,7 @@ FieldSolveReport solveField(MagnetostaticProblem& problem, std::vector<double>& 
           forEach(n, [&](std::size_t m) { delta[m] += wallDelta[m]; });
           forWall([&](std::size_t w) { delta[wall[w]] = wallMove[w]; });
           coupled = true;
+          expectedResidual = cgResidual + cgw.relativeResidual * moveNorm;
         }
       }
       rec.secondsWallPrediction = secondsSince(tp);
@@ -392,10 +406,18 @@ FieldSolveReport solveField(MagnetostaticProblem& problem, std::vector<double>& 
     }
 
     // Full step first, evaluated with the Jacobian: when accepted (nearly
-    // always) this is the next iteration's evaluation.
+    // always) this is the next iteration's evaluation. When the CG solves
+    // of a predicted-wall step left less than the tolerance, the trial
+    // nearly always meets it, and its Jacobian (about half an evaluation's
+    // cost) would go unused: it is deferred to the next iteration, which
+    // builds it only when the tolerance was missed after all.
     double lambda = 1.0;
     bool accepted = false;
-    MagnetostaticProblem::Evaluation evT = problem.evaluate(trial.data(), Ftrial.data(), true, Ftrial.data());
+    const bool aimsAtTolerance = settings.deferFinalJacobian && expectedResidual <= settings.tolerance * r0 &&
+                                 it + 1 < settings.maxNewtonIterations;
+    bool trialJacobian = !aimsAtTolerance;
+    MagnetostaticProblem::Evaluation evT =
+        problem.evaluate(trial.data(), Ftrial.data(), trialJacobian, Ftrial.data());
     if (coupled) {
       // The step changed the wall too, so the energy of the fixed-wall
       // problem is no merit for it: it is accepted when the residual with
@@ -412,6 +434,7 @@ FieldSolveReport solveField(MagnetostaticProblem& problem, std::vector<double>& 
         wallCurrent = true;
         rec.wallPredicted = true;
         rec.residualMerit = true;
+        jacobianDeferred = rec.jacobianDeferred = !trialJacobian;
       } else {
         // Back to the Newton step alone, with the wall fixed.
         wallPrev.swap(wallPrevSaved);
@@ -423,6 +446,7 @@ FieldSolveReport solveField(MagnetostaticProblem& problem, std::vector<double>& 
           linearSolverFailed();
           break;
         }
+        trialJacobian = true;
         evT = problem.evaluate(trial.data(), Ftrial.data(), true, Ftrial.data());
       }
     }
@@ -449,6 +473,7 @@ FieldSolveReport solveField(MagnetostaticProblem& problem, std::vector<double>& 
       }
       if (accepted) {
         takeTrial(evT);
+        jacobianDeferred = rec.jacobianDeferred = !trialJacobian;
       } else {
         for (int cut = 1; cut <= settings.maxLineSearchCuts && !accepted; ++cut) {
           lambda = backtrackedStep(dE, g0, lambda);

@@ -224,6 +224,12 @@ void MagnetostaticProblem::setMaterial(GridView<const double> n, const AppliedFi
     }
     blockCentre_[b] = c > 0 ? first / c : geo / double(blockStart_[b + 1] - blockStart_[b]);
   });
+  // Each cell's offset from its block's centre, for the second moments
+  // (evaluate, linearizedMultipoles).
+  cellFromCentre_.resize(cells);
+  tbb::parallel_for(std::size_t(0), cells, [&](std::size_t s) {
+    cellFromCentre_[s] = cellOrigin(cellBase_[s]) - blockCentre_[cellBlock_[s]];
+  });
 }
 
 template <typename CellFn>
@@ -309,7 +315,7 @@ MagnetostaticProblem::Evaluation MagnetostaticProblem::evaluate(const double* ph
       cellTensor_[s] = tensorSum;
     }
     // Second moment about the block centre.
-    cs.multipole = cellMultipole(cs.multipole.dipole, upper, cellOrigin(cellBase_[s]) - blockCentre_[cellBlock_[s]], h);
+    cs.multipole = cellMultipole(cs.multipole.dipole, upper, cellFromCentre_[s], h);
     // Residual -fScale sum_q dN_qc . M_q, the transpose of the gradient.
     double res[8];
     q1::gaussDivergenceTranspose(Mq, res);
@@ -443,7 +449,7 @@ std::vector<Multipole> MagnetostaticProblem::linearizedMultipoles(const double* 
       const Vec3d dip = w * (T * all);
       Vec3d up[3];
       for (int a = 0; a < 3; ++a) up[a] = w * (T * upper[a]);
-      mp += cellMultipole(dip, up, cellOrigin(cellBase_[s]) - mp.centre, h);
+      mp += cellMultipole(dip, up, cellFromCentre_[s], h);
     }
   });
   return out;

@@ -41,6 +41,12 @@ struct FieldSolveSettings {
   bool predictWall = true;
   /// Relative CG tolerance of that response solve, in (0, 1).
   double wallPredictionTolerance = 0.1;
+  /// A trial point that the step's CG solves leave below the tolerance is
+  /// evaluated without the Jacobian's element matrices (about half an
+  /// evaluation), which are built at the next iteration only if the
+  /// tolerance was missed after all. false: built at every trial point (the
+  /// same iterates, to rounding).
+  bool deferFinalJacobian = true;
 
   /// Throws InvalidArgument naming the first bad value.
   void validate() const;
@@ -69,10 +75,16 @@ struct NewtonIterationRecord {
   bool residualMerit = false;   ///< step accepted on the residual norm (energy at round-off)
   bool wallPredicted = false;   ///< the step moved the open wall with it (FieldSolveSettings::predictWall)
   int wallCgIterations = 0;     ///< CG iterations of the wall-response solve (also in cgIterations)
+  /// The accepted trial point was evaluated without the Jacobian's element
+  /// matrices, because the step aimed at the tolerance (a predicted-wall step
+  /// with the finishing forcing). When the tolerance was still missed, the
+  /// next iteration built them (jacobianRebuilt there).
+  bool jacobianDeferred = false;
+  bool jacobianRebuilt = false;  ///< this iteration first built the Jacobian the previous one deferred
   double seconds = 0;           ///< wall time of the iteration, of which:
   double secondsWall = 0;       ///<   open-wall update (far-field sum and residual correction)
   double secondsWallPrediction = 0;  ///< wall prediction (linearized far-field sum, response CG)
-  double secondsSetup = 0;      ///<   preconditioner set-up
+  double secondsSetup = 0;      ///<   preconditioner set-up (and a deferred Jacobian, when built)
   double secondsCg = 0;         ///<   preconditioned CG
   double secondsLineSearch = 0; ///<   line search, including the evaluation at the accepted point
                                 ///<   (and, for a predicted wall, the wall update there)
@@ -114,6 +126,10 @@ struct FieldSolveWorkspace {
 /// Solves for phi in place (phi holds the warm start on entry: one value per
 /// node; pass zeros for a cold start). Never leaves non-finite values in phi.
 /// `workspace` (optional) is reused storage, see FieldSolveWorkspace.
+/// On return the problem holds the evaluation (M, residual, multipoles) at
+/// phi; its Jacobian (element matrices, material stencil, cell tensors) may
+/// be that of the previous Newton iterate (NewtonIterationRecord::
+/// jacobianDeferred): call problem.evaluate(phi) before applying it.
 FieldSolveReport solveField(MagnetostaticProblem& problem, std::vector<double>& phi,
                             const FieldSolveSettings& settings, const SolveProgress& progress = {},
                             FieldSolveWorkspace* workspace = nullptr);

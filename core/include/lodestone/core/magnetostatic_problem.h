@@ -185,6 +185,7 @@ class MagnetostaticProblem {
   std::vector<std::size_t> blockCells_;  // material cell slots sorted by block
   std::vector<Vec3d> blockCentre_;       // n-weighted centroid of each block, m
   std::vector<std::uint32_t> cellBlock_; // block of each material cell slot
+  std::vector<Vec3d> cellFromCentre_;    // each cell slot's origin minus its block's centre, m
   double totalCount_ = 0;
 };
 
