@@ -97,6 +97,13 @@ int main(int argc, char** argv) {
         else throw InvalidArgument(concat("--wall-prediction: expected on or off, got '", w, "'"));
       } else if (arg == "--wall-tolerance")
         settings.solve.wallPredictionTolerance = parseList(next(), "--wall-tolerance").at(0);
+      else if (arg == "--smoothing") {
+        const std::vector<double> sm = parseList(next(), "--smoothing");
+        require(sm.size() == 2 && sm[0] == std::floor(sm[0]) && sm[1] == std::floor(sm[1]),
+                "--smoothing: expected PRE,POST sweep counts, e.g. 2,2");
+        settings.solve.multigrid.preSmoothing = int(sm[0]);
+        settings.solve.multigrid.postSmoothing = int(sm[1]);
+      }
       else if (arg == "--help" || arg == "-h") {
         std::printf(
             "lodestone-bench-field-solve: times the nonlinear field solve\n"
@@ -109,7 +116,8 @@ int main(int argc, char** argv) {
             "  --law L           langevin (default) or linear (the paper's chi0 = 0.91 linearization)\n"
             "  --crop M          also solve on the material box plus M cells and compare H\n"
             "  --wall-prediction on|off  move the open wall with each Newton step (default on)\n"
-            "  --wall-tolerance X  relative CG tolerance of the wall-response solve (default 0.1)\n");
+            "  --wall-tolerance X  relative CG tolerance of the wall-response solve (default 0.1)\n"
+            "  --smoothing PRE,POST  multigrid damped-Jacobi sweeps per level (default 2,2)\n");
         return 0;
       } else {
         throw InvalidArgument(concat("unknown option '", arg, "' (see --help)"));
@@ -123,15 +131,17 @@ int main(int argc, char** argv) {
     require(bool(csv), "cannot write ", csvPath);
     csv << "body,nodes_per_axis,H0_A_per_m,start,newton_iterations,cg_iterations,line_search_cuts,relative_residual,"
            "status,material_cells,seconds_solve,seconds_stage,threads,tolerance,seconds_initial,seconds_wall,"
-           "seconds_setup,seconds_cg,seconds_line_search,law,wall_prediction,seconds_wall_prediction\n";
+           "seconds_setup,seconds_cg,seconds_line_search,law,wall_prediction,seconds_wall_prediction,"
+           "pre_smoothing,post_smoothing\n";
     const int threads = tbb::info::default_concurrency();
     // The solver predicts the open wall with multigrid only.
     const bool predicted =
         settings.solve.predictWall && settings.solve.preconditioner == PreconditionerKind::Multigrid;
     std::printf("Lodestone field-solve benchmark (%d threads, %s law, preconditioner %s, tolerance %.0e, wall "
-                "prediction %s)\n",
+                "prediction %s, smoothing %d,%d)\n",
                 threads, linear ? "linear" : "Langevin", toString(settings.solve.preconditioner),
-                settings.solve.tolerance, predicted ? "on" : "off");
+                settings.solve.tolerance, predicted ? "on" : "off", settings.solve.multigrid.preSmoothing,
+                settings.solve.multigrid.postSmoothing);
     std::printf("%-6s %5s %8s %5s %7s %6s %5s %10s %9s %9s\n", "body", "N", "H0", "start", "newton", "cg", "cuts",
                 "residual", "solve s", "stage s");
     for (double sN : sizes)
@@ -223,7 +233,8 @@ int main(int argc, char** argv) {
                 search += h.secondsLineSearch;
               }
               csv << ',' << wall << ',' << setup << ',' << cgs << ',' << search << ',' << (linear ? "linear" : "langevin")
-                  << ',' << (predicted ? "on" : "off") << ',' << predict << '\n';
+                  << ',' << (predicted ? "on" : "off") << ',' << predict << ',' << settings.solve.multigrid.preSmoothing
+                  << ',' << settings.solve.multigrid.postSmoothing << '\n';
             }
           }
         }
