@@ -240,6 +240,15 @@ FieldSolveReport solveField(MagnetostaticProblem& problem, std::vector<double>& 
   bool wallCurrent = false;
   // ev's element matrices were not built (see aimsAtTolerance below).
   bool jacobianDeferred = false;
+  // Predicted-wall steps that did not help: rejected, or accepted with less
+  // than half of the residual removed. Near the wall, a strongly
+  // magnetizable body (chi0 ~ 10-100, 2-3 cells of clearance) makes the
+  // linearized wall move a poor guess: such steps were accepted at 0.5-0.7
+  // reduction each and the solve crawled (40 Newton steps without
+  // converging where the lagging wall took 16). After kWallStrikes of them
+  // the wall lags for the rest of the solve.
+  constexpr int kWallStrikes = 2;
+  int wallStrikes = 0;
   for (int it = 0;; ++it) {
     const auto ti = Clock::now();
     double secondsWall = 0;
@@ -315,7 +324,7 @@ FieldSolveReport solveField(MagnetostaticProblem& problem, std::vector<double>& 
     // error an early-stopped Jacobi-CG leaves, not by the wall (measured at
     // 128^3: 5-7 Newton steps either way, CG iterations -15% to +48% with
     // the prediction).
-    const bool predicting = open && settings.predictWall && !wall.empty() &&
+    const bool predicting = open && settings.predictWall && !wall.empty() && wallStrikes < kWallStrikes &&
                             problem.materialWallClearance() >= 1 &&
                             settings.preconditioner == PreconditionerKind::Multigrid;
     // With the wall predicted, a step reduces the residual by about its
@@ -428,6 +437,13 @@ FieldSolveReport solveField(MagnetostaticProblem& problem, std::vector<double>& 
         updateWall(trial, Ftrial, Ktrial, evT);
         const double ft = norm(Ftrial);
         accepted = evT.finite && std::isfinite(ft) && ft <= (1.0 - settings.armijo) * fn;
+        if (!accepted || ft > 0.5 * fn) ++wallStrikes;
+      } else {
+        ++wallStrikes;
+      }
+      if (wallStrikes == kWallStrikes && !rep.wallPredictionDropped) {
+        rep.wallPredictionDropped = true;
+        rec.wallPredictionDropped = true;
       }
       if (accepted) {
         takeTrial(evT);

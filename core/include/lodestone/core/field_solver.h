@@ -81,6 +81,9 @@ struct NewtonIterationRecord {
   /// next iteration built them (jacobianRebuilt there).
   bool jacobianDeferred = false;
   bool jacobianRebuilt = false;  ///< this iteration first built the Jacobian the previous one deferred
+  /// This iteration's predicted wall was the second that did not help (see
+  /// FieldSolveReport::wallPredictionDropped): later steps let the wall lag.
+  bool wallPredictionDropped = false;
   double seconds = 0;           ///< wall time of the iteration, of which:
   double secondsWall = 0;       ///<   open-wall update (far-field sum and residual correction)
   double secondsWallPrediction = 0;  ///< wall prediction (linearized far-field sum, response CG)
@@ -100,6 +103,11 @@ struct FieldSolveReport {
   double materialEnergy = 0;       ///< sum w W at the solution, A^2*m
   double seconds = 0;
   double secondsInitial = 0;       ///< reference residual and first evaluation (before the iterations)
+  /// The open wall's prediction (FieldSolveSettings::predictWall) was turned
+  /// off for the rest of the solve after two predicted steps that did not
+  /// help (rejected, or accepted with less than half the residual removed):
+  /// a strongly magnetizable body close to the wall.
+  bool wallPredictionDropped = false;
   std::size_t materialCells = 0;
   std::string preconditioner;
   std::string message;             ///< human-readable outcome
