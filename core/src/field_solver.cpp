@@ -433,18 +433,15 @@ FieldSolveReport solveField(MagnetostaticProblem& problem, std::vector<double>& 
       // the wall updated at the trial point (the next iteration's) decreases.
       wallPrevSaved = wallPrev;
       const int savedUpdates = wallUpdates;
+      double ft = std::numeric_limits<double>::infinity();
       if (evT.finite) {
         updateWall(trial, Ftrial, Ktrial, evT);
-        const double ft = norm(Ftrial);
-        accepted = evT.finite && std::isfinite(ft) && ft <= (1.0 - settings.armijo) * fn;
-        if (!accepted || ft > 0.5 * fn) ++wallStrikes;
-      } else {
-        ++wallStrikes;
+        ft = norm(Ftrial);
+        accepted = std::isfinite(ft) && ft <= (1.0 - settings.armijo) * fn;
       }
-      if (wallStrikes == kWallStrikes && !rep.wallPredictionDropped) {
-        rep.wallPredictionDropped = true;
-        rec.wallPredictionDropped = true;
-      }
+      // (Counted only while predicting, so it reaches kWallStrikes once.)
+      if (!accepted || ft > 0.5 * fn) ++wallStrikes;
+      if (wallStrikes == kWallStrikes) rep.wallPredictionDropped = rec.wallPredictionDropped = true;
       if (accepted) {
         takeTrial(evT);
         wallCurrent = true;

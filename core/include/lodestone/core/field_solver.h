@@ -76,9 +76,9 @@ struct NewtonIterationRecord {
   bool wallPredicted = false;   ///< the step moved the open wall with it (FieldSolveSettings::predictWall)
   int wallCgIterations = 0;     ///< CG iterations of the wall-response solve (also in cgIterations)
   /// The accepted trial point was evaluated without the Jacobian's element
-  /// matrices, because the step aimed at the tolerance (a predicted-wall step
-  /// with the finishing forcing). When the tolerance was still missed, the
-  /// next iteration built them (jacobianRebuilt there).
+  /// matrices, because the step's CG solves left less than the tolerance
+  /// (FieldSolveSettings::deferFinalJacobian). When the tolerance was still
+  /// missed, the next iteration built them (jacobianRebuilt there).
   bool jacobianDeferred = false;
   bool jacobianRebuilt = false;  ///< this iteration first built the Jacobian the previous one deferred
   /// This iteration's predicted wall was the second that did not help (see
