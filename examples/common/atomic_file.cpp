@@ -9,7 +9,7 @@
 #include <cstring>
 #include <filesystem>
 
-#include "lodestone/core/error.h"
+#include "lodestone/core/base/error.h"
 
 namespace lodestone::examples {
 

@@ -3,7 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include "lodestone/core/error.h"
+#include "lodestone/core/base/error.h"
 
 namespace lodestone::examples {
 namespace {

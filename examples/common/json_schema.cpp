@@ -10,7 +10,7 @@
 #include <sstream>
 #include <utility>
 
-#include "lodestone/core/error.h"
+#include "lodestone/core/base/error.h"
 
 namespace lodestone::examples {
 namespace {

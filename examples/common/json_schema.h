@@ -42,7 +42,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "lodestone/core/vec3.h"
+#include "lodestone/core/base/vec3.h"
 
 namespace lodestone::examples {
 

@@ -13,7 +13,7 @@
 #include <memory>
 #include <utility>
 
-#include "lodestone/core/error.h"
+#include "lodestone/core/base/error.h"
 
 namespace lodestone::examples {
 namespace {

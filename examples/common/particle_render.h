@@ -37,8 +37,8 @@
 #include <vector>
 
 #include "colormap.h"
-#include "lodestone/core/pose.h"
-#include "lodestone/core/vec3.h"
+#include "lodestone/core/base/pose.h"
+#include "lodestone/core/base/vec3.h"
 
 namespace lodestone::examples {
 

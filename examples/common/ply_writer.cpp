@@ -4,7 +4,7 @@
 #include <cstring>
 
 #include "atomic_file.h"
-#include "lodestone/core/error.h"
+#include "lodestone/core/base/error.h"
 
 namespace lodestone::examples {
 namespace {

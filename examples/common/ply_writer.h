@@ -26,7 +26,7 @@
 #include <vector>
 
 #include "colormap.h"
-#include "lodestone/core/vec3.h"
+#include "lodestone/core/base/vec3.h"
 
 namespace lodestone::examples {
 

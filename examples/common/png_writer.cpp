@@ -3,7 +3,7 @@
 #include <zlib.h>
 
 #include "atomic_file.h"
-#include "lodestone/core/error.h"
+#include "lodestone/core/base/error.h"
 
 namespace lodestone::examples {
 namespace {

@@ -5,7 +5,7 @@
 #include <cmath>
 #include <cstdio>
 
-#include "lodestone/core/error.h"
+#include "lodestone/core/base/error.h"
 
 namespace lodestone::examples {
 

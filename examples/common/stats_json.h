@@ -10,7 +10,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "lodestone/core/vec3.h"
+#include "lodestone/core/base/vec3.h"
 #include "progress.h"
 
 namespace lodestone::examples {

@@ -36,14 +36,14 @@
 #include <tbb/info.h>
 
 #include "colormap.h"
-#include "lodestone/core/constants.h"
-#include "lodestone/core/cylinder_magnet.h"
-#include "lodestone/core/error.h"
-#include "lodestone/core/field_source_set.h"
-#include "lodestone/core/magnetic_stage.h"
-#include "lodestone/core/material.h"
-#include "lodestone/core/pose.h"
-#include "lodestone/core/uniform_field.h"
+#include "lodestone/core/base/constants.h"
+#include "lodestone/core/sources/cylinder_magnet.h"
+#include "lodestone/core/base/error.h"
+#include "lodestone/core/sources/field_source_set.h"
+#include "lodestone/core/stage/magnetic_stage.h"
+#include "lodestone/core/field/material.h"
+#include "lodestone/core/base/pose.h"
+#include "lodestone/core/sources/uniform_field.h"
 #include "png_writer.h"
 
 namespace {

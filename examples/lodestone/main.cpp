@@ -22,8 +22,8 @@
 #include <tbb/global_control.h>
 
 #include "atomic_file.h"
-#include "lodestone/core/error.h"
-#include "lodestone/core/mpm_checkpoint.h"
+#include "lodestone/core/base/error.h"
+#include "lodestone/core/mpm/checkpoint.h"
 #include "lodestone/plugin/node_registry.h"
 #if LODESTONE_HAVE_VDB
 #include "lodestone/vdb_io/field_file.h"

@@ -2,7 +2,7 @@
 
 #include <cmath>
 
-#include "lodestone/core/error.h"
+#include "lodestone/core/base/error.h"
 
 namespace lodestone::examples {
 

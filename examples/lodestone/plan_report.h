@@ -8,7 +8,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "lodestone/core/effects_planner.h"
+#include "lodestone/core/planner/effects_planner.h"
 #include "scene.h"
 
 namespace lodestone::examples {

@@ -3,9 +3,9 @@
 #include <cmath>
 #include <vector>
 
-#include "lodestone/core/cuboid_magnet.h"
-#include "lodestone/core/cylinder_magnet.h"
-#include "lodestone/core/sphere_magnet.h"
+#include "lodestone/core/sources/cuboid_magnet.h"
+#include "lodestone/core/sources/cylinder_magnet.h"
+#include "lodestone/core/sources/sphere_magnet.h"
 #include "particle_render.h"
 
 namespace lodestone::examples {

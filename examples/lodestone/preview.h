@@ -6,7 +6,7 @@
 #include <string>
 
 #include "colormap.h"
-#include "lodestone/core/mpm_solver.h"
+#include "lodestone/core/mpm/solver.h"
 #include "scene.h"
 
 namespace lodestone::examples {

@@ -14,11 +14,11 @@
 #include <string>
 #include <vector>
 
-#include "lodestone/core/accuracy_preset.h"
-#include "lodestone/core/field_source_set.h"
-#include "lodestone/core/magnet_source.h"
-#include "lodestone/core/mpm_solver.h"
-#include "lodestone/core/sampled_sdf.h"
+#include "lodestone/core/planner/accuracy_preset.h"
+#include "lodestone/core/sources/field_source_set.h"
+#include "lodestone/core/sources/magnet_source.h"
+#include "lodestone/core/mpm/solver.h"
+#include "lodestone/core/mpm/sampled_sdf.h"
 
 namespace lodestone::examples {
 

@@ -13,8 +13,8 @@
 #include <string>
 #include <vector>
 
-#include "lodestone/core/langevin.h"
-#include "lodestone/core/magnetization_law.h"
+#include "lodestone/core/field/langevin.h"
+#include "lodestone/core/field/magnetization_law.h"
 #include "lodestone/gpu/backend.h"
 #include "lodestone/gpu/field_solver.h"
 #include "lodestone/gpu/mpm.h"

@@ -1,7 +1,7 @@
 #include "lodestone/gpu/backend.h"
 
 #include "device_query.h"
-#include "lodestone/core/error.h"
+#include "lodestone/core/base/error.h"
 
 namespace lodestone {
 namespace gpu {

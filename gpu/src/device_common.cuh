@@ -9,7 +9,7 @@
 #include <string>
 #include <utility>
 
-#include "lodestone/core/error.h"
+#include "lodestone/core/base/error.h"
 
 namespace lodestone {
 namespace gpu {

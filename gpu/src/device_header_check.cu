@@ -4,14 +4,14 @@
 // The kernel is never launched.
 #include <cuda_runtime.h>
 
-#include "lodestone/core/bspline.h"
-#include "lodestone/core/langevin.h"
-#include "lodestone/core/magnetization_law.h"
-#include "lodestone/core/mat3.h"
-#include "lodestone/core/mpm_collider.h"
-#include "lodestone/core/mpm_constitutive.h"
-#include "lodestone/core/q1_element.h"
-#include "lodestone/core/vec3.h"
+#include "lodestone/core/base/bspline.h"
+#include "lodestone/core/field/langevin.h"
+#include "lodestone/core/field/magnetization_law.h"
+#include "lodestone/core/base/mat3.h"
+#include "lodestone/core/mpm/collider.h"
+#include "lodestone/core/mpm/constitutive.h"
+#include "lodestone/core/field/q1_element.h"
+#include "lodestone/core/base/vec3.h"
 
 namespace lodestone {
 namespace gpu {

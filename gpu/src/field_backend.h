@@ -8,9 +8,9 @@
 #include <memory>
 #include <vector>
 
-#include "lodestone/core/grid.h"
-#include "lodestone/core/magnetization_law.h"
-#include "lodestone/core/vec3.h"
+#include "lodestone/core/base/grid.h"
+#include "lodestone/core/field/magnetization_law.h"
+#include "lodestone/core/base/vec3.h"
 #include "lodestone/gpu/field_solver.h"
 
 namespace lodestone {

@@ -1,7 +1,7 @@
 #pragma once
 // The per-node and per-cell formulas of the field solve, written once for the
 // host reference backend and the CUDA kernels (LODESTONE_HOSTDEV). They are
-// the formulas of core/src/magnetostatic_problem.cpp, q1_stencil.cpp and
+// the formulas of core/src/field/magnetostatic_problem.cpp, q1_stencil.cpp and
 // multigrid.cpp, rearranged so that every output is gathered by its owner:
 //
 //  * per material cell: the 8 Gauss points' M, W and dM/dH give the cell's
@@ -18,11 +18,11 @@
 #include <cstddef>
 #include <cstdint>
 
-#include "lodestone/core/hostdev.h"
-#include "lodestone/core/magnetization_law.h"
-#include "lodestone/core/mat3.h"
-#include "lodestone/core/q1_element.h"
-#include "lodestone/core/vec3.h"
+#include "lodestone/core/base/hostdev.h"
+#include "lodestone/core/field/magnetization_law.h"
+#include "lodestone/core/base/mat3.h"
+#include "lodestone/core/field/q1_element.h"
+#include "lodestone/core/base/vec3.h"
 
 namespace lodestone {
 namespace gpu {

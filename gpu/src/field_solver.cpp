@@ -4,8 +4,8 @@
 #include <cmath>
 
 #include "field_backend.h"
-#include "lodestone/core/error.h"
-#include "lodestone/core/q1_element.h"
+#include "lodestone/core/base/error.h"
+#include "lodestone/core/field/q1_element.h"
 #include "newton_driver.h"
 
 namespace lodestone {

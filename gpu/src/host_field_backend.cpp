@@ -7,7 +7,7 @@
 
 #include "field_backend.h"
 #include "field_kernels.h"
-#include "lodestone/core/error.h"
+#include "lodestone/core/base/error.h"
 
 namespace lodestone {
 namespace gpu {

@@ -4,7 +4,7 @@
 
 #include "device_entry.h"
 #include "field_kernels.h"
-#include "lodestone/core/error.h"
+#include "lodestone/core/base/error.h"
 
 namespace lodestone {
 namespace gpu {

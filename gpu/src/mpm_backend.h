@@ -6,7 +6,7 @@
 #include <memory>
 #include <vector>
 
-#include "lodestone/core/mpm_collider.h"
+#include "lodestone/core/mpm/collider.h"
 #include "lodestone/gpu/mpm.h"
 #include "mpm_kernels.h"
 

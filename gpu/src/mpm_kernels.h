@@ -1,5 +1,5 @@
 #pragma once
-// The MLS-MPM transfer and grid-update formulas of core/src/mpm_grid.cpp and
+// The MLS-MPM transfer and grid-update formulas of core/src/mpm/grid.cpp and
 // mpm_solver.cpp, per particle and per node, written once for the host
 // reference and the CUDA kernels (LODESTONE_HOSTDEV). P2G hands every
 // (node, contribution) pair to an accumulator: plain += on the host,
@@ -8,12 +8,12 @@
 #include <cstddef>
 #include <cstdint>
 
-#include "lodestone/core/bspline.h"
-#include "lodestone/core/hostdev.h"
-#include "lodestone/core/mat3.h"
-#include "lodestone/core/mpm_collider.h"
-#include "lodestone/core/mpm_constitutive.h"
-#include "lodestone/core/vec3.h"
+#include "lodestone/core/base/bspline.h"
+#include "lodestone/core/base/hostdev.h"
+#include "lodestone/core/base/mat3.h"
+#include "lodestone/core/mpm/collider.h"
+#include "lodestone/core/mpm/constitutive.h"
+#include "lodestone/core/base/vec3.h"
 #include "lodestone/gpu/mpm.h"
 
 namespace lodestone {

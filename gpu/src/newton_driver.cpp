@@ -8,8 +8,8 @@
 #include <utility>
 #include <vector>
 
-#include "lodestone/core/error.h"
-#include "lodestone/core/line_search.h"
+#include "lodestone/core/base/error.h"
+#include "lodestone/core/field/line_search.h"
 
 namespace lodestone {
 namespace gpu {

@@ -1,6 +1,6 @@
 #pragma once
 // The Newton-PCG-multigrid driver of the field solve, written once over the
-// FieldBackend operations (the algorithm of core/src/field_solver.cpp,
+// FieldBackend operations (the algorithm of core/src/field/field_solver.cpp,
 // pcg.cpp and multigrid.cpp).
 #include "field_backend.h"
 #include "lodestone/gpu/field_solver.h"

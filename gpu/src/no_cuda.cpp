@@ -3,7 +3,7 @@
 #include "device_entry.h"
 #include "device_query.h"
 #include "field_backend.h"
-#include "lodestone/core/error.h"
+#include "lodestone/core/base/error.h"
 #include "mpm_backend.h"
 
 namespace lodestone {

@@ -7,9 +7,9 @@
 #include <cmath>
 #include <vector>
 
-#include "lodestone/core/langevin.h"
-#include "lodestone/core/magnetization_law.h"
-#include "lodestone/core/vec3.h"
+#include "lodestone/core/field/langevin.h"
+#include "lodestone/core/field/magnetization_law.h"
+#include "lodestone/core/base/vec3.h"
 #include "lodestone/gpu/backend.h"
 
 /// Skips the current test, saying why, unless a CUDA device is usable.

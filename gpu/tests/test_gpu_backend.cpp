@@ -5,7 +5,7 @@
 #include <string>
 
 #include "gpu_test_support.h"
-#include "lodestone/core/error.h"
+#include "lodestone/core/base/error.h"
 #include "lodestone/gpu/backend.h"
 
 using namespace lodestone;

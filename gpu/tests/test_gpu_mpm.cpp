@@ -9,7 +9,7 @@
 #include <vector>
 
 #include "gpu_test_support.h"
-#include "lodestone/core/error.h"
+#include "lodestone/core/base/error.h"
 #include "lodestone/gpu/mpm.h"
 
 using namespace lodestone;

@@ -2,7 +2,7 @@
 
 #include <algorithm>
 
-#include "lodestone/core/error.h"
+#include "lodestone/core/base/error.h"
 #include "lodestone/plugin/errors.h"
 #include "lodestone/plugin/node_registry.h"
 

@@ -2,14 +2,14 @@
 
 #include <cmath>
 
-#include "lodestone/core/constants.h"
-#include "lodestone/core/cuboid_magnet.h"
-#include "lodestone/core/cylinder_magnet.h"
-#include "lodestone/core/error.h"
-#include "lodestone/core/material.h"
-#include "lodestone/core/point_dipole.h"
-#include "lodestone/core/sphere_magnet.h"
-#include "lodestone/core/uniform_field.h"
+#include "lodestone/core/base/constants.h"
+#include "lodestone/core/sources/cuboid_magnet.h"
+#include "lodestone/core/sources/cylinder_magnet.h"
+#include "lodestone/core/base/error.h"
+#include "lodestone/core/field/material.h"
+#include "lodestone/core/sources/point_dipole.h"
+#include "lodestone/core/sources/sphere_magnet.h"
+#include "lodestone/core/sources/uniform_field.h"
 #include "lodestone/plugin/errors.h"
 #include "lodestone/plugin/node_registry.h"
 

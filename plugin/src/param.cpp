@@ -3,7 +3,7 @@
 #include <cmath>
 #include <sstream>
 
-#include "lodestone/core/error.h"
+#include "lodestone/core/base/error.h"
 
 namespace lodestone::plugin {
 

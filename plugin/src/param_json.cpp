@@ -1,6 +1,6 @@
 #include "lodestone/plugin/param_json.h"
 
-#include "lodestone/core/error.h"
+#include "lodestone/core/base/error.h"
 
 namespace lodestone::plugin {
 

@@ -6,7 +6,7 @@
 #include <string>
 #include <vector>
 
-#include "lodestone/core/error.h"
+#include "lodestone/core/base/error.h"
 
 namespace lodestone::bench {
 

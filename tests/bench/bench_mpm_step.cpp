@@ -22,8 +22,8 @@
 #include <tbb/info.h>
 
 #include "bench_args.h"
-#include "lodestone/core/error.h"
-#include "lodestone/core/mpm_solver.h"
+#include "lodestone/core/base/error.h"
+#include "lodestone/core/mpm/solver.h"
 
 using namespace lodestone;
 using lodestone::bench::parseList;

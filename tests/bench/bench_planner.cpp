@@ -20,7 +20,7 @@
 #include <vector>
 
 #include "bench_args.h"
-#include "lodestone/core/error.h"
+#include "lodestone/core/base/error.h"
 #include "scene.h"
 
 using namespace lodestone;

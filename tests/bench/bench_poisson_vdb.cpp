@@ -39,11 +39,11 @@
 #include <tbb/parallel_for.h>
 
 #include "bench_args.h"
-#include "lodestone/core/error.h"
-#include "lodestone/core/langevin.h"
-#include "lodestone/core/magnetic_stage.h"
-#include "lodestone/core/material.h"
-#include "lodestone/core/uniform_field.h"
+#include "lodestone/core/base/error.h"
+#include "lodestone/core/field/langevin.h"
+#include "lodestone/core/stage/magnetic_stage.h"
+#include "lodestone/core/field/material.h"
+#include "lodestone/core/sources/uniform_field.h"
 
 using namespace lodestone;
 using lodestone::bench::parseList;

@@ -9,13 +9,13 @@
 #include <cstdio>
 #include <vector>
 
-#include "lodestone/core/accuracy_preset.h"
-#include "lodestone/core/error.h"
-#include "lodestone/core/magnetic_stage.h"
-#include "lodestone/core/material.h"
-#include "lodestone/core/mpm_solver.h"
-#include "lodestone/core/sphere_magnet.h"
-#include "lodestone/core/uniform_field.h"
+#include "lodestone/core/planner/accuracy_preset.h"
+#include "lodestone/core/base/error.h"
+#include "lodestone/core/stage/magnetic_stage.h"
+#include "lodestone/core/field/material.h"
+#include "lodestone/core/mpm/solver.h"
+#include "lodestone/core/sources/sphere_magnet.h"
+#include "lodestone/core/sources/uniform_field.h"
 
 using namespace lodestone;
 

@@ -9,11 +9,11 @@
 #include <cstdio>
 #include <string>
 
-#include "lodestone/core/effects_planner.h"
-#include "lodestone/core/material.h"
-#include "lodestone/core/mpm_solver.h"
-#include "lodestone/core/sphere_magnet.h"
-#include "lodestone/core/uniform_field.h"
+#include "lodestone/core/planner/effects_planner.h"
+#include "lodestone/core/field/material.h"
+#include "lodestone/core/mpm/solver.h"
+#include "lodestone/core/sources/sphere_magnet.h"
+#include "lodestone/core/sources/uniform_field.h"
 
 using namespace lodestone;
 

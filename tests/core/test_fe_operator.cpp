@@ -9,11 +9,11 @@
 #include <random>
 #include <vector>
 
-#include "lodestone/core/magnetostatic_problem.h"
-#include "lodestone/core/material.h"
-#include "lodestone/core/nodal_field.h"
-#include "lodestone/core/parallel.h"
-#include "lodestone/core/q1_element.h"
+#include "lodestone/core/field/magnetostatic_problem.h"
+#include "lodestone/core/field/material.h"
+#include "lodestone/core/stage/nodal_field.h"
+#include "lodestone/core/base/parallel.h"
+#include "lodestone/core/field/q1_element.h"
 
 using namespace lodestone;
 

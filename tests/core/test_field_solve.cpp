@@ -6,10 +6,10 @@
 #include <cmath>
 #include <vector>
 
-#include "lodestone/core/magnetic_stage.h"
-#include "lodestone/core/material.h"
-#include "lodestone/core/point_dipole.h"
-#include "lodestone/core/uniform_field.h"
+#include "lodestone/core/stage/magnetic_stage.h"
+#include "lodestone/core/field/material.h"
+#include "lodestone/core/sources/point_dipole.h"
+#include "lodestone/core/sources/uniform_field.h"
 #include "lodestone_test/scenes.h"
 
 using namespace lodestone;

@@ -15,18 +15,18 @@
 #include <thread>
 #include <vector>
 
-#include "lodestone/core/constants.h"
-#include "lodestone/core/cuboid_magnet.h"
-#include "lodestone/core/cylinder_magnet.h"
-#include "lodestone/core/elliptic_integral.h"
-#include "lodestone/core/error.h"
-#include "lodestone/core/field_source_set.h"
-#include "lodestone/core/magnet_source.h"
-#include "lodestone/core/point_dipole.h"
-#include "lodestone/core/pose.h"
-#include "lodestone/core/sphere_magnet.h"
-#include "lodestone/core/time_profile.h"
-#include "lodestone/core/uniform_field.h"
+#include "lodestone/core/base/constants.h"
+#include "lodestone/core/sources/cuboid_magnet.h"
+#include "lodestone/core/sources/cylinder_magnet.h"
+#include "lodestone/core/sources/elliptic_integral.h"
+#include "lodestone/core/base/error.h"
+#include "lodestone/core/sources/field_source_set.h"
+#include "lodestone/core/sources/magnet_source.h"
+#include "lodestone/core/sources/point_dipole.h"
+#include "lodestone/core/base/pose.h"
+#include "lodestone/core/sources/sphere_magnet.h"
+#include "lodestone/core/sources/time_profile.h"
+#include "lodestone/core/sources/uniform_field.h"
 
 using namespace lodestone;
 

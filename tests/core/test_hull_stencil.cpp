@@ -8,7 +8,7 @@
 #include <random>
 #include <vector>
 
-#include "lodestone/core/hull_stencil.h"
+#include "lodestone/core/field/hull_stencil.h"
 
 using namespace lodestone;
 

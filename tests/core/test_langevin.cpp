@@ -7,11 +7,11 @@
 #include <limits>
 #include <vector>
 
-#include "lodestone/core/constants.h"
-#include "lodestone/core/error.h"
-#include "lodestone/core/langevin.h"
-#include "lodestone/core/magnetization_law.h"
-#include "lodestone/core/material.h"
+#include "lodestone/core/base/constants.h"
+#include "lodestone/core/base/error.h"
+#include "lodestone/core/field/langevin.h"
+#include "lodestone/core/field/magnetization_law.h"
+#include "lodestone/core/field/material.h"
 
 using namespace lodestone;
 

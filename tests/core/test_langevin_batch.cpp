@@ -10,9 +10,9 @@
 #include <limits>
 #include <random>
 
-#include "lodestone/core/element_build.h"
-#include "lodestone/core/langevin_batch.h"
-#include "lodestone/core/material.h"
+#include "lodestone/core/field/element_build.h"
+#include "lodestone/core/field/langevin_batch.h"
+#include "lodestone/core/field/material.h"
 
 using namespace lodestone;
 

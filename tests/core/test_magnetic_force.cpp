@@ -6,12 +6,12 @@
 #include <cmath>
 #include <cstdio>
 
-#include "lodestone/core/constants.h"
-#include "lodestone/core/magnetic_force.h"
-#include "lodestone/core/magnetic_stage.h"
-#include "lodestone/core/material.h"
-#include "lodestone/core/sphere_magnet.h"
-#include "lodestone/core/uniform_field.h"
+#include "lodestone/core/base/constants.h"
+#include "lodestone/core/stage/magnetic_force.h"
+#include "lodestone/core/stage/magnetic_stage.h"
+#include "lodestone/core/field/material.h"
+#include "lodestone/core/sources/sphere_magnet.h"
+#include "lodestone/core/sources/uniform_field.h"
 #include "lodestone_test/scenes.h"
 
 using namespace lodestone;

@@ -9,11 +9,11 @@
 
 #include <tbb/global_control.h>
 
-#include "lodestone/core/error.h"
-#include "lodestone/core/magnetic_stage.h"
-#include "lodestone/core/material.h"
-#include "lodestone/core/sphere_magnet.h"
-#include "lodestone/core/uniform_field.h"
+#include "lodestone/core/base/error.h"
+#include "lodestone/core/stage/magnetic_stage.h"
+#include "lodestone/core/field/material.h"
+#include "lodestone/core/sources/sphere_magnet.h"
+#include "lodestone/core/sources/uniform_field.h"
 #include "lodestone_test/scenes.h"
 
 using namespace lodestone;

@@ -11,11 +11,11 @@
 #include <memory>
 #include <vector>
 
-#include "lodestone/core/constants.h"
-#include "lodestone/core/error.h"
-#include "lodestone/core/mpm_collider.h"
-#include "lodestone/core/mpm_solver.h"
-#include "lodestone/core/sampled_sdf.h"
+#include "lodestone/core/base/constants.h"
+#include "lodestone/core/base/error.h"
+#include "lodestone/core/mpm/collider.h"
+#include "lodestone/core/mpm/solver.h"
+#include "lodestone/core/mpm/sampled_sdf.h"
 
 using namespace lodestone;
 

@@ -5,9 +5,9 @@
 #include <cmath>
 #include <random>
 
-#include "lodestone/core/error.h"
-#include "lodestone/core/mpm_constitutive.h"
-#include "lodestone/core/mpm_material.h"
+#include "lodestone/core/base/error.h"
+#include "lodestone/core/mpm/constitutive.h"
+#include "lodestone/core/mpm/material.h"
 
 using namespace lodestone;
 

@@ -6,9 +6,9 @@
 #include <memory>
 #include <vector>
 
-#include "lodestone/core/constants.h"
-#include "lodestone/core/error.h"
-#include "lodestone/core/mpm_emitter.h"
+#include "lodestone/core/base/constants.h"
+#include "lodestone/core/base/error.h"
+#include "lodestone/core/mpm/emitter.h"
 
 using namespace lodestone;
 

@@ -22,7 +22,7 @@
 #include <cstdio>
 #include <vector>
 
-#include "lodestone/core/mpm_solver.h"
+#include "lodestone/core/mpm/solver.h"
 
 using namespace lodestone;
 

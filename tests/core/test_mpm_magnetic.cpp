@@ -17,10 +17,10 @@
 #include <cstdio>
 #include <vector>
 
-#include "lodestone/core/constants.h"
-#include "lodestone/core/magnetization_law.h"
-#include "lodestone/core/mpm_solver.h"
-#include "lodestone/core/sphere_magnet.h"
+#include "lodestone/core/base/constants.h"
+#include "lodestone/core/field/magnetization_law.h"
+#include "lodestone/core/mpm/solver.h"
+#include "lodestone/core/sources/sphere_magnet.h"
 
 using namespace lodestone;
 

@@ -9,8 +9,8 @@
 #include <cstdio>
 #include <vector>
 
-#include "lodestone/core/error.h"
-#include "lodestone/core/mpm_solver.h"
+#include "lodestone/core/base/error.h"
+#include "lodestone/core/mpm/solver.h"
 
 using namespace lodestone;
 

@@ -11,9 +11,9 @@
 
 #include <tbb/global_control.h>
 
-#include "lodestone/core/error.h"
-#include "lodestone/core/mpm_grid.h"
-#include "lodestone/core/mpm_solver.h"
+#include "lodestone/core/base/error.h"
+#include "lodestone/core/mpm/grid.h"
+#include "lodestone/core/mpm/solver.h"
 
 using namespace lodestone;
 

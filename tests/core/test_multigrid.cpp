@@ -9,12 +9,12 @@
 #include <random>
 #include <vector>
 
-#include "lodestone/core/field_solver.h"
-#include "lodestone/core/magnetic_stage.h"
-#include "lodestone/core/material.h"
-#include "lodestone/core/multigrid.h"
-#include "lodestone/core/parallel.h"
-#include "lodestone/core/uniform_field.h"
+#include "lodestone/core/field/field_solver.h"
+#include "lodestone/core/stage/magnetic_stage.h"
+#include "lodestone/core/field/material.h"
+#include "lodestone/core/field/multigrid.h"
+#include "lodestone/core/base/parallel.h"
+#include "lodestone/core/sources/uniform_field.h"
 #include "lodestone_test/scenes.h"
 
 using namespace lodestone;

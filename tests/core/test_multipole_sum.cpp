@@ -8,8 +8,8 @@
 #include <random>
 #include <vector>
 
-#include "lodestone/core/constants.h"
-#include "lodestone/core/multipole.h"
+#include "lodestone/core/base/constants.h"
+#include "lodestone/core/field/multipole.h"
 
 using namespace lodestone;
 

@@ -17,10 +17,10 @@
 #include <string>
 #include <vector>
 
-#include "lodestone/core/bspline.h"
-#include "lodestone/core/error.h"
-#include "lodestone/core/grid.h"
-#include "lodestone/core/transfer.h"
+#include "lodestone/core/base/bspline.h"
+#include "lodestone/core/base/error.h"
+#include "lodestone/core/base/grid.h"
+#include "lodestone/core/stage/transfer.h"
 
 using namespace lodestone;
 

@@ -12,7 +12,7 @@
 #include <string>
 
 #include "atomic_file.h"
-#include "lodestone/core/error.h"
+#include "lodestone/core/base/error.h"
 
 using namespace lodestone;
 using namespace lodestone::examples;

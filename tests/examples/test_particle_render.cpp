@@ -13,7 +13,7 @@
 #include <random>
 #include <vector>
 
-#include "lodestone/core/error.h"
+#include "lodestone/core/base/error.h"
 #include "particle_render.h"
 
 using namespace lodestone;

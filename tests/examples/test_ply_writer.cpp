@@ -15,7 +15,7 @@
 #include <string>
 #include <vector>
 
-#include "lodestone/core/error.h"
+#include "lodestone/core/base/error.h"
 #include "ply_writer.h"
 
 using namespace lodestone;

@@ -15,7 +15,7 @@
 #include <vector>
 
 #include "colormap.h"
-#include "lodestone/core/error.h"
+#include "lodestone/core/base/error.h"
 #include "png_writer.h"
 
 using namespace lodestone;

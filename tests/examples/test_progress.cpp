@@ -8,7 +8,7 @@
 #include <sstream>
 #include <string>
 
-#include "lodestone/core/error.h"
+#include "lodestone/core/base/error.h"
 #include "progress.h"
 
 using namespace lodestone;

@@ -5,7 +5,7 @@
 #include <filesystem>
 #include <string>
 
-#include "lodestone/core/error.h"
+#include "lodestone/core/base/error.h"
 #include "scene.h"
 
 using namespace lodestone;

@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "lodestone/core/error.h"
+#include "lodestone/core/base/error.h"
 #include "scene.h"
 
 using namespace lodestone;

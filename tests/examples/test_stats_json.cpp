@@ -10,7 +10,7 @@
 #include <string>
 
 #include "json_schema.h"
-#include "lodestone/core/error.h"
+#include "lodestone/core/base/error.h"
 #include "stats_json.h"
 
 using namespace lodestone;

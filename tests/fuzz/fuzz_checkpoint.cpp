@@ -10,8 +10,8 @@
 #include <string>
 #include <vector>
 
-#include "lodestone/core/error.h"
-#include "lodestone/core/mpm_checkpoint.h"
+#include "lodestone/core/base/error.h"
+#include "lodestone/core/mpm/checkpoint.h"
 #include "scene.h"
 
 namespace {

@@ -6,7 +6,7 @@
 #include <cstdint>
 #include <string>
 
-#include "lodestone/core/error.h"
+#include "lodestone/core/base/error.h"
 #include "scene.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {

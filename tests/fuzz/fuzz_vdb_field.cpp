@@ -10,8 +10,8 @@
 #include <string>
 
 #include "bounded_new.h"
-#include "lodestone/core/error.h"
-#include "lodestone/core/grid.h"
+#include "lodestone/core/base/error.h"
+#include "lodestone/core/base/grid.h"
 #include "lodestone/vdb_io/field_file.h"
 
 namespace {

@@ -9,7 +9,7 @@
 #include <string>
 
 #include "bounded_new.h"
-#include "lodestone/core/error.h"
+#include "lodestone/core/base/error.h"
 #include "lodestone/vdb_io/point_file.h"
 
 // OpenVDB 10's readTopology leaks the nodes it had allocated when a read

@@ -21,9 +21,9 @@
 
 #include <nlohmann/json.hpp>
 
-#include "lodestone/core/cylinder_magnet.h"
-#include "lodestone/core/material.h"
-#include "lodestone/core/mpm_solver.h"
+#include "lodestone/core/sources/cylinder_magnet.h"
+#include "lodestone/core/field/material.h"
+#include "lodestone/core/mpm/solver.h"
 
 using namespace lodestone;
 

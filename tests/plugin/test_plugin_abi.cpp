@@ -9,9 +9,9 @@
 #include <thread>
 #include <vector>
 
-#include "lodestone/core/cylinder_magnet.h"
-#include "lodestone/core/magnetic_stage.h"
-#include "lodestone/core/material.h"
+#include "lodestone/core/sources/cylinder_magnet.h"
+#include "lodestone/core/stage/magnetic_stage.h"
+#include "lodestone/core/field/material.h"
 #include "lodestone/plugin/lodestone.h"
 
 namespace {

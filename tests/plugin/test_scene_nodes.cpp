@@ -10,7 +10,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "lodestone/core/error.h"
+#include "lodestone/core/base/error.h"
 #include "lodestone/plugin/network.h"
 #include "lodestone/plugin/param_json.h"
 #include "scene.h"

@@ -10,12 +10,12 @@
 #include <string>
 #include <vector>
 
-#include "lodestone/core/error.h"
-#include "lodestone/core/material.h"
-#include "lodestone/core/mpm_checkpoint.h"
-#include "lodestone/core/mpm_solver.h"
-#include "lodestone/core/point_dipole.h"
-#include "lodestone/core/uniform_field.h"
+#include "lodestone/core/base/error.h"
+#include "lodestone/core/field/material.h"
+#include "lodestone/core/mpm/checkpoint.h"
+#include "lodestone/core/mpm/solver.h"
+#include "lodestone/core/sources/point_dipole.h"
+#include "lodestone/core/sources/uniform_field.h"
 
 using namespace lodestone;
 

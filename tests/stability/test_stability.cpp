@@ -22,13 +22,13 @@
 #include <string>
 #include <vector>
 
-#include "lodestone/core/bspline.h"
-#include "lodestone/core/error.h"
-#include "lodestone/core/magnetization_law.h"
-#include "lodestone/core/material.h"
-#include "lodestone/core/mpm_solver.h"
-#include "lodestone/core/sphere_magnet.h"
-#include "lodestone/core/uniform_field.h"
+#include "lodestone/core/base/bspline.h"
+#include "lodestone/core/base/error.h"
+#include "lodestone/core/field/magnetization_law.h"
+#include "lodestone/core/field/material.h"
+#include "lodestone/core/mpm/solver.h"
+#include "lodestone/core/sources/sphere_magnet.h"
+#include "lodestone/core/sources/uniform_field.h"
 
 using namespace lodestone;
 

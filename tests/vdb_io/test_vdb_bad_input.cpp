@@ -14,8 +14,8 @@
 #include <string>
 #include <vector>
 
-#include "lodestone/core/error.h"
-#include "lodestone/core/grid.h"
+#include "lodestone/core/base/error.h"
+#include "lodestone/core/base/grid.h"
 #include "lodestone/vdb_io/field_file.h"
 #include "lodestone/vdb_io/grid_conversion.h"
 

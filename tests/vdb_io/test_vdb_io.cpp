@@ -13,9 +13,9 @@
 #include <thread>
 #include <vector>
 
-#include "lodestone/core/magnetic_stage.h"
-#include "lodestone/core/material.h"
-#include "lodestone/core/uniform_field.h"
+#include "lodestone/core/stage/magnetic_stage.h"
+#include "lodestone/core/field/material.h"
+#include "lodestone/core/sources/uniform_field.h"
 #include "lodestone/vdb_io/field_file.h"
 #include "lodestone/vdb_io/grid_conversion.h"
 #include "lodestone/vdb_io/point_file.h"

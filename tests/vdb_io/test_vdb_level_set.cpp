@@ -18,12 +18,12 @@
 #include <openvdb/tools/LevelSetSphere.h>
 #include <openvdb/tools/LevelSetUtil.h>
 
-#include "lodestone/core/constants.h"
-#include "lodestone/core/magnetic_stage.h"
-#include "lodestone/core/material.h"
-#include "lodestone/core/mpm_emitter.h"
-#include "lodestone/core/mpm_solver.h"
-#include "lodestone/core/uniform_field.h"
+#include "lodestone/core/base/constants.h"
+#include "lodestone/core/stage/magnetic_stage.h"
+#include "lodestone/core/field/material.h"
+#include "lodestone/core/mpm/emitter.h"
+#include "lodestone/core/mpm/solver.h"
+#include "lodestone/core/sources/uniform_field.h"
 #include "lodestone/vdb_io/field_file.h"
 #include "lodestone/vdb_io/grid_conversion.h"
 #include "lodestone/vdb_io/level_set_file.h"

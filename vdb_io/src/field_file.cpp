@@ -7,7 +7,7 @@
 
 #include <openvdb/openvdb.h>
 
-#include "lodestone/core/error.h"
+#include "lodestone/core/base/error.h"
 #include "vdb_atomic_write.h"
 #include "lodestone/vdb_io/grid_conversion.h"
 

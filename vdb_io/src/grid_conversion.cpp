@@ -12,7 +12,7 @@
 #include <openvdb/tools/Interpolation.h>
 #include <openvdb/tools/Prune.h>
 
-#include "lodestone/core/error.h"
+#include "lodestone/core/base/error.h"
 
 namespace lodestone {
 

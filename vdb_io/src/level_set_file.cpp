@@ -9,7 +9,7 @@
 #include <openvdb/openvdb.h>
 #include <openvdb/tools/MeshToVolume.h>
 
-#include "lodestone/core/error.h"
+#include "lodestone/core/base/error.h"
 #include "lodestone/vdb_io/grid_conversion.h"
 #include "vdb_atomic_write.h"
 

@@ -10,7 +10,7 @@
 #include <openvdb/points/PointConversion.h>
 #include <openvdb/points/PointDataGrid.h>
 
-#include "lodestone/core/error.h"
+#include "lodestone/core/base/error.h"
 #include "vdb_atomic_write.h"
 #include "lodestone/vdb_io/grid_conversion.h"
 

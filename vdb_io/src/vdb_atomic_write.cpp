@@ -5,7 +5,7 @@
 #include <random>
 #include <system_error>
 
-#include "lodestone/core/error.h"
+#include "lodestone/core/base/error.h"
 
 namespace lodestone::detail {
 

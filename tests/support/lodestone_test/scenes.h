@@ -7,11 +7,11 @@
 #include <string>
 #include <vector>
 
-#include "lodestone/core/field_source.h"
-#include "lodestone/core/grid.h"
-#include "lodestone/core/langevin.h"
-#include "lodestone/core/material.h"
-#include "lodestone/core/vec3.h"
+#include "lodestone/core/sources/field_source.h"
+#include "lodestone/core/base/grid.h"
+#include "lodestone/core/field/langevin.h"
+#include "lodestone/core/field/material.h"
+#include "lodestone/core/base/vec3.h"
 
 namespace lodestone::test {
 

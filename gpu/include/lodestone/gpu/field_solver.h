@@ -32,10 +32,10 @@
 #include <string>
 #include <utility>
 
-#include "lodestone/core/boundary_kind.h"
-#include "lodestone/core/grid.h"
-#include "lodestone/core/magnetization_law.h"
-#include "lodestone/core/vec3.h"
+#include "lodestone/core/field/boundary_kind.h"
+#include "lodestone/core/base/grid.h"
+#include "lodestone/core/field/magnetization_law.h"
+#include "lodestone/core/base/vec3.h"
 #include "lodestone/gpu/backend.h"
 
 namespace lodestone {

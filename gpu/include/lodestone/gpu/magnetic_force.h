@@ -1,16 +1,16 @@
 #pragma once
 // Nodal fields and the magnetic force from a solved potential, on the device
 // or the host reference: the pipeline of core's recoverNodalFields,
-// stressDivergence and spreadForce (core/src/nodal_field.cpp,
+// stressDivergence and spreadForce (core/src/stage/nodal_field.cpp,
 // magnetic_force.cpp):
 //   H = H_ext - grad phi (lumped-L2 projected gradient), B = mu0 (H + M(H; n)),
 //   t = div T in split form (Einstein-Laub stress, central differences;
 //       (M . grad) H_ext from central differences of the nodal H_ext),
 //   f_i = sum_j R_ij t_j with R = prod_axes [dx/6, 2dx/3, dx/6] (N).
 // Arrays are host arrays, one entry per node, x fastest.
-#include "lodestone/core/grid.h"
-#include "lodestone/core/magnetization_law.h"
-#include "lodestone/core/vec3.h"
+#include "lodestone/core/base/grid.h"
+#include "lodestone/core/field/magnetization_law.h"
+#include "lodestone/core/base/vec3.h"
 #include "lodestone/gpu/backend.h"
 
 namespace lodestone {

@@ -5,7 +5,7 @@
 // (gravity, an optional nodal force such as the magnetic force, domain walls)
 // and G2P (APIC velocity and affine matrix, MLS update of F or J, advection,
 // domain bounds). The formulas are those of core's MpmGrid and MpmSolver
-// (core/src/mpm_grid.cpp, mpm_solver.cpp), evaluated by the same
+// (core/src/mpm/grid.cpp, mpm_solver.cpp), evaluated by the same
 // LODESTONE_HOSTDEV functions on the host (Backend::Cpu, serial) and on the
 // device (Backend::Cuda). Colliders other than the domain walls stay on the
 // host's side of the step.
@@ -29,9 +29,9 @@
 #include <string>
 #include <vector>
 
-#include "lodestone/core/grid.h"
-#include "lodestone/core/mat3.h"
-#include "lodestone/core/vec3.h"
+#include "lodestone/core/base/grid.h"
+#include "lodestone/core/base/mat3.h"
+#include "lodestone/core/base/vec3.h"
 #include "lodestone/gpu/backend.h"
 
 namespace lodestone {

@@ -1,6 +1,6 @@
 #pragma once
 // Exceptions of the node layer; the C ABI maps them to status codes.
-#include "lodestone/core/error.h"
+#include "lodestone/core/base/error.h"
 
 namespace lodestone::plugin {
 

@@ -3,13 +3,13 @@
 // nodes' cooks and scene files (whose entries are nodes' parameters).
 #include <memory>
 
-#include "lodestone/core/field_source.h"
-#include "lodestone/core/magnet_source.h"
-#include "lodestone/core/mpm_collider.h"
-#include "lodestone/core/mpm_emitter.h"
-#include "lodestone/core/mpm_solver.h"
-#include "lodestone/core/pose.h"
-#include "lodestone/core/sampled_sdf.h"
+#include "lodestone/core/sources/field_source.h"
+#include "lodestone/core/sources/magnet_source.h"
+#include "lodestone/core/mpm/collider.h"
+#include "lodestone/core/mpm/emitter.h"
+#include "lodestone/core/mpm/solver.h"
+#include "lodestone/core/base/pose.h"
+#include "lodestone/core/mpm/sampled_sdf.h"
 #include "lodestone/plugin/param.h"
 
 namespace lodestone::plugin {

@@ -7,13 +7,13 @@
 #include <variant>
 #include <vector>
 
-#include "lodestone/core/field_source_set.h"
-#include "lodestone/core/magnet_source.h"
-#include "lodestone/core/magnetic_stage.h"
-#include "lodestone/core/mpm_collider.h"
-#include "lodestone/core/mpm_emitter.h"
-#include "lodestone/core/mpm_material.h"
-#include "lodestone/core/mpm_particles.h"
+#include "lodestone/core/sources/field_source_set.h"
+#include "lodestone/core/sources/magnet_source.h"
+#include "lodestone/core/stage/magnetic_stage.h"
+#include "lodestone/core/mpm/collider.h"
+#include "lodestone/core/mpm/emitter.h"
+#include "lodestone/core/mpm/material.h"
+#include "lodestone/core/mpm/particles.h"
 
 namespace lodestone {
 class MpmSolver;

@@ -11,7 +11,7 @@
 #include <variant>
 #include <vector>
 
-#include "lodestone/core/vec3.h"
+#include "lodestone/core/base/vec3.h"
 
 namespace lodestone::plugin {
 

@@ -5,10 +5,10 @@
 #include <memory>
 #include <string>
 
-#include "lodestone/core/field_source.h"
-#include "lodestone/core/grid.h"
-#include "lodestone/core/magnetic_stage.h"
-#include "lodestone/core/vec3.h"
+#include "lodestone/core/sources/field_source.h"
+#include "lodestone/core/base/grid.h"
+#include "lodestone/core/stage/magnetic_stage.h"
+#include "lodestone/core/base/vec3.h"
 
 namespace lodestone {
 

@@ -17,9 +17,9 @@
 
 #include <openvdb/openvdb.h>
 
-#include "lodestone/core/grid.h"
-#include "lodestone/core/sampled_sdf.h"
-#include "lodestone/core/vec3.h"
+#include "lodestone/core/base/grid.h"
+#include "lodestone/core/mpm/sampled_sdf.h"
+#include "lodestone/core/base/vec3.h"
 
 namespace lodestone {
 

@@ -14,8 +14,8 @@
 #include <string>
 #include <vector>
 
-#include "lodestone/core/sampled_sdf.h"
-#include "lodestone/core/vec3.h"
+#include "lodestone/core/mpm/sampled_sdf.h"
+#include "lodestone/core/base/vec3.h"
 
 namespace lodestone {
 

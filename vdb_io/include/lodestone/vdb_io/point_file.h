@@ -6,9 +6,9 @@
 #include <string>
 #include <vector>
 
-#include "lodestone/core/mat3.h"
-#include "lodestone/core/mpm_particles.h"
-#include "lodestone/core/vec3.h"
+#include "lodestone/core/base/mat3.h"
+#include "lodestone/core/mpm/particles.h"
+#include "lodestone/core/base/vec3.h"
 
 namespace lodestone {
 

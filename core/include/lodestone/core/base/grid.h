@@ -1,0 +1,117 @@
+#pragma once
+// The node-centred Cartesian grid shared by the MPM and the magnetic stage:
+// node (i,j,k) sits at origin + dx*(i,j,k). Cells are the boxes between nodes.
+// Data lives in contiguous arrays with x fastest; views are non-owning so the
+// same kernels serve our storage, a host's memory or a GPU mirror. Algorithms
+// take views, never DenseGrid, so a sparse (tiled or VDB-backed) store only has
+// to hand out dense views of the blocks it holds.
+#include <cmath>
+#include <cstddef>
+#include <algorithm>
+#include <cstdint>
+#include <vector>
+
+#include "lodestone/core/base/error.h"
+#include "lodestone/core/base/vec3.h"
+
+namespace lodestone {
+
+struct Index3 {
+  int i = 0, j = 0, k = 0;
+  constexpr int operator[](int a) const { return a == 0 ? i : (a == 1 ? j : k); }
+  friend constexpr bool operator==(const Index3& a, const Index3& b) {
+    return a.i == b.i && a.j == b.j && a.k == b.k;
+  }
+};
+
+struct GridSpec {
+  Vec3d origin;  ///< world position of node (0,0,0), m
+  double dx = 0; ///< node spacing, m
+  Index3 dims;   ///< number of nodes along x, y, z (each >= 2)
+
+  std::size_t nodeCount() const {
+    return std::size_t(dims.i) * std::size_t(dims.j) * std::size_t(dims.k);
+  }
+  Index3 cellDims() const { return {dims.i - 1, dims.j - 1, dims.k - 1}; }
+  std::size_t cellCount() const {
+    return std::size_t(dims.i - 1) * std::size_t(dims.j - 1) * std::size_t(dims.k - 1);
+  }
+  std::size_t index(int i, int j, int k) const {
+    return std::size_t(i) + std::size_t(dims.i) * (std::size_t(j) + std::size_t(dims.j) * std::size_t(k));
+  }
+  std::size_t cellIndex(int i, int j, int k) const {
+    return std::size_t(i) +
+           std::size_t(dims.i - 1) * (std::size_t(j) + std::size_t(dims.j - 1) * std::size_t(k));
+  }
+  Vec3d nodePosition(int i, int j, int k) const {
+    return {origin.x + dx * i, origin.y + dx * j, origin.z + dx * k};
+  }
+  /// World position of the last node, m.
+  Vec3d maxCorner() const { return nodePosition(dims.i - 1, dims.j - 1, dims.k - 1); }
+  bool isBoundaryNode(int i, int j, int k) const {
+    return i == 0 || j == 0 || k == 0 || i == dims.i - 1 || j == dims.j - 1 || k == dims.k - 1;
+  }
+  /// Cell volume dx^3, m^3.
+  double cellVolume() const { return dx * dx * dx; }
+
+  /// Throws InvalidArgument naming `what` and the bad value.
+  void validate(const char* what = "grid") const {
+    require(std::isfinite(dx) && dx > 0, what, ": node spacing dx must be a positive finite length in m, got ", dx);
+    require(isFinite(origin), what, ": origin must be finite, got (", origin.x, ", ", origin.y, ", ", origin.z, ")");
+    require(dims.i >= 2 && dims.j >= 2 && dims.k >= 2, what, ": at least 2 nodes per axis are needed, got ",
+            dims.i, " x ", dims.j, " x ", dims.k);
+    // Guard the flat index against overflow (2^40 nodes is far beyond memory anyway).
+    require(double(dims.i) * dims.j * dims.k < 1.1e12, what, ": ", dims.i, " x ", dims.j, " x ", dims.k,
+            " nodes is too many");
+  }
+  friend bool operator==(const GridSpec& a, const GridSpec& b) {
+    return a.origin == b.origin && a.dx == b.dx && a.dims == b.dims;
+  }
+};
+
+/// A non-owning view of one value per grid node.
+template <typename T>
+struct GridView {
+  T* data = nullptr;
+  GridSpec spec;
+
+  std::size_t size() const { return spec.nodeCount(); }
+  T& operator[](std::size_t n) const { return data[n]; }
+  T& operator()(int i, int j, int k) const { return data[spec.index(i, j, k)]; }
+  operator GridView<const T>() const { return {data, spec}; }
+};
+
+/// Owning dense storage of one value per node.
+template <typename T>
+class DenseGrid {
+ public:
+  DenseGrid() = default;
+  explicit DenseGrid(const GridSpec& spec, const T& value = T{}) { reset(spec, value); }
+
+  void reset(const GridSpec& spec, const T& value = T{}) {
+    spec.validate();
+    spec_ = spec;
+    data_.assign(spec.nodeCount(), value);
+  }
+  void fill(const T& value) { std::fill(data_.begin(), data_.end(), value); }
+
+  const GridSpec& spec() const { return spec_; }
+  std::size_t size() const { return data_.size(); }
+  bool empty() const { return data_.empty(); }
+  T* data() { return data_.data(); }
+  const T* data() const { return data_.data(); }
+  T& operator[](std::size_t n) { return data_[n]; }
+  const T& operator[](std::size_t n) const { return data_[n]; }
+  T& operator()(int i, int j, int k) { return data_[spec_.index(i, j, k)]; }
+  const T& operator()(int i, int j, int k) const { return data_[spec_.index(i, j, k)]; }
+  GridView<T> view() { return {data_.data(), spec_}; }
+  GridView<const T> view() const { return {data_.data(), spec_}; }
+  std::vector<T>& values() { return data_; }
+  const std::vector<T>& values() const { return data_; }
+
+ private:
+  GridSpec spec_;
+  std::vector<T> data_;
+};
+
+}  // namespace lodestone

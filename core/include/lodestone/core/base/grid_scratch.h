@@ -1,0 +1,18 @@
+#pragma once
+// Reusable whole-grid temporaries of the nodal-field and force passes
+// (projectedGradient, recoverNodalFields, spreadForce). A caller that runs
+// them repeatedly on one grid keeps one GridScratch, so that these buffers
+// (tens to hundreds of MB at 128^3 to 256^3) are allocated once instead of
+// being mapped, page-faulted and cleared by the kernel on every call.
+#include <vector>
+
+#include "lodestone/core/base/vec3.h"
+
+namespace lodestone {
+
+struct GridScratch {
+  std::vector<double> scalar0, scalar1;
+  std::vector<Vec3d> vector0;
+};
+
+}  // namespace lodestone

@@ -1,0 +1,115 @@
+#pragma once
+// Constitutive laws of the reference MLS-MPM (Section 3 of the paper,
+// PHYSICS.md section 5), written once for host and device: no exceptions, no
+// allocation. Stresses are in Pa, energy densities in J/m^3 (per reference
+// volume).
+//
+// Neo-Hookean solid (Eq. 18, after Sifakis and Barbic 2012), with Lame
+// parameters mu, lambda (Pa) and J = det F:
+//   sigma = (mu/J) (F F^T - I) + (lambda/J) ln J I          (Cauchy)
+//   tau   = J sigma = mu (F F^T - I) + lambda ln J I          (Kirchhoff, = P F^T)
+//   Psi   = mu/2 (tr(F^T F) - 3) - mu ln J + lambda/2 (ln J)^2
+// so that P = dPsi/dF = mu (F - F^-T) + lambda ln J F^-T and tau = P F^T.
+//
+// Viscous fluid (Eqs. 19-21), viscosity mu_N (Pa*s), bulk modulus K (Pa), and
+// only the volume ratio J tracked (Tampubolon et al. 2017):
+//   sigma = mu_N (grad v + grad v^T) - K (1 - J) I            (Cauchy)
+//   tau   = J sigma                                           (Kirchhoff)
+//   Psi   = K/2 (J - 1)^2   (the elastic part: d Psi/dJ = K (J - 1) = -p)
+// The pressure is p = K (1 - J). In MLS-MPM the particle's affine matrix C is
+// its velocity gradient, so grad v = C.
+//
+// Inverted or collapsed elements (J <= kMinVolumeRatio) would make ln J
+// undefined; J is floored at kMinVolumeRatio inside the logarithm and the
+// 1/J factor so the stress stays finite (a strong restoring pressure) instead
+// of turning into NaN.
+#include <cmath>
+
+#include "lodestone/core/base/hostdev.h"
+#include "lodestone/core/base/mat3.h"
+
+namespace lodestone {
+
+/// Smallest volume ratio used inside ln J and 1/J (dimensionless).
+inline constexpr double kMinVolumeRatio = 1e-6;
+
+/// det A.
+template <typename T>
+LODESTONE_HOSTDEV inline T determinant(const Mat3<T>& A) {
+  return A(0, 0) * (A(1, 1) * A(2, 2) - A(1, 2) * A(2, 1)) - A(0, 1) * (A(1, 0) * A(2, 2) - A(1, 2) * A(2, 0)) +
+         A(0, 2) * (A(1, 0) * A(2, 1) - A(1, 1) * A(2, 0));
+}
+
+/// tr A.
+template <typename T>
+LODESTONE_HOSTDEV inline T trace(const Mat3<T>& A) {
+  return A(0, 0) + A(1, 1) + A(2, 2);
+}
+
+/// Neo-Hookean Kirchhoff stress tau = mu (F F^T - I) + lambda ln J I (Pa), Eq. 18 times J.
+template <typename T>
+LODESTONE_HOSTDEV inline Mat3<T> neoHookeanKirchhoff(const Mat3<T>& F, T mu, T lambda) {
+  using std::log;
+  T J = determinant(F);
+  if (!(J > T(kMinVolumeRatio))) J = T(kMinVolumeRatio);
+  const T p = lambda * log(J);
+  Mat3<T> tau;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) {
+      const T ffT = F(i, 0) * F(j, 0) + F(i, 1) * F(j, 1) + F(i, 2) * F(j, 2);
+      tau(i, j) = mu * (ffT - (i == j ? T(1) : T(0))) + (i == j ? p : T(0));
+    }
+  return tau;
+}
+
+/// Neo-Hookean Cauchy stress sigma = tau / J (Pa), Eq. 18.
+template <typename T>
+LODESTONE_HOSTDEV inline Mat3<T> neoHookeanCauchy(const Mat3<T>& F, T mu, T lambda) {
+  T J = determinant(F);
+  if (!(J > T(kMinVolumeRatio))) J = T(kMinVolumeRatio);
+  Mat3<T> s = neoHookeanKirchhoff(F, mu, lambda);
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) s(i, j) /= J;
+  return s;
+}
+
+/// Neo-Hookean strain energy per reference volume Psi(F) (J/m^3).
+template <typename T>
+LODESTONE_HOSTDEV inline T neoHookeanEnergyDensity(const Mat3<T>& F, T mu, T lambda) {
+  using std::log;
+  T J = determinant(F);
+  if (!(J > T(kMinVolumeRatio))) J = T(kMinVolumeRatio);
+  T frob = 0;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) frob += F(i, j) * F(i, j);
+  const T lnJ = log(J);
+  return T(0.5) * mu * (frob - T(3)) - mu * lnJ + T(0.5) * lambda * lnJ * lnJ;
+}
+
+/// Viscous-fluid Cauchy stress sigma = mu_N (C + C^T) - K (1 - J) I (Pa), Eqs. 19-21,
+/// with the velocity gradient C (1/s), viscosity mu_N (Pa*s) and bulk modulus K (Pa).
+template <typename T>
+LODESTONE_HOSTDEV inline Mat3<T> viscousFluidCauchy(const Mat3<T>& C, T J, T viscosity, T bulkModulus) {
+  const T p = bulkModulus * (T(1) - J);  // pressure, Pa
+  Mat3<T> s;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) s(i, j) = viscosity * (C(i, j) + C(j, i)) - (i == j ? p : T(0));
+  return s;
+}
+
+/// Viscous-fluid Kirchhoff stress tau = J sigma (Pa).
+template <typename T>
+LODESTONE_HOSTDEV inline Mat3<T> viscousFluidKirchhoff(const Mat3<T>& C, T J, T viscosity, T bulkModulus) {
+  Mat3<T> s = viscousFluidCauchy(C, J, viscosity, bulkModulus);
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) s(i, j) *= J;
+  return s;
+}
+
+/// Elastic energy per reference volume of the fluid, K/2 (J - 1)^2 (J/m^3).
+template <typename T>
+LODESTONE_HOSTDEV inline T fluidEnergyDensity(T J, T bulkModulus) {
+  return T(0.5) * bulkModulus * (J - T(1)) * (J - T(1));
+}
+
+}  // namespace lodestone

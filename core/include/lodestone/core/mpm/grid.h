@@ -1,0 +1,146 @@
+#pragma once
+// The MLS-MPM background grid and its particle <-> grid transfers (Hu et al.
+// 2018; Section 4.3 of the paper, steps 1, 5, 6 and 7) with quadratic
+// B-splines (bspline.h) on the node-centred grid of grid.h.
+//
+// P2G (step 1): for every particle p and node i of its 3x3x3 stencil, with
+// weight w_ip and offset d_ip = x_i - x_p,
+//   m_i  += w_ip m_p
+//   mv_i += w_ip (m_p v_p + A_p d_ip + dt f_p)
+//   A_p   = m_p C_p - dt (4/dx^2) V_p^0 tau_p,
+// APIC momentum (Jiang et al. 2015) plus the MLS stress force: tau_p = J sigma
+// is the Kirchhoff stress (mpm_constitutive.h), V_p^0 J = V_p the current
+// volume, 4/dx^2 = D_p^-1 for quadratic B-splines; f_p an optional external
+// force per particle (N).
+// G2P (steps 5-7): v_p = sum_i w_ip v_i, C_p = (4/dx^2) sum_i w_ip v_i d_ip^T,
+// then F_p <- (I + dt C_p) F_p (solids, MLS update) or J_p <- (1 + dt tr C_p) J_p
+// (fluids), and x_p <- x_p + dt v_p.
+//
+// Conservation: P2G preserves mass, linear momentum and APIC angular momentum
+// (MpmParticles::angularMomentum) exactly in exact arithmetic, the stress term
+// contributing zero net force and, tau being symmetric, zero net torque; G2P
+// (before advection) returns exactly the grid's momentum and angular momentum.
+//
+// Determinism of the parallel P2G. Particles are binned by the base node of
+// their stencil (counting sort; atomics only count, and the order they give
+// inside a bin is replaced by ascending particle index). Bins form x-rows
+// (bj, bk); a row writes only nodes with j in [bj, bj+2], k in [bk, bk+2], so
+// rows of equal colour (bj mod 3, bk mod 3) write disjoint nodes. The nine
+// colours run one after another, the rows of a colour in parallel, each row
+// by one task walking its bins in increasing bi and each bin in increasing
+// particle index. A node receives contributions from 9 rows of 9 distinct
+// colours, so it accumulates them in one fixed order whatever the thread
+// count or schedule: the grid is bitwise identical for any number of
+// threads. G2P writes only its own particle.
+//
+// Particles must lie where their stencil fits the grid: grid coordinate
+// u = (x - origin)/dx in [1/2, dims - 3/2) per axis (transfer.h). The solver
+// keeps them there; the transfers throw InvalidArgument otherwise.
+#include <atomic>
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+#include "lodestone/core/base/grid.h"
+#include "lodestone/core/mpm/material.h"
+#include "lodestone/core/mpm/particles.h"
+
+namespace lodestone {
+
+/// One node during P2G: mass (kg) and momentum (kg*m/s).
+struct MpmNode {
+  Vec3d momentum;
+  double mass = 0;
+};
+
+/// Where G2P keeps the advected particles (optional): positions outside
+/// [lo, hi] (m, per axis) are clamped back, stopping their outward velocity,
+/// or only counted (clamp = false), for the caller to remove.
+struct ParticleBounds {
+  Vec3d lo, hi;
+  bool clamp = true;
+};
+
+/// What G2P measured.
+struct GridToParticleReport {
+  double maxSpeed = 0;        ///< largest |v_p| after the transfer, m/s
+  std::size_t clamped = 0;    ///< particles moved back inside the bounds
+  std::size_t outside = 0;    ///< particles outside the bounds, left there (clamp = false)
+  std::size_t nonFinite = 0;  ///< particles whose position, velocity or J became non-finite (left as they are)
+};
+
+class MpmGrid {
+ public:
+  MpmGrid() = default;
+  /// Throws InvalidArgument on a bad grid (fewer than 3 nodes per axis).
+  explicit MpmGrid(const GridSpec& spec);
+  MpmGrid(MpmGrid&&) noexcept;
+  MpmGrid& operator=(MpmGrid&&) noexcept;
+  ~MpmGrid();
+
+  const GridSpec& spec() const { return spec_; }
+
+  /// Step 1: bins the particles and deposits mass and momentum (including the
+  /// stress impulse over dt (s) and, when particleForces is given, dt times
+  /// those forces (N, one per particle)). Throws InvalidArgument naming the
+  /// lowest offending particle for a non-finite position, a stencil outside
+  /// the grid or a material index out of range. Nodes outside activeLo() ..
+  /// activeHi() are zero afterwards.
+  void particleToGrid(const MpmParticles& particles, const std::vector<MpmMaterial>& materials, double dt,
+                      const Vec3d* particleForces = nullptr);
+
+  /// Steps 5-7: G2P (APIC), the MLS update of F (solids) or J (fluids) and
+  /// advection, from the node velocities velocity() (m/s), which the grid
+  /// update must have set on the active box. Particles must be the ones of
+  /// the last particleToGrid, unmoved.
+  GridToParticleReport gridToParticle(MpmParticles& particles, const std::vector<MpmMaterial>& materials, double dt,
+                                      const ParticleBounds* bounds = nullptr) const;
+
+  /// Node data of the last P2G (one entry per node, x fastest).
+  std::vector<MpmNode>& nodes() { return nodes_; }
+  const std::vector<MpmNode>& nodes() const { return nodes_; }
+  /// Node velocities (m/s) used by G2P; written by the grid update.
+  std::vector<Vec3d>& velocity() { return velocity_; }
+  const std::vector<Vec3d>& velocity() const { return velocity_; }
+
+  /// The box of nodes the last P2G could touch: [activeLo, activeHi) per
+  /// axis (empty when there were no particles).
+  Index3 activeLo() const { return activeLo_; }
+  Index3 activeHi() const { return activeHi_; }
+
+  /// The particle indices of the last P2G grouped by stencil bin (bins in
+  /// flat order, ascending index within a bin): a cache-friendly order.
+  const std::vector<std::uint32_t>& binnedOrder() const { return sorted_; }
+
+  /// Seconds spent binning in the last particleToGrid.
+  double lastBinningSeconds() const { return binningSeconds_; }
+
+ private:
+  void bin(const MpmParticles& particles, std::size_t materialCount);
+  void zeroBox(Index3 lo, Index3 hi);
+
+  GridSpec spec_;
+  Index3 baseDims_{0, 0, 0};
+  std::vector<MpmNode> nodes_;
+  std::vector<Vec3d> velocity_;
+  Index3 activeLo_{0, 0, 0}, activeHi_{0, 0, 0};
+  // Binning scratch. Bins are stencil base nodes; only the box of bins in
+  // use, [binLo_, binLo_ + binDims_), gets offsets.
+  std::size_t boxKey(std::uint64_t packed) const {
+    const std::size_t bi = std::size_t(packed & 0x1FFFFF) - std::size_t(binLo_.i);
+    const std::size_t bj = std::size_t((packed >> 21) & 0x1FFFFF) - std::size_t(binLo_.j);
+    const std::size_t bk = std::size_t(packed >> 42) - std::size_t(binLo_.k);
+    return bi + std::size_t(binDims_.i) * (bj + std::size_t(binDims_.j) * bk);
+  }
+  Index3 binLo_{0, 0, 0}, binDims_{0, 0, 0};
+  std::vector<std::uint64_t> key_;   // per particle: base node, 21 bits per axis
+  std::vector<std::uint32_t> rank_;  // per particle: slot in its bin (scheduling-dependent, re-sorted)
+  std::unique_ptr<std::atomic<std::uint32_t>[]> binSize_;  // per base node; zero between calls
+  std::size_t binCapacity_ = 0;
+  std::vector<std::uint32_t> offsets_;  // box bins + 1 prefix sums
+  std::vector<std::uint32_t> sorted_;   // particle indices grouped by bin, ascending within a bin
+  double binningSeconds_ = 0;
+};
+
+}  // namespace lodestone

@@ -1,0 +1,56 @@
+#pragma once
+// Materials of the reference MLS-MPM: a mechanical model (Neo-Hookean solid
+// or viscous fluid, mpm_constitutive.h) with its density, plus an optional
+// magnetic material (law none / linear / Langevin and the bulk micro-particle
+// number density n0, material.h). Built by validated factories that throw
+// InvalidArgument naming the bad value and its unit.
+#include <string>
+
+#include "lodestone/core/field/material.h"
+
+namespace lodestone {
+
+enum class MpmModel : int {
+  NeoHookeanSolid = 0,  ///< tracks the deformation gradient F (Eq. 18)
+  ViscousFluid = 1      ///< tracks only the volume ratio J (Eqs. 19-21)
+};
+const char* toString(MpmModel model);
+
+struct MpmMaterial {
+  MpmModel model = MpmModel::NeoHookeanSolid;
+  double density = 0;         ///< rest mass density rho, kg/m^3
+  double mu = 0;              ///< solid: shear modulus (second Lame parameter) mu, Pa
+  double lambda = 0;          ///< solid: Lame parameter lambda, Pa
+  double viscosity = 0;       ///< fluid: dynamic viscosity mu_N, Pa*s
+  double bulkModulus = 0;     ///< fluid: bulk modulus K, Pa
+  MagneticMaterial magnetic;  ///< magnetization law and n0 (1/m^3); LawKind::None when not magnetic
+
+  bool isMagnetic() const { return magnetic.law.kind != LawKind::None; }
+  /// Fastest elastic (P-)wave speed at rest, m/s: sqrt((lambda + 2 mu)/rho)
+  /// for the solid, sqrt(K/rho) for the fluid.
+  double waveSpeed() const;
+  /// Kinematic viscosity mu_N / rho (m^2/s); 0 for the solid.
+  double kinematicViscosity() const;
+  /// Throws InvalidArgument naming the first bad value.
+  void validate() const;
+  /// One line with units.
+  std::string describe() const;
+};
+
+/// Neo-Hookean solid from Young's modulus E (Pa, finite, > 0), Poisson's ratio
+/// nu (in (-1, 0.5)) and density rho (kg/m^3, finite, > 0):
+/// mu = E / (2 (1 + nu)), lambda = E nu / ((1 + nu)(1 - 2 nu)).
+MpmMaterial neoHookeanSolid(double youngModulus, double poissonRatio, double density,
+                            const MagneticMaterial& magnetic = nonMagneticMaterial());
+
+/// Viscous fluid from viscosity mu_N (Pa*s, finite, >= 0), bulk modulus K
+/// (Pa, finite, > 0) and density rho (kg/m^3, finite, > 0).
+MpmMaterial viscousFluid(double viscosity, double bulkModulus, double density,
+                         const MagneticMaterial& magnetic = nonMagneticMaterial());
+
+/// Throws InvalidArgument unless the magnetic material is usable by the MPM:
+/// LawKind::None, or a linear / Langevin law with finite positive parameters
+/// and a positive finite n0 (1/m^3).
+void validateMagneticMaterial(const MagneticMaterial& magnetic, const char* who);
+
+}  // namespace lodestone

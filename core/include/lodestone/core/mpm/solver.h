@@ -1,0 +1,318 @@
+#pragma once
+// The reference MLS-MPM with nonlinear magnetism (Section 4.3 of the paper,
+// PHYSICS.md section 5). One substep, top to bottom:
+//
+//   0. particles handed out through particles() or added by emit() since the
+//      last substep are checked: outside the domain they are clamped back or
+//      removed, non-finite ones removed (all counted);
+//   1. P2G: mass and APIC momentum with the MLS stress impulse (mpm_grid.h);
+//   2-3. the magnetic force: every `magneticSolveInterval` substeps (or once
+//      per frame) the magnetic points (their positions at the start of the
+//      substep, as P2G sees them) are handed to MagneticForceStage::run
+//      exactly as an external host would, and its nodal force is kept and
+//      reused until the next solve;
+//   4. grid update: v_i = (m v_i + dt f_i) / m_i + dt g, then the colliders'
+//      and the domain walls' boundary conditions;
+//   5-7. G2P (APIC), MLS update of F or J, advection (mpm_grid.h); advected
+//      particles leaving the domain are clamped or removed, non-finite ones
+//      removed, and counted in the report.
+//
+// Coupling to the magnetic stage. When the stage grid equals the MPM grid
+// (the default), the stage's nodal force f_i (N) is first moved onto the
+// support of the micro-particle density with gatherToSupport (conserving its
+// sum): ForceMask::Material keeps force up to two nodes beyond the material,
+// where the MPM has no mass and a force would be lost; on the support every
+// node has mass, because mass and n are deposited by the same particles with
+// the same weights. It is then added to the grid momentum (f_i dt). When the
+// stage grid differs, MagneticForceStage::particleForces gives a
+// conservative force per particle (N), kept in MpmParticles::magneticForce
+// and deposited in P2G (w_ip F_p dt). Either way the total impulse is
+// dt * (the stage's total force) up to force the stage drops.
+//
+// The domain: nodes within `wallNodes` (W) of a grid face are walls with the
+// `walls` boundary condition (normal pointing into the domain); material is
+// stopped about W - 1/2 nodes from the face (domainLower / domainUpper: a
+// block placed with its bottom there rests without sinking, one placed at
+// node W sinks into the last half cell). Particles are kept where their
+// stencil fits: (x - origin)/dx in [1, dims - 2] per axis (a half-cell margin
+// inside the valid range [1/2, dims - 3/2)); leaving that box counts as
+// leaving the domain.
+//
+// Time stepping: a fixed dt, or dt = min(cfl dx / (max|v_p| + c), cfl dx^2 /
+// (3 nu), dtMax) floored at dtMin, with c the largest elastic wave speed of
+// the materials (sqrt((lambda + 2 mu)/rho) or sqrt(K/rho)) and nu the largest
+// kinematic viscosity (the explicit diffusion limit dx^2/(6 nu) at cfl = 1/2).
+// A fixed dt above the stability bound (stabilityLimitDt) is shortened by
+// advanceFrame, with a warning, rather than taken and blown up.
+//
+// Known limitations of the scheme (measured in tests/core/test_mpm_*.cpp):
+// APIC transfers damp elastic vibration at the grid scale (an 8-cell block
+// loses about 90% of its breathing-mode energy in 14 periods); the J-only fluid on a
+// collocated grid carries pressure modes the grid cannot see (alternating J
+// within a cell, nodal checkerboard), so its per-particle pressure is noisy
+// after violent flow though its grid-visible mean is hydrostatic; fluids seep
+// up to about half a cell into separate/slip wall layers; particle density
+// drifts from 1/J in fluids (particles cluster without a pressure response).
+#include <cstddef>
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "lodestone/core/planner/effects_planner.h"
+#include "lodestone/core/sources/field_source_set.h"
+#include "lodestone/core/base/grid.h"
+#include "lodestone/core/sources/magnet_source.h"
+#include "lodestone/core/stage/magnetic_stage.h"
+#include "lodestone/core/mpm/collider.h"
+#include "lodestone/core/mpm/emitter.h"
+#include "lodestone/core/mpm/grid.h"
+#include "lodestone/core/mpm/material.h"
+#include "lodestone/core/mpm/particles.h"
+
+namespace lodestone {
+
+/// What to do with a particle that leaves the domain (see the header comment).
+enum class OutOfDomainPolicy : int {
+  Clamp = 0,  ///< move it back to the domain edge and stop its outward motion
+  Remove = 1  ///< delete it
+};
+
+struct MpmSettings {
+  GridSpec grid;                   ///< the MPM grid (at least 4 nodes per axis)
+  Vec3d gravity{0.0, 0.0, -9.81};  ///< m/s^2
+  BoundaryCondition walls;         ///< domain walls (default: separate, frictionless)
+  int wallNodes = 2;               ///< wall layer thickness in nodes (0 = no walls)
+  OutOfDomainPolicy outOfDomain = OutOfDomainPolicy::Clamp;
+
+  double fixedDt = 0;   ///< > 0: every substep takes this dt (s); 0: CFL-adaptive
+  double cfl = 0.4;     ///< fraction of a cell a wave or particle may cross per substep
+  double dtMax = 1e-3;  ///< s
+  double dtMin = 1e-7;  ///< s; a smaller CFL step is raised to this (and reported)
+
+  int reorderInterval = 20;  ///< substeps between sorts of the particles by grid cell, for memory locality in P2G
+                             ///< (0 = never: indices stay stable; MpmParticles::id survives either way)
+
+  int magneticSolveInterval = 0;         ///< substeps between field solves; 0 = once per frame
+  std::optional<GridSpec> magneticGrid;  ///< grid of the magnetic stage; empty = the MPM grid (a grid not covering
+                                         ///< every magnetic particle needs magnetic.outOfGrid = Skip)
+  MagneticStageSettings magnetic;        ///< settings of the magnetic stage
+  PlannerSettings planner;               ///< effects planner (off: every magnetic stage runs as configured)
+
+  /// Scan every substep for NaN/Inf (particles' x, v, C, F, J, magnetic
+  /// force; the grid's mass, momentum and velocity on the active box; the
+  /// magnetic nodal force) and throw lodestone::Error naming the quantity, the
+  /// substep and the particle (index and id) or node. Off by default: the
+  /// solver then removes non-finite particles and counts them. About one
+  /// extra pass over the particles and the active grid per substep.
+  bool checkFinite = false;
+
+  /// Throws InvalidArgument naming the first bad value.
+  void validate() const;
+};
+
+/// Energies of the particle system (J).
+struct MpmEnergies {
+  double kinetic = 0;        ///< sum 1/2 m_p |v_p|^2
+  double gravitational = 0;  ///< -sum m_p g . x_p (zero at the world origin)
+  double elastic = 0;        ///< sum V_p^0 Psi (Neo-Hookean or K/2 (J-1)^2)
+  double total() const { return kinetic + gravitational + elastic; }
+};
+
+/// Outcome and timings (s) of one substep.
+struct MpmStepReport {
+  double dt = 0;               ///< s
+  double time = 0;             ///< time after the substep, s
+  double secondsP2G = 0;       ///< domain check, binning and P2G
+  double secondsBinning = 0;   ///< part of secondsP2G
+  double secondsMagnetic = 0;  ///< transfer + solve + force (+ coupling), when a solve ran
+  double secondsGridUpdate = 0;
+  double secondsG2P = 0;  ///< G2P, F/J update, advection, domain check
+  double secondsTotal = 0;
+  bool magneticSolved = false;   ///< a field solve ran in this substep
+  bool magneticReused = false;   ///< a solve was due but the planner reused the last one (nothing moved enough)
+  MagneticStageReport magnetic;  ///< its report (when magneticSolved)
+  Vec3d magneticImpulse;         ///< dt * magnetic force applied this substep, N*s
+  std::size_t particles = 0;     ///< particles after the substep
+  std::size_t clamped = 0;       ///< particles clamped back into the domain
+  std::size_t removed = 0;       ///< particles removed (out of domain under Remove, or non-finite)
+  std::size_t nonFinite = 0;     ///< of the removed, those with a non-finite state
+  double maxSpeed = 0;           ///< max |v_p| after G2P, m/s
+};
+
+/// Outcome of advanceFrame.
+struct MpmFrameReport {
+  int substeps = 0;
+  double time = 0;              ///< time at the end, s
+  double minDt = 0, maxDt = 0;  ///< s
+  int dtAtMinimum = 0;          ///< substeps whose CFL step was raised to dtMin
+  int dtLimitedByCfl = 0;       ///< substeps whose fixed dt exceeded stabilityLimitDt() and was shortened
+  double secondsP2G = 0, secondsMagnetic = 0, secondsGridUpdate = 0, secondsG2P = 0, secondsTotal = 0;
+  std::vector<MagneticStageReport> magneticReports;  ///< one per field solve
+  int magneticReused = 0;                            ///< due solves the planner skipped (field reused)
+  Vec3d magneticImpulse;                             ///< sum over substeps of dt * applied magnetic force, N*s
+  std::size_t clamped = 0, removed = 0, nonFinite = 0;
+  MpmEnergies energies;    ///< at the end of the frame
+  bool cancelled = false;  ///< the progress callback asked to stop
+  std::vector<std::string> warnings;
+  /// Multi-line summary with units.
+  std::string summary() const;
+};
+
+/// Progress of a frame: called after every substep; return false to stop.
+struct MpmProgress {
+  int substep = 0;
+  double time = 0;      ///< s
+  double fraction = 0;  ///< of the frame done, 0..1
+};
+using MpmProgressCallback = std::function<bool(const MpmProgress&)>;
+
+class MpmSolver {
+ public:
+  /// Throws InvalidArgument on bad settings.
+  explicit MpmSolver(const MpmSettings& settings);
+  ~MpmSolver();
+  MpmSolver(const MpmSolver&) = delete;
+  MpmSolver& operator=(const MpmSolver&) = delete;
+
+  const MpmSettings& settings() const { return settings_; }
+
+  /// The particles. Taking them mutably marks them for a domain check (and
+  /// clamping or removal) at the start of the next substep.
+  MpmParticles& particles() {
+    particlesDirty_ = true;
+    return particles_;
+  }
+  const MpmParticles& particles() const { return particles_; }
+
+  /// Adds a material and returns its index. All magnetic materials must share
+  /// one magnetization law (they may differ in n0): one stage solves them all.
+  std::uint32_t addMaterial(const MpmMaterial& material);
+  const std::vector<MpmMaterial>& materials() const { return materials_; }
+
+  /// Fills a shape with particles of material `material` (an index from
+  /// addMaterial); a zero settings.cellSize means the MPM grid's dx.
+  EmitReport emit(const EmitterShape& shape, std::uint32_t material, EmitterSettings settings);
+
+  std::size_t addCollider(const MpmCollider& collider);
+  std::size_t colliderCount() const { return colliders_.size(); }
+  MpmCollider& collider(std::size_t i);
+  const MpmCollider& collider(std::size_t i) const;
+
+  /// The applied-field sources (coils, uniform fields, static magnets that
+  /// are not colliders). Magnets added with addMagnet are kept separately.
+  FieldSourceSet& sources() { return sources_; }
+  const FieldSourceSet& sources() const { return sources_; }
+  void setSources(FieldSourceSet sources) { sources_ = std::move(sources); }
+
+  /// A permanent magnet that is both a field source and a collider of its
+  /// own shape (SphereMagnet -> sphere, CylinderMagnet -> cylinder,
+  /// CuboidMagnet -> box; other kinds throw). The magnet's pose follows
+  /// `motion` (before each field solve it is moved to motion.poseAt(t)).
+  /// Returns the collider index.
+  std::size_t addMagnet(const MagnetSource& magnet, const ColliderMotion& motion,
+                        const BoundaryCondition& boundary = BoundaryCondition());
+  /// As above, resting at the magnet's current pose.
+  std::size_t addMagnet(const MagnetSource& magnet, const BoundaryCondition& boundary = BoundaryCondition());
+  std::size_t magnetCount() const { return magnets_.size(); }
+  const MagnetSource& magnet(std::size_t i) const;
+
+  /// The applied field the stage sees: sources() plus the magnets.
+  const FieldSource& appliedField() const;
+
+  /// The substep the solver would take now (s): fixedDt, or the CFL step.
+  double suggestedDt() const;
+  /// The largest stable substep now (s): dx / (max|v_p| + c) and the
+  /// explicit viscous limit dx^2 / (6 nu); infinite for an empty or static
+  /// inviscid scene. advanceFrame shortens a fixedDt above it to cfl times
+  /// it (counted in MpmFrameReport::dtLimitedByCfl, with a warning).
+  double stabilityLimitDt() const;
+  /// One substep of dt (s, finite, > 0).
+  MpmStepReport step(double dt);
+  /// Substeps until the time has advanced by frameDuration (s); the last
+  /// substep is shortened to land on the frame end. With
+  /// magneticSolveInterval == 0 the field is solved at the frame's first substep.
+  MpmFrameReport advanceFrame(double frameDuration, const MpmProgressCallback& progress = {});
+
+  double time() const { return time_; }
+  void setTime(double t);
+
+  MpmEnergies energies() const;
+  /// Where the wall layers act, m: a wall made of the nodes below index W
+  /// (W = wallNodes) stops material at about W - 1/2 nodes from the face, so
+  /// the domain is [origin + (W - 1/2) dx, origin + (dims - 1 - W + 1/2) dx]
+  /// per axis; a body resting on the floor has its bottom at domainLower().z.
+  Vec3d domainLower() const;
+  Vec3d domainUpper() const;
+  const MpmGrid& grid() const { return grid_; }
+  /// The magnetic stage (null before the first field solve).
+  const MagneticForceStage* magneticStage() const { return stage_.get(); }
+  /// The nodal magnetic force (N) applied on the MPM grid until the next
+  /// solve (zero when the stage grid differs from the MPM grid).
+  GridView<const Vec3d> magneticNodalForce() const { return magneticForce_.view(); }
+  /// Force the last solve could not place on the support of the density
+  /// (gatherToSupport's dropped part), N.
+  Vec3d magneticForceDropped() const { return magneticDropped_; }
+
+  /// Forget the magnetic stage's warm start: the next field solve starts
+  /// from phi = 0, as it does in a solver restored from a checkpoint (which
+  /// is why the `lodestone` command calls it after writing one: a resumed
+  /// run then repeats the uninterrupted one bit for bit).
+  void resetMagneticWarmStart();
+
+  /// Substeps taken since construction (or restored from a checkpoint).
+  long long substepCount() const { return substeps_; }
+
+  /// The effects planner's decisions for the magnetic stages in the current
+  /// state (what the next field solve would do), without solving.
+  MagneticPlan planMagneticNow() const;
+  /// The plan of the last field solve (empty decisions before the first, or
+  /// when the planner is off).
+  const MagneticPlan& lastMagneticPlan() const { return lastPlan_; }
+
+ private:
+  friend struct MpmCheckpointAccess;  // mpm_checkpoint.cpp reads and restores the private state
+  void checkFiniteParticles(const char* where) const;
+  double cflDt(double cfl, bool bound) const;
+  void checkFiniteGrid(const char* where) const;
+  class SceneField;
+  std::size_t enforceDomain(std::size_t& removedOut, std::size_t& nonFiniteOut);
+  ParticleBounds domainBounds() const;
+  bool anyMagneticParticles() const;
+  void solveMagnetic(MpmStepReport& rep);
+  bool magneticStateChanged();
+  bool isMagneticPoint(std::size_t p) const;    // a particle with n_p > 0 of a magnetic material
+  const MagneticMaterial* magneticLaw() const;  // the (shared) law of the magnetic materials, or null
+  void poseMagnetsAt(double t) const;           // move the magnets to their motion's pose at t (s)
+  PlannerInputs plannerInputs(const std::vector<Vec3d>& positions, const MagneticMaterial& law) const;
+  void gridUpdate(double dt, MpmStepReport& rep);
+
+  MpmSettings settings_;
+  GridSpec magneticGrid_;
+  bool sameGrid_ = true;
+  MpmParticles particles_;
+  std::vector<MpmMaterial> materials_;
+  std::vector<MpmCollider> colliders_;
+  FieldSourceSet sources_;
+  std::vector<std::unique_ptr<MagnetSource>> magnets_;
+  std::vector<std::size_t> magnetCollider_;
+  std::unique_ptr<SceneField> scene_;
+  MpmGrid grid_;
+  std::unique_ptr<MagneticForceStage> stage_;
+  DenseGrid<Vec3d> magneticForce_;  // on the MPM grid (same-grid coupling)
+  Vec3d magneticDropped_;
+  bool haveMagneticForce_ = false;
+  bool frameStart_ = false;
+  bool particlesDirty_ = true;
+  int stepsSinceSolve_ = 0;
+  MagneticPlan lastPlan_;
+  std::vector<Vec3d> lastSolveX_;   // particle positions at the last solve (planner reuse), permuted with the particles
+  std::vector<Vec3d> lastSolveH_;   // applied field at sampled magnetic points at the last solve, A/m
+  std::vector<std::uint32_t> lastSolveSample_;  // particle indices of those samples
+  long long substeps_ = 0;
+  double time_ = 0;
+};
+
+}  // namespace lodestone

@@ -1,0 +1,106 @@
+#pragma once
+// The effects planner: which magnetic stages a substep's field solve needs,
+// and at what fidelity, within a relative accuracy budget b (the scene's
+// `accuracy`). Each decision is predicted from the current state, taken only
+// when its predicted error fits its share of the budget (b/4 each: law,
+// applied-field-only, reuse, active region), and recorded with its reason,
+// so that `lodestone plan` and `lodestone run` can say what was skipped and
+// what it costs. docs/planner.md gives the derivations; the tests
+// (tests/core/test_effects_planner.cpp) measure every decision against the
+// full-physics run.
+//
+// Predicted errors (relative, of the field inside the material):
+//  - linear law: the Langevin function L(a)/a = 1/3 - a^2/45 + ..., so the
+//    linear law (slope 1/3) overestimates M by a^2/15 at a = k2 |H|;
+//    a_max uses the largest applied |H_ext| over the magnetic points (the
+//    demagnetizing field only lowers |H| inside a body).
+//  - applied field only (no solve, H = H_ext): the demagnetizing field of a
+//    body of susceptibility chi changes H by N chi / (1 + N chi) <= chi
+//    (N <= 1), with chi the largest chord susceptibility M/H over the points.
+//  - reuse: between solves the force on a point is that of where it was;
+//    the force density changes by about 0.2 per cell of motion (measured in
+//    the tests: 0.38 dx of motion gave 8% on a cube pulled by a magnet), so
+//    a solve is reused while every magnetic point moved less than
+//    (b/4) / 0.2 cells and the applied field at the points changed by less
+//    than b/4 (relative).
+//  - active region: the open (far-field) boundary makes the truncation of the
+//    domain cheap: a margin of 4 free cells around the material costs
+//    < 0.5% of the force, 8 cells < 0.1% (measured in the tests).
+#include <cstddef>
+#include <string>
+#include <vector>
+
+#include "lodestone/core/sources/field_source.h"
+#include "lodestone/core/base/grid.h"
+#include "lodestone/core/field/material.h"
+#include "lodestone/core/base/vec3.h"
+
+namespace lodestone {
+
+enum class PlannerToggle : int {
+  Auto = 0,  ///< the planner decides from the budget
+  Off = 1,   ///< never (full physics for this decision)
+  On = 2     ///< always, whatever the predicted error
+};
+const char* toString(PlannerToggle toggle);
+/// "auto", "off" or "on"; throws InvalidArgument naming the bad value.
+PlannerToggle parsePlannerToggle(const std::string& name);
+
+struct PlannerSettings {
+  bool enabled = false;  ///< off: every stage as configured (full physics)
+  double budget = 0.01;  ///< relative deviation from full physics the planner may spend, (0, 1)
+  PlannerToggle linearLaw = PlannerToggle::Auto;
+  PlannerToggle appliedFieldOnly = PlannerToggle::Auto;
+  PlannerToggle fieldReuse = PlannerToggle::Auto;
+  PlannerToggle activeRegion = PlannerToggle::Auto;
+
+  /// Throws InvalidArgument naming the first bad value.
+  void validate() const;
+};
+
+/// One stage's decision.
+struct StageDecision {
+  std::string stage;           ///< e.g. "field solve", "magnetization law"
+  bool on = true;              ///< the stage (or the full-physics variant) runs
+  std::string choice;          ///< what runs, e.g. "langevin", "linear", "skipped"
+  std::string reason;          ///< why, with the numbers
+  double predictedError = 0;   ///< relative deviation from full physics this decision costs
+  double estimatedSeconds = 0; ///< predicted cost of the stage as decided, s (0: not estimated)
+};
+
+/// The planner's magnetic decisions for one field solve.
+struct MagneticPlan {
+  bool magnetic = false;         ///< any magnetic stage runs
+  bool linearLaw = false;        ///< solve with the linearized law
+  bool appliedFieldOnly = false; ///< skip the solve: H = H_ext
+  bool activeRegion = false;     ///< solve on `region` instead of the full magnetic grid
+  GridSpec region;               ///< the solve grid (the full grid when !activeRegion)
+  double reuseDistance = 0;      ///< m: reuse the solve while points moved less (0: re-solve when due)
+  double reuseFieldChange = 0;   ///< relative change of H_ext at the points that forces a re-solve
+  double predictedError = 0;     ///< sum of the decisions' predicted errors
+  std::vector<StageDecision> decisions;
+
+  /// One line per decision: stage, on/off, choice, reason, predicted error.
+  std::string summary() const;
+};
+
+/// The state the planner decides from.
+struct PlannerInputs {
+  const Vec3d* positions = nullptr;  ///< magnetic points, m
+  std::size_t count = 0;
+  MagneticMaterial material;         ///< law and bulk n0 of the magnetic material
+  const FieldSource* applied = nullptr;  ///< applied field (null or empty: none)
+  bool appliedEmpty = true;
+  double time = 0;                   ///< s
+  GridSpec grid;                     ///< the full magnetic grid
+  double secondsPerNodeSolve = 3e-7; ///< field-solve cost per grid node, s (docs/benchmarks.md: 2 cores, 1e-6, cold and warm)
+};
+
+/// Decides the magnetic stages for the state `in` (see the header comment).
+MagneticPlan planMagnetic(const PlannerSettings& settings, const PlannerInputs& in);
+
+/// Largest relative change of the applied field between two samplings at
+/// the same points (|a - b| / max |b|); 0 when both are zero.
+double relativeFieldChange(const std::vector<Vec3d>& a, const std::vector<Vec3d>& b);
+
+}  // namespace lodestone

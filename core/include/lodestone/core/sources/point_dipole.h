@@ -1,0 +1,43 @@
+#pragma once
+// The field of an ideal magnetic point dipole of moment m (A*m^2):
+//   H(r) = (3 r_hat (r_hat . m) - m) / (4 pi |r|^3)      (A/m)
+// Also the exact exterior field of a uniformly magnetized sphere and the
+// leading far-field term of every magnet.
+#include <memory>
+#include <string>
+
+#include "lodestone/core/sources/field_source.h"
+#include "lodestone/core/sources/time_profile.h"
+#include "lodestone/core/base/vec3.h"
+
+namespace lodestone {
+
+/// H (A/m) at offset r (m) from a point dipole of moment m (A*m^2).
+/// The singular point r = 0 is excluded: there (and wherever |r| is so small
+/// that the field overflows a double) the result is zero, never NaN or inf.
+Vec3d dipoleField(const Vec3d& moment, const Vec3d& r);
+
+class PointDipole final : public FieldSource {
+ public:
+  /// Dipole at `position` (m, world frame) with moment `moment` (A*m^2, world
+  /// frame), scaled in time by `scale`. Both vectors must be finite.
+  PointDipole(const Vec3d& position, const Vec3d& moment, TimeProfile scale = TimeProfile());
+
+  /// dipoleField(s(t) m, x - position); zero at x == position.
+  Vec3d field(const Vec3d& x, double t) const override;
+  void accumulateField(const Vec3d* x, std::size_t count, double t, Vec3d* out) const override;
+  std::string describe() const override;
+  std::unique_ptr<FieldSource> clone() const override;
+  /// Instance and s(t).
+  bool appendFieldSignature(double t, std::vector<double>& out) const override;
+
+  const Vec3d& position() const { return position_; }  ///< m
+  const Vec3d& moment() const { return moment_; }      ///< A*m^2, before scaling
+  const TimeProfile& profile() const { return scale_; }
+
+ private:
+  Vec3d position_, moment_;
+  TimeProfile scale_;
+};
+
+}  // namespace lodestone

@@ -1,0 +1,179 @@
+#include "lodestone/core/field/hull_stencil.h"
+
+#include <algorithm>
+#include <array>
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include "lodestone/core/base/error.h"
+
+namespace lodestone {
+
+template <typename T>
+void HullStencil<T>::build(const GridSpec& grid, const std::size_t* cellBase, std::size_t cells) {
+  grid.validate("hull stencil grid");
+  grid_ = grid;
+  const std::size_t nx = std::size_t(grid.dims.i), ny = std::size_t(grid.dims.j), nz = std::size_t(grid.dims.k);
+  const std::size_t rows = ny * nz;
+  lo_.assign(rows, grid.dims.i);
+  hi_.assign(rows, 0);
+  for (std::size_t s = 0; s < cells; ++s) {
+    const std::size_t b = cellBase[s];
+    const int i = int(b % nx);
+    const std::size_t j = (b / nx) % ny, k = b / (nx * ny);
+    require(i + 1 < grid.dims.i && j + 1 < ny && k + 1 < nz, "hull stencil: cell base node ", b,
+            " has no cell on a grid of ", grid.dims.i, " x ", grid.dims.j, " x ", grid.dims.k, " nodes");
+    for (std::size_t dk = 0; dk < 2; ++dk)
+      for (std::size_t dj = 0; dj < 2; ++dj) {
+        const std::size_t row = (j + dj) + ny * (k + dk);
+        lo_[row] = std::min(lo_[row], std::int32_t(i));
+        hi_[row] = std::max(hi_[row], std::int32_t(i + 2));
+      }
+  }
+  rowStart_.assign(rows + 1, 0);
+  for (std::size_t row = 0; row < rows; ++row) {
+    if (lo_[row] >= hi_[row]) lo_[row] = hi_[row] = 0;
+    rowStart_[row + 1] = rowStart_[row] + std::size_t(hi_[row] - lo_[row]);
+  }
+  corner_.resize(cells * 8);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, cells, 1024), [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t s = r.begin(); s != r.end(); ++s) {
+      const std::size_t b = cellBase[s];
+      const int i = int(b % nx);
+      const std::size_t j = (b / nx) % ny, k = b / (nx * ny);
+      for (int c = 0; c < 8; ++c) {
+        const std::size_t row = (j + std::size_t((c >> 1) & 1)) + ny * (k + std::size_t(c >> 2));
+        corner_[s * 8 + std::size_t(c)] = std::uint32_t(rowStart_[row] + std::size_t(i + (c & 1) - lo_[row]));
+      }
+    }
+  });
+  cellBase_.assign(cellBase, cellBase + cells);
+  cellSlot_.assign(grid.cellCount(), -1);
+  for (std::size_t s = 0; s < cells; ++s) {
+    const std::size_t b = cellBase[s];
+    cellSlot_[grid.cellIndex(int(b % nx), int((b / nx) % ny), int(b / (nx * ny)))] = std::int32_t(s);
+  }
+  values_.resize(std::size_t(kTaps) * size());
+}
+
+template <typename T>
+void HullStencil<T>::assemble(const double* packed) {
+  // Per corner c of a cell: the taps its row of E feeds and where that row
+  // sits in the packed upper triangle.
+  struct Tables {
+    int tap[8][8], at[8][8];
+  };
+  static const Tables tables = [] {
+    Tables t{};
+    int p[8][8];
+    for (int c = 0, e = 0; c < 8; ++c)
+      for (int d = c; d < 8; ++d, ++e) p[c][d] = p[d][c] = e;
+    for (int c = 0; c < 8; ++c)
+      for (int d = 0; d < 8; ++d) {
+        t.tap[c][d] = tap(c, d);
+        t.at[c][d] = p[c][d];
+      }
+    return t;
+  }();
+  const Index3 d = grid_.dims;
+  const Index3 cd = grid_.cellDims();
+  const std::size_t n = size();
+  T* out = values_.data();
+  tbb::parallel_for(tbb::blocked_range<int>(0, d.k, 1), [&](const tbb::blocked_range<int>& kr) {
+    for (int k = kr.begin(); k != kr.end(); ++k)
+      for (int j = 0; j < d.j; ++j) {
+        const int a0 = lo(j, k), a1 = hi(j, k);
+        if (a0 >= a1) continue;
+        const std::size_t row = rowStart(j, k);
+        const int len = a1 - a0;
+        for (int t = 0; t < kTaps; ++t) std::fill(out + std::size_t(t) * n + row, out + std::size_t(t) * n + row + len, T(0));
+        // The row's nodes are corner c = a + 2b + 4e of the cells based at
+        // (i - a, j - b, k - e): one cell row per (b, e), in a fixed order.
+        for (int c = 0; c < 8; ++c) {
+          const int a = c & 1, cj = j - ((c >> 1) & 1), ck = k - (c >> 2);
+          if (cj < 0 || ck < 0 || cj >= cd.j || ck >= cd.k) continue;
+          const std::int32_t* slots = cellSlot_.data() + grid_.cellIndex(0, cj, ck);
+          const int* taps = tables.tap[c];
+          const int* at = tables.at[c];
+          for (int i = std::max(a0, a); i < std::min(a1, cd.i + a); ++i) {
+            const std::int32_t slot = slots[i - a];
+            if (slot < 0) continue;
+            const double* E = packed + std::size_t(slot) * 36;
+            const std::size_t node = row + std::size_t(i - a0);
+            for (int e = 0; e < 8; ++e) out[std::size_t(taps[e]) * n + node] += T(E[at[e]]);
+          }
+        }
+      }
+  });
+}
+
+template <typename T>
+bool HullStencil<T>::sameCells(const GridSpec& grid, const std::size_t* cellBase, std::size_t cells) const {
+  return grid == grid_ && cells == cellBase_.size() && std::equal(cellBase, cellBase + cells, cellBase_.begin());
+}
+
+template <typename T>
+template <typename U>
+void HullStencil<T>::assignConverted(const HullStencil<U>& other) {
+  grid_ = other.grid_;
+  lo_ = other.lo_;
+  hi_ = other.hi_;
+  rowStart_ = other.rowStart_;
+  corner_.clear();
+  cellBase_.clear();
+  cellSlot_.clear();
+  values_.resize(other.values_.size());
+  const U* src = other.values_.data();
+  T* dst = values_.data();
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, values_.size(), 1 << 15),
+                    [&](const tbb::blocked_range<std::size_t>& r) {
+                      for (std::size_t m = r.begin(); m != r.end(); ++m) dst[m] = T(src[m]);
+                    });
+}
+
+template <typename T>
+void HullStencil<T>::clear() {
+  T* v = values_.data();
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, values_.size(), 1 << 15),
+                    [&](const tbb::blocked_range<std::size_t>& r) { std::fill(v + r.begin(), v + r.end(), T(0)); });
+}
+
+template <typename T>
+template <typename V>
+void HullStencil<T>::addProduct(const V* v, V* out) const {
+  const Index3 d = grid_.dims;
+  tbb::parallel_for(tbb::blocked_range<int>(0, d.k, 1), [&](const tbb::blocked_range<int>& kr) {
+    for (int k = kr.begin(); k != kr.end(); ++k)
+      for (int j = 0; j < d.j; ++j) {
+        const std::size_t row = grid_.index(0, j, k);
+        addRow(j, k, lo(j, k), hi(j, k), v + row, out + row);
+      }
+  });
+}
+
+template <typename T>
+template <typename V>
+void HullStencil<T>::addDiagonal(V* out) const {
+  const Index3 d = grid_.dims;
+  const T* centre = values_.data() + std::size_t(13) * size();
+  tbb::parallel_for(0, d.k, [&](int k) {
+    for (int j = 0; j < d.j; ++j) {
+      const int a = lo(j, k), b = hi(j, k);
+      const T* c = centre + rowStart(j, k);
+      V* o = out + grid_.index(a, j, k);
+      for (int i = 0; i < b - a; ++i) o[i] += V(c[i]);
+    }
+  });
+}
+
+template class HullStencil<double>;
+template class HullStencil<float>;
+template void HullStencil<double>::addProduct<double>(const double*, double*) const;
+template void HullStencil<float>::addProduct<float>(const float*, float*) const;
+template void HullStencil<double>::addDiagonal<double>(double*) const;
+template void HullStencil<float>::assignConverted<double>(const HullStencil<double>&);
+template void HullStencil<double>::assignConverted<double>(const HullStencil<double>&);
+template void HullStencil<float>::addDiagonal<float>(float*) const;
+
+}  // namespace lodestone

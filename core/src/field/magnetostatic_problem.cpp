@@ -1,0 +1,588 @@
+#include "lodestone/core/field/magnetostatic_problem.h"
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include "lodestone/core/base/coloured_scatter.h"
+#include "lodestone/core/base/error.h"
+#include "lodestone/core/field/element_build.h"
+#include "lodestone/core/field/langevin_batch.h"
+#include "lodestone/core/base/parallel.h"
+#include "lodestone/core/field/q1_element.h"
+#include "lodestone/core/field/q1_stencil.h"
+
+namespace lodestone {
+
+namespace {
+constexpr q1::Tables kQ1 = q1::makeTables();
+
+// A cell's moments about a block centre `rel` away from the cell's origin
+// (rel = origin - centre), from its dipole sum_q w M_q and upper[a], the
+// same sum over the Gauss points with bit a set (the upper abscissa on axis
+// a): the Gauss point at bits (qa, qb, qd) lies at o + dx (g[qa], g[qb],
+// g[qd]), so sum_q w M_q (x_q - c)_a = dipole (o - c)_a + dx (g0 dipole +
+// (g1 - g0) upper[a]). The centre field is left unset.
+Multipole cellMultipole(const Vec3d& dipole, const Vec3d upper[3], const Vec3d& rel, double h) {
+  const double g0 = q1::gaussAbscissa(0), g1 = q1::gaussAbscissa(1);
+  Multipole m;
+  m.dipole = dipole;
+  for (int i = 0; i < 3; ++i)
+    for (int a = 0; a < 3; ++a) m.quadrupole[i][a] = dipole[i] * (rel[a] + h * g0) + h * (g1 - g0) * upper[a][i];
+  return m;
+}
+
+struct EnergyTotals {
+  double energy = 0, energyAbs = 0;
+  bool finite = true;
+  EnergyTotals& operator+=(const EnergyTotals& o) {
+    energy += o.energy;
+    energyAbs += o.energyAbs;
+    finite = finite && o.finite;
+    return *this;
+  }
+};
+
+struct EnergySums {
+  double s = 0, a = 0;
+  EnergySums& operator+=(const EnergySums& o) {
+    s += o.s;
+    a += o.a;
+    return *this;
+  }
+};
+}  // namespace
+
+MagnetostaticProblem::MagnetostaticProblem(const GridSpec& grid, const MagnetizationLaw<double>& law,
+                                           BoundaryKind boundary)
+    : grid_(grid), law_(law), boundary_(boundary) {
+  grid_.validate("field-solve grid");
+  require(boundary != BoundaryKind::Open || (grid.dims.i >= 3 && grid.dims.j >= 3 && grid.dims.k >= 3),
+          "field-solve grid: the open boundary needs at least 3 nodes per axis, got ", grid.dims.i, " x ",
+          grid.dims.j, " x ", grid.dims.k);
+  cornerOffsets(grid_, cornerOffset_);
+}
+
+std::size_t MagnetostaticProblem::freeNodeCount() const {
+  if (boundary_ == BoundaryKind::Shield) return grid_.nodeCount();
+  return std::size_t(grid_.dims.i - 2) * std::size_t(grid_.dims.j - 2) * std::size_t(grid_.dims.k - 2);
+}
+
+Vec3d MagnetostaticProblem::cellOrigin(std::size_t base) const {
+  const std::size_t nx = std::size_t(grid_.dims.i), ny = std::size_t(grid_.dims.j);
+  const int i = int(base % nx), j = int((base / nx) % ny), k = int(base / (nx * ny));
+  return grid_.nodePosition(i, j, k);
+}
+
+void MagnetostaticProblem::gatherCorners(std::size_t base, const double* v, double c[8]) const {
+  for (int n = 0; n < 8; ++n) c[n] = v[base + cornerOffset_[n]];
+}
+
+void MagnetostaticProblem::setMaterial(GridView<const double> n, const AppliedFieldFunction& appliedField) {
+  require(n.spec == grid_, "field solve: the density grid does not match the solver grid");
+  require(bool(appliedField), "field solve: no applied-field function given");
+  const std::size_t count = grid_.nodeCount();
+  // First bad density by index (deterministic message).
+  const std::size_t bad = tbb::parallel_reduce(
+      tbb::blocked_range<std::size_t>(0, count, 1 << 14), count,
+      [&](const tbb::blocked_range<std::size_t>& r, std::size_t first) {
+        for (std::size_t m = r.begin(); m != r.end() && m < first; ++m)
+          if (!(std::isfinite(n[m]) && n[m] >= 0)) return m;
+        return first;
+      },
+      [](std::size_t a, std::size_t b) { return std::min(a, b); });
+  if (bad < count) {
+    const std::size_t nx = std::size_t(grid_.dims.i), ny = std::size_t(grid_.dims.j);
+    throw InvalidArgument(concat("field solve: micro-particle density n at node (", bad % nx, ", ",
+                                 (bad / nx) % ny, ", ", bad / (nx * ny), ") is ", n[bad],
+                                 " 1/m^3; it must be finite and >= 0"));
+  }
+
+  // Material cells per z-slab and colour, concatenated in slab order.
+  const Index3 cd = grid_.cellDims();
+  std::vector<std::vector<std::size_t>> slabs(std::size_t(cd.k) * 8);
+  tbb::parallel_for(0, cd.k, [&](int k) {
+    for (int j = 0; j < cd.j; ++j)
+      for (int i = 0; i < cd.i; ++i) {
+        const std::size_t base = grid_.index(i, j, k);
+        bool any = false;
+        for (int c = 0; c < 8 && !any; ++c) any = n[base + cornerOffset_[c]] > 0;
+        if (any) slabs[std::size_t(k) * 8 + std::size_t(cellColour(i, j, k))].push_back(base);
+      }
+  });
+  cellBase_.clear();
+  for (int colour = 0; colour < 8; ++colour) {
+    colourStart_[colour] = cellBase_.size();
+    for (int k = 0; k < cd.k; ++k) {
+      const auto& s = slabs[std::size_t(k) * 8 + std::size_t(colour)];
+      cellBase_.insert(cellBase_.end(), s.begin(), s.end());
+    }
+  }
+  colourStart_[8] = cellBase_.size();
+  const std::size_t cells = cellBase_.size();
+  nq_.assign(cells * 8, 0.0);
+  hext_.assign(cells * 8, Vec3d{});
+  elem_.assign(cells * kPacked, 0.0);
+  cellTensor_.assign(cells, SymMat3d{});
+  if (!stencil_.sameCells(grid_, cellBase_.data(), cells)) stencil_.build(grid_, cellBase_.data(), cells);
+  stencil_.clear();
+
+  const double h = grid_.dx;
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, cells, 256), [&](const tbb::blocked_range<std::size_t>& r) {
+    std::vector<Vec3d> x(r.size() * 8);
+    for (std::size_t s = r.begin(); s != r.end(); ++s) {
+      double nc[8];
+      gatherCorners(cellBase_[s], n.data, nc);
+      const Vec3d o = cellOrigin(cellBase_[s]);
+      for (int q = 0; q < 8; ++q) {
+        nq_[s * 8 + std::size_t(q)] = q1::interpolate(kQ1, q, nc);
+        x[(s - r.begin()) * 8 + std::size_t(q)] =
+            o + h * Vec3d{q1::gaussAbscissa(q & 1), q1::gaussAbscissa((q >> 1) & 1), q1::gaussAbscissa((q >> 2) & 1)};
+      }
+    }
+    appliedField(x.data(), x.size(), &hext_[r.begin() * 8]);
+  });
+  for (std::size_t m = 0; m < cells * 8; ++m)
+    if (!isFinite(hext_[m]))
+      throw InvalidArgument(concat("field solve: the applied field is not finite at (",
+                                   cellOrigin(cellBase_[m / 8]).x, ", ", cellOrigin(cellBase_[m / 8]).y, ", ",
+                                   cellOrigin(cellBase_[m / 8]).z, ") m"));
+
+  // Clearance to the wall, total count and centroid.
+  wallClearance_ = 1 << 30;
+  for (std::size_t s = 0; s < cells; ++s) {
+    const std::size_t b = cellBase_[s], nx = std::size_t(grid_.dims.i), ny = std::size_t(grid_.dims.j);
+    const int i = int(b % nx), j = int((b / nx) % ny), k = int(b / (nx * ny));
+    wallClearance_ = std::min({wallClearance_, i, j, k, cd.i - 1 - i, cd.j - 1 - j, cd.k - 1 - k});
+  }
+  const double w = grid_.cellVolume() / 8.0;
+  struct Moments {
+    double count = 0;
+    Vec3d first;
+    Moments& operator+=(const Moments& o) {
+      count += o.count;
+      first += o.first;
+      return *this;
+    }
+  };
+  const Moments mom = deterministicSum<Moments>(cells, [&](std::size_t s) {
+    Moments m;
+    const Vec3d o = cellOrigin(cellBase_[s]);
+    for (int q = 0; q < 8; ++q) {
+      const double nw = w * nq_[s * 8 + std::size_t(q)];
+      m.count += nw;
+      m.first += nw * (o + h * Vec3d{q1::gaussAbscissa(q & 1), q1::gaussAbscissa((q >> 1) & 1),
+                                     q1::gaussAbscissa((q >> 2) & 1)});
+    }
+    return m;
+  }, 256);
+  totalCount_ = mom.count;
+  centroid_ = mom.count > 0 ? mom.first / mom.count : 0.5 * (grid_.origin + grid_.maxCorner());
+
+  // Multipole blocks: cells grouped by (i, j, k) / edge, sorted by (block,
+  // slot) so the per-block sums have a fixed order. The edge grows with the
+  // distance to the wall so that edge / clearance stays <= 1/2 beyond 8 cells
+  // (the truncated octupole of a block falls as (edge / distance)^3).
+  int edge = kMultipoleBlock;
+  while (edge < 32 && 4 * edge <= wallClearance_) edge *= 2;
+  blockEdge_ = edge;
+  const int bx = (cd.i + edge - 1) / edge, by = (cd.j + edge - 1) / edge;
+  std::vector<std::uint64_t> key(cells);
+  tbb::parallel_for(std::size_t(0), cells, [&](std::size_t s) {
+    const std::size_t b = cellBase_[s], nx = std::size_t(grid_.dims.i), ny = std::size_t(grid_.dims.j);
+    const std::uint64_t i = b % nx / std::size_t(edge), j = (b / nx) % ny / std::size_t(edge),
+                        k = b / (nx * ny) / std::size_t(edge);
+    key[s] = i + std::uint64_t(bx) * (j + std::uint64_t(by) * k);
+  });
+  blockCells_.resize(cells);
+  std::iota(blockCells_.begin(), blockCells_.end(), std::size_t(0));
+  std::sort(blockCells_.begin(), blockCells_.end(),
+            [&](std::size_t a, std::size_t b) { return key[a] != key[b] ? key[a] < key[b] : a < b; });
+  blockStart_.clear();
+  cellBlock_.assign(cells, 0);
+  for (std::size_t m = 0; m < cells; ++m) {
+    if (m == 0 || key[blockCells_[m]] != key[blockCells_[m - 1]]) blockStart_.push_back(m);
+    cellBlock_[blockCells_[m]] = std::uint32_t(blockStart_.size() - 1);
+  }
+  blockStart_.push_back(cells);
+  const std::size_t blocks = blockStart_.size() - 1;
+  blockCentre_.assign(blocks, Vec3d{});
+  tbb::parallel_for(std::size_t(0), blocks, [&](std::size_t b) {
+    double c = 0;
+    Vec3d first{}, geo{};
+    for (std::size_t m = blockStart_[b]; m < blockStart_[b + 1]; ++m) {
+      const std::size_t sl = blockCells_[m];
+      const Vec3d o = cellOrigin(cellBase_[sl]) + Vec3d{0.5 * h, 0.5 * h, 0.5 * h};
+      double nc = 0;
+      for (int q = 0; q < 8; ++q) nc += nq_[sl * 8 + std::size_t(q)];
+      c += nc;
+      first += nc * o;
+      geo += o;
+    }
+    blockCentre_[b] = c > 0 ? first / c : geo / double(blockStart_[b + 1] - blockStart_[b]);
+  });
+  // Each cell's offset from its block's centre, for the second moments
+  // (evaluate, linearizedMultipoles).
+  cellFromCentre_.resize(cells);
+  tbb::parallel_for(std::size_t(0), cells, [&](std::size_t s) {
+    cellFromCentre_[s] = cellOrigin(cellBase_[s]) - blockCentre_[cellBlock_[s]];
+  });
+}
+
+template <typename CellFn>
+void MagnetostaticProblem::scatterCells(double* out, const CellFn& cellFn) const {
+  scatterByColour(cellBase_.data(), colourStart_, cornerOffset_, out, cellFn);
+}
+
+void MagnetostaticProblem::applyVacuum(const double* v, double* out) const {
+  applyQ1Laplacian(grid_, boundary_, v, out);
+}
+
+void MagnetostaticProblem::zeroFixed(double* v) const { zeroFixedNodes(grid_, boundary_, v); }
+
+void MagnetostaticProblem::removeMean(double* v) const {
+  const std::size_t count = grid_.nodeCount();
+  const double mean = deterministicSum<double>(count, [&](std::size_t m) { return v[m]; }) / double(count);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, 1 << 14), [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t m = r.begin(); m != r.end(); ++m) v[m] -= mean;
+  });
+}
+
+// ---------------------------------------------------------------------------
+// Material terms.
+
+MagnetostaticProblem::Evaluation MagnetostaticProblem::evaluate(const double* phi, double* F, bool jacobian,
+                                                                const double* vacuumPart) {
+  if (vacuumPart == F) {
+    // F holds the vacuum part already.
+  } else if (vacuumPart) {
+    const std::size_t count = grid_.nodeCount();
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, 1 << 14),
+                      [&](const tbb::blocked_range<std::size_t>& r) {
+                        std::copy(vacuumPart + r.begin(), vacuumPart + r.end(), F + r.begin());
+                      });
+  } else {
+    applyVacuum(phi, F);
+  }
+  const double h = grid_.dx, w = grid_.cellVolume() / 8.0, fScale = h * h / 8.0;
+  std::vector<CellSums>& sums = sums_;
+  sums.resize(cellBase_.size());
+  scatterCells(F, [&](std::size_t s, double local[8]) {
+    double pc[8];
+    gatherCorners(cellBase_[s], phi, pc);
+    // grad phi at the 8 Gauss points by sum factorization: the x-derivative
+    // is the edge difference along x interpolated in y and z (it does not
+    // depend on the x abscissa), likewise for y and z.
+    double gradient[8][3];
+    q1::gaussGradients(pc, gradient);
+    CellSums& cs = sums[s];
+    cs = CellSums{};
+    double* E = &elem_[s * kPacked];
+    SymMat3d tensorSum;
+    Vec3d upper[3];  // sum of w M over the Gauss points with bit a set (the upper abscissa on axis a)
+    double Mq[8][3];
+    Vec3d Hq[8];
+    for (int q = 0; q < 8; ++q) {
+      const std::size_t g = s * 8 + std::size_t(q);
+      Hq[q] = {hext_[g].x - gradient[q][0] / h, hext_[g].y - gradient[q][1] / h, hext_[g].z - gradient[q][2] / h};
+    }
+    ResponseBatch rb;
+    respondBatch(law_, &nq_[s * 8], Hq, rb);
+    for (int q = 0; q < 8; ++q) {
+      struct {
+        Vec3d M, h;
+        double iso, rank1, W;
+      } r{{rb.Mx[q], rb.My[q], rb.Mz[q]}, {rb.hx[q], rb.hy[q], rb.hz[q]}, rb.iso[q], rb.rank1[q], rb.W[q]};
+      if (jacobian) tensorSum += SymMat3d::identityPlusOuter(r.iso, r.rank1, r.h);
+      cs.finite = cs.finite && isFinite(r.M) && std::isfinite(r.W) && std::isfinite(r.iso) && std::isfinite(r.rank1);
+      cs.energy += w * r.W;
+      cs.energyAbs += w * std::fabs(r.W);
+      const Vec3d mw = w * r.M;
+      cs.multipole.dipole += mw;
+      for (int axis = 0; axis < 3; ++axis)
+        if ((q >> axis) & 1) upper[axis] += mw;
+      Mq[q][0] = r.M.x;
+      Mq[q][1] = r.M.y;
+      Mq[q][2] = r.M.z;
+    }
+    if (jacobian) {
+      // Element matrix (dx/8) sum_q dN_q^T (iso I + rank1 h h^T) dN_q, packed.
+      buildElementMatrix(h, rb, E);
+      tensorSum *= 0.125;
+      cellTensor_[s] = tensorSum;
+    }
+    // Second moment about the block centre.
+    cs.multipole = cellMultipole(cs.multipole.dipole, upper, cellFromCentre_[s], h);
+    // Residual -fScale sum_q dN_qc . M_q, the transpose of the gradient.
+    double res[8];
+    q1::gaussDivergenceTranspose(Mq, res);
+    for (int c = 0; c < 8; ++c) local[c] -= fScale * res[c];
+  });
+  zeroFixed(F);
+  if (jacobian) stencil_.assemble(elem_.data());
+  const EnergyTotals total = deterministicSum<EnergyTotals>(
+      sums.size(), [&](std::size_t s) { return EnergyTotals{sums[s].energy, sums[s].energyAbs, sums[s].finite}; },
+      256);
+  Evaluation e;
+  e.materialEnergy = total.energy;
+  e.materialEnergyAbs = total.energyAbs;
+  e.finite = total.finite;
+  e.multipoles.resize(blockCentre_.size());
+  tbb::parallel_for(std::size_t(0), blockCentre_.size(), [&](std::size_t b) {
+    Multipole mp;
+    mp.centre = blockCentre_[b];
+    for (std::size_t m = blockStart_[b]; m < blockStart_[b + 1]; ++m) mp += sums[blockCells_[m]].multipole;
+    e.multipoles[b] = mp;
+  });
+  return e;
+}
+
+void MagnetostaticProblem::residualAtZero(double* F0) const {
+  std::fill(F0, F0 + grid_.nodeCount(), 0.0);
+  const double fScale = grid_.dx * grid_.dx / 8.0;
+  scatterCells(F0, [&](std::size_t s, double local[8]) {
+    // The batched response of the cell's 8 Gauss points (vectorized where
+    // the CPU allows), of which only M is used.
+    ResponseBatch rb;
+    respondBatch(law_, &nq_[s * 8], &hext_[s * 8], rb);
+    double Mq[8][3];
+    for (int q = 0; q < 8; ++q) {
+      Mq[q][0] = rb.Mx[q];
+      Mq[q][1] = rb.My[q];
+      Mq[q][2] = rb.Mz[q];
+    }
+    double res[8];
+    q1::gaussDivergenceTranspose(Mq, res);
+    for (int c = 0; c < 8; ++c) local[c] -= fScale * res[c];
+  });
+  zeroFixed(F0);
+}
+
+void MagnetostaticProblem::applyJacobian(const double* v, double* out) const {
+  applyVacuum(v, out);
+  stencil_.addProduct(v, out);
+  zeroFixed(out);
+}
+
+double MagnetostaticProblem::applyJacobianDot(const double* v, double* out) const {
+  const int nx = grid_.dims.i, ny = grid_.dims.j, nz = grid_.dims.k;
+  const bool open = boundary_ == BoundaryKind::Open;
+  rowSums_.resize(std::size_t(ny) * std::size_t(nz));
+  tbb::parallel_for(tbb::blocked_range<int>(0, nz, 1), [&](const tbb::blocked_range<int>& kr) {
+    for (int k = kr.begin(); k != kr.end(); ++k)
+      for (int j = 0; j < ny; ++j) {
+        const std::size_t row = grid_.index(0, j, k);
+        double* o = out + row;
+        const double* x = v + row;
+        double& sum = rowSums_[std::size_t(j) + std::size_t(ny) * std::size_t(k)];
+        sum = 0;
+        if (open && (j == 0 || k == 0 || j == ny - 1 || k == nz - 1)) {
+          std::fill(o, o + nx, 0.0);  // a wall row: fixed nodes only
+          continue;
+        }
+        applyQ1LaplacianRow(grid_, boundary_, j, k, v, out);
+        // The material rows on this row's hull; for Open its end nodes are fixed.
+        const int lo = stencil_.lo(j, k), hi = stencil_.hi(j, k);
+        const int from = open ? std::max(lo, 1) : lo, to = open ? std::min(hi, nx - 1) : hi;
+        stencil_.addRow(j, k, from, to, x, o);
+        if (open) o[0] = o[nx - 1] = 0.0;
+        for (int i = 0; i < nx; ++i) sum += x[i] * o[i];
+      }
+  });
+  double total = 0;
+  for (const double r : rowSums_) total += r;
+  return total;
+}
+
+void MagnetostaticProblem::jacobianDiagonal(double* out) const {
+  q1LaplacianDiagonalAll(grid_, out);
+  stencil_.addDiagonal(out);
+  setFixedNodes(grid_, boundary_, 1.0, out);  // fixed rows: identity
+}
+
+double MagnetostaticProblem::materialEnergyAlong(const double* phi, const double* delta, double lambda,
+                                                 double* absSum) const {
+  const double h = grid_.dx, w = grid_.cellVolume() / 8.0;
+  const EnergySums e = deterministicSum<EnergySums>(cellBase_.size(), [&](std::size_t s) {
+    double pc[8], dc[8];
+    gatherCorners(cellBase_[s], phi, pc);
+    gatherCorners(cellBase_[s], delta, dc);
+    EnergySums r;
+    for (int q = 0; q < 8; ++q) {
+      const std::size_t g = s * 8 + std::size_t(q);
+      const Vec3d H = hext_[g] - (q1::referenceGradient(kQ1, q, pc) + lambda * q1::referenceGradient(kQ1, q, dc)) / h;
+      const double W = w * coEnergy(law_, nq_[g], H);
+      r.s += W;
+      r.a += std::fabs(W);
+    }
+    return r;
+  }, 256);
+  if (absSum) *absSum = e.a;
+  return e.s;
+}
+
+std::vector<Multipole> MagnetostaticProblem::linearizedMultipoles(const double* dphi) const {
+  const double h = grid_.dx, w = grid_.cellVolume() / 8.0;
+  std::vector<Multipole> out(blockCentre_.size());
+  tbb::parallel_for(std::size_t(0), blockCentre_.size(), [&](std::size_t b) {
+    Multipole& mp = out[b];
+    mp.centre = blockCentre_[b];
+    for (std::size_t m = blockStart_[b]; m < blockStart_[b + 1]; ++m) {
+      const std::size_t s = blockCells_[m];
+      double pc[8];
+      gatherCorners(cellBase_[s], dphi, pc);
+      double gradient[8][3];
+      q1::gaussGradients(pc, gradient);
+      // sum_q w dH_q and the same over the Gauss points with bit a set; dM
+      // is linear in dH with the cell's constant tensor.
+      Vec3d all, upper[3];
+      for (int q = 0; q < 8; ++q) {
+        const Vec3d dH{-gradient[q][0] / h, -gradient[q][1] / h, -gradient[q][2] / h};
+        all += dH;
+        for (int axis = 0; axis < 3; ++axis)
+          if ((q >> axis) & 1) upper[axis] += dH;
+      }
+      const SymMat3d& T = cellTensor_[s];
+      const Vec3d dip = w * (T * all);
+      Vec3d up[3];
+      for (int a = 0; a < 3; ++a) up[a] = w * (T * upper[a]);
+      mp += cellMultipole(dip, up, cellFromCentre_[s], h);
+    }
+  });
+  return out;
+}
+
+void MagnetostaticProblem::applyOpenBoundary(const std::vector<Multipole>& multipoles, double* phi) const {
+  if (boundary_ != BoundaryKind::Open) return;
+  // The far-field potential is smooth on the wall on the scale of the
+  // material's clearance d, so it is summed exactly on a lattice of wall nodes
+  // with spacing s (a power of 2 <= d/6, at least 2) and interpolated
+  // (bi)linearly in between: relative error about (s/d)^2/8 <= 0.4%, below
+  // the blocks' truncated octupole.
+  const int nx = grid_.dims.i, ny = grid_.dims.j, nz = grid_.dims.k;
+  int s = 2;
+  while (s < 16 && 6 * (2 * s) <= wallClearance_) s *= 2;
+  const auto onLattice = [s](int c, int count) { return c % s == 0 || c == count - 1; };
+  const auto forWallNodes = [&](const auto& fn) {
+    tbb::parallel_for(0, nz, [&](int k) {
+      for (int j = 0; j < ny; ++j) {
+        const bool wallRow = k == 0 || k == nz - 1 || j == 0 || j == ny - 1;
+        for (int i = 0; i < nx; i += (wallRow || i == nx - 1) ? 1 : nx - 1) fn(i, j, k);
+      }
+    });
+  };
+  // The blocks as arrays, padded to a multiple of 4 with empty blocks, so
+  // that the sum over blocks runs in 4 independent lanes (which the compiler
+  // vectorizes) and in a fixed order. With r = x - c:
+  //   4 pi phi = (m.r - tr N) / r^3 + 3 r^T N r / r^5.
+  enum { kCx, kCy, kCz, kMx, kMy, kMz, kNxx, kNyy, kNzz, kNxy, kNxz, kNyz, kTr, kFields };
+  const std::size_t nb = multipoles.size(), padded = (nb + 3) / 4 * 4;
+  std::vector<double> soa(std::size_t(kFields) * padded, 0.0);
+  for (std::size_t b = 0; b < nb; ++b) {
+    const Multipole& mp = multipoles[b];
+    const auto& N = mp.quadrupole;
+    const double v[kFields] = {mp.centre.x, mp.centre.y, mp.centre.z, mp.dipole.x, mp.dipole.y, mp.dipole.z,
+                               N[0][0], N[1][1], N[2][2], N[0][1] + N[1][0], N[0][2] + N[2][0], N[1][2] + N[2][1],
+                               N[0][0] + N[1][1] + N[2][2]};
+    for (int f = 0; f < kFields; ++f) soa[std::size_t(f) * padded + b] = v[f];
+  }
+  const auto field = [&](int f) { return soa.data() + std::size_t(f) * padded; };
+  const double *cx = field(kCx), *cy = field(kCy), *cz = field(kCz), *mx = field(kMx), *my = field(kMy),
+               *mz = field(kMz), *nxx = field(kNxx), *nyy = field(kNyy), *nzz = field(kNzz), *nxy = field(kNxy),
+               *nxz = field(kNxz), *nyz = field(kNyz), *tr = field(kTr);
+  const MultipoleArrays blocks{cx, cy, cz, mx, my, mz, nxx, nyy, nzz, nxy, nxz, nyz, tr, padded};
+  forWallNodes([&](int i, int j, int k) {
+    if (!onLattice(i, nx) || !onLattice(j, ny) || !onLattice(k, nz)) return;
+    phi[grid_.index(i, j, k)] = multipoleSum(blocks, grid_.nodePosition(i, j, k)) / (4.0 * kPi);
+  });
+  // Off-lattice wall nodes: along each off-lattice axis, between the lattice
+  // coordinates lo = s floor(c/s) and hi = min(lo + s, count - 1). The wall's
+  // normal coordinate (0 or count - 1) is always on the lattice.
+  forWallNodes([&](int i, int j, int k) {
+    const int c[3] = {i, j, k}, count[3] = {nx, ny, nz};
+    int lo[3], hi[3];
+    double t[3];
+    bool all = true;
+    for (int a = 0; a < 3; ++a) {
+      if (onLattice(c[a], count[a])) {
+        lo[a] = hi[a] = c[a];
+        t[a] = 0;
+      } else {
+        all = false;
+        lo[a] = (c[a] / s) * s;
+        hi[a] = std::min(lo[a] + s, count[a] - 1);
+        t[a] = double(c[a] - lo[a]) / double(hi[a] - lo[a]);
+      }
+    }
+    if (all) return;
+    double v = 0;
+    for (int corner = 0; corner < 8; ++corner) {
+      double w = 1;
+      int p[3];
+      for (int a = 0; a < 3; ++a) {
+        const bool up = (corner >> a) & 1;
+        if (lo[a] == hi[a] && up) {
+          w = 0;
+          break;
+        }
+        p[a] = up ? hi[a] : lo[a];
+        w *= lo[a] == hi[a] ? 1.0 : (up ? t[a] : 1.0 - t[a]);
+      }
+      if (w != 0) v += w * phi[grid_.index(p[0], p[1], p[2])];
+    }
+    phi[grid_.index(i, j, k)] = v;
+  });
+}
+
+std::vector<std::size_t> MagnetostaticProblem::fixedNodes() const {
+  std::vector<std::size_t> out;
+  if (boundary_ != BoundaryKind::Open) return out;
+  const int nx = grid_.dims.i, ny = grid_.dims.j, nz = grid_.dims.k;
+  out.reserve(grid_.nodeCount() - freeNodeCount());
+  for (int k = 0; k < nz; ++k)
+    for (int j = 0; j < ny; ++j) {
+      const bool wallRow = k == 0 || k == nz - 1 || j == 0 || j == ny - 1;
+      for (int i = 0; i < nx; i += (wallRow || i == nx - 1) ? 1 : nx - 1) out.push_back(grid_.index(i, j, k));
+    }
+  return out;
+}
+
+void MagnetostaticProblem::addWallCoupling(const double* v, double* out) const {
+  if (boundary_ != BoundaryKind::Open) return;
+  const int nx = grid_.dims.i, ny = grid_.dims.j, nz = grid_.dims.k;
+  // Row (i, j, k) of K restricted to the wall columns. Free rows are
+  // interior rows: face neighbours weigh 0, edge neighbours -dx/6, corner
+  // neighbours -dx/12 (q1_stencil.h), and the centre is never on the wall.
+  // A neighbour is on the wall when one of its coordinates is; the three
+  // per-axis tests are made once per row, not per neighbour.
+  const double weight[4] = {0.0, 0.0, -grid_.dx / 6.0, -grid_.dx / 12.0};
+  const std::ptrdiff_t sy = nx, sz = std::ptrdiff_t(nx) * ny;
+  const auto row = [&](int i, int j, int k) {
+    bool wi[3], wj[3], wk[3];
+    for (int o = 0; o < 3; ++o) {
+      wi[o] = i + o - 1 == 0 || i + o - 1 == nx - 1;
+      wj[o] = j + o - 1 == 0 || j + o - 1 == ny - 1;
+      wk[o] = k + o - 1 == 0 || k + o - 1 == nz - 1;
+    }
+    const double* centre = v + grid_.index(i, j, k);
+    double sum = 0;
+    for (int c = -1; c <= 1; ++c)
+      for (int b = -1; b <= 1; ++b)
+        for (int a = -1; a <= 1; ++a) {
+          const int order = (a != 0) + (b != 0) + (c != 0);
+          if (order >= 2 && (wi[a + 1] || wj[b + 1] || wk[c + 1])) sum += weight[order] * centre[a + sy * b + sz * c];
+        }
+    return sum;
+  };
+  tbb::parallel_for(1, nz - 1, [&](int k) {
+    for (int j = 1; j < ny - 1; ++j) {
+      const bool shellRow = k == 1 || k == nz - 2 || j == 1 || j == ny - 2;
+      for (int i = 1; i < nx - 1; i += (shellRow || i == nx - 2) ? 1 : nx - 3) out[grid_.index(i, j, k)] += row(i, j, k);
+    }
+  });
+}
+
+}  // namespace lodestone

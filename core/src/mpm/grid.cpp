@@ -1,0 +1,499 @@
+// MLS-MPM particle <-> grid transfers. The formulas and the determinism
+// argument are in mpm_grid.h.
+#include "lodestone/core/mpm/grid.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
+#include <tbb/parallel_scan.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <functional>
+#include <limits>
+
+#include "lodestone/core/base/bspline.h"
+#include "lodestone/core/base/error.h"
+#include "lodestone/core/mpm/constitutive.h"
+
+namespace lodestone {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+constexpr std::size_t kNone = std::numeric_limits<std::size_t>::max();
+constexpr std::uint32_t kBadKey = std::numeric_limits<std::uint32_t>::max();
+constexpr std::uint64_t kBadBase = std::numeric_limits<std::uint64_t>::max();
+
+void atomicMin(std::atomic<std::size_t>& a, std::size_t v) {
+  std::size_t cur = a.load(std::memory_order_relaxed);
+  while (v < cur && !a.compare_exchange_weak(cur, v, std::memory_order_relaxed)) {
+  }
+}
+
+/// The constants of one material the kernels need.
+struct MaterialParams {
+  bool fluid = false;
+  double mu = 0, lambda = 0;              // Pa (solid)
+  double viscosity = 0, bulkModulus = 0;  // Pa*s, Pa (fluid)
+};
+
+std::vector<MaterialParams> paramsOf(const std::vector<MpmMaterial>& materials) {
+  std::vector<MaterialParams> out(materials.size());
+  for (std::size_t m = 0; m < materials.size(); ++m) {
+    const MpmMaterial& mat = materials[m];
+    out[m].fluid = mat.model == MpmModel::ViscousFluid;
+    out[m].mu = mat.mu;
+    out[m].lambda = mat.lambda;
+    out[m].viscosity = mat.viscosity;
+    out[m].bulkModulus = mat.bulkModulus;
+  }
+  return out;
+}
+
+/// Box of base nodes touched: [lo, hi] inclusive, as a reduction value.
+struct BaseBox {
+  int lo[3] = {std::numeric_limits<int>::max(), std::numeric_limits<int>::max(), std::numeric_limits<int>::max()};
+  int hi[3] = {-1, -1, -1};
+  void add(int i, int j, int k) {
+    lo[0] = std::min(lo[0], i);
+    lo[1] = std::min(lo[1], j);
+    lo[2] = std::min(lo[2], k);
+    hi[0] = std::max(hi[0], i);
+    hi[1] = std::max(hi[1], j);
+    hi[2] = std::max(hi[2], k);
+  }
+  void join(const BaseBox& o) {
+    for (int a = 0; a < 3; ++a) {
+      lo[a] = std::min(lo[a], o.lo[a]);
+      hi[a] = std::max(hi[a], o.hi[a]);
+    }
+  }
+};
+
+}  // namespace
+
+MpmGrid::MpmGrid(const GridSpec& spec) : spec_(spec) {
+  spec_.validate("MPM grid");
+  require(spec_.dims.i >= 3 && spec_.dims.j >= 3 && spec_.dims.k >= 3,
+          "MPM grid: a quadratic B-spline stencil needs at least 3 nodes per axis, got ", spec_.dims.i, " x ",
+          spec_.dims.j, " x ", spec_.dims.k);
+  baseDims_ = {spec_.dims.i - 2, spec_.dims.j - 2, spec_.dims.k - 2};
+  const std::size_t nb = std::size_t(baseDims_.i) * std::size_t(baseDims_.j) * std::size_t(baseDims_.k);
+  require(nb < std::size_t(kBadKey), "MPM grid: ", nb, " stencil bins is too many (at most 2^32 - 2)");
+  require(spec_.dims.i < (1 << 21) && spec_.dims.j < (1 << 21) && spec_.dims.k < (1 << 21),
+          "MPM grid: at most 2^21 - 1 nodes per axis");
+  nodes_.assign(spec_.nodeCount(), MpmNode{});
+  velocity_.assign(spec_.nodeCount(), Vec3d{});
+  binSize_.reset(new std::atomic<std::uint32_t>[nb]);
+  binCapacity_ = nb;
+  for (std::size_t b = 0; b < nb; ++b) binSize_[b].store(0, std::memory_order_relaxed);
+}
+
+MpmGrid::MpmGrid(MpmGrid&&) noexcept = default;
+MpmGrid& MpmGrid::operator=(MpmGrid&&) noexcept = default;
+MpmGrid::~MpmGrid() = default;
+
+void MpmGrid::zeroBox(Index3 lo, Index3 hi) {
+  if (lo.i >= hi.i || lo.j >= hi.j || lo.k >= hi.k) return;
+  const std::size_t rows = std::size_t(hi.j - lo.j) * std::size_t(hi.k - lo.k);
+  const int nj = hi.j - lo.j;
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, rows, 16), [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t row = r.begin(); row != r.end(); ++row) {
+      const int j = lo.j + int(row % std::size_t(nj));
+      const int k = lo.k + int(row / std::size_t(nj));
+      const std::size_t first = spec_.index(lo.i, j, k);
+      std::fill(nodes_.begin() + std::ptrdiff_t(first), nodes_.begin() + std::ptrdiff_t(first + (hi.i - lo.i)),
+                MpmNode{});
+      std::fill(velocity_.begin() + std::ptrdiff_t(first), velocity_.begin() + std::ptrdiff_t(first + (hi.i - lo.i)),
+                Vec3d{});
+    }
+  });
+}
+
+void MpmGrid::bin(const MpmParticles& particles, std::size_t materialCount) {
+  const std::size_t np = particles.size();
+  require(np < std::size_t(kBadKey), "MPM grid: at most 2^32 - 2 particles are supported, got ", np);
+  // Invariant: every bin size is zero between calls (pass 2 resets the
+  // ones it used), so only the bins of the active box are ever touched.
+  std::atomic<std::uint32_t>* binSize = binSize_.get();
+  key_.resize(np);
+  rank_.resize(np);
+
+  const Vec3d* X = particles.x.data();
+  const std::uint32_t* mat = particles.material.data();
+  const double invDx = 1.0 / spec_.dx;
+  const Vec3d o = spec_.origin;
+  const Index3 bd = baseDims_;
+  std::atomic<std::size_t> firstBad{kNone};
+
+  // Pass 1: base node of every particle (packed 21 bits per axis), a
+  // scheduling-dependent slot in its bin, and the box of bases in use
+  // (min/max are exact, so the reduction is deterministic).
+  const BaseBox box = tbb::parallel_reduce(
+      tbb::blocked_range<std::size_t>(0, np, 2048), BaseBox{},
+      [&](const tbb::blocked_range<std::size_t>& r, BaseBox acc) {
+        for (std::size_t p = r.begin(); p != r.end(); ++p) {
+          const Vec3d u{(X[p].x - o.x) * invDx, (X[p].y - o.y) * invDx, (X[p].z - o.z) * invDx};
+          const double fx = quadraticBaseFloor(u.x), fy = quadraticBaseFloor(u.y), fz = quadraticBaseFloor(u.z);
+          // The comparisons are false for NaN, so non-finite positions land here too.
+          if (!(fx >= 0 && fx <= bd.i - 1 && fy >= 0 && fy <= bd.j - 1 && fz >= 0 && fz <= bd.k - 1) ||
+              mat[p] >= materialCount) {
+            key_[p] = kBadBase;
+            atomicMin(firstBad, p);
+            continue;
+          }
+          const int bi = int(fx), bj = int(fy), bk = int(fz);
+          key_[p] = std::uint64_t(bi) | (std::uint64_t(bj) << 21) | (std::uint64_t(bk) << 42);
+          const std::size_t flat =
+              std::size_t(bi) + std::size_t(bd.i) * (std::size_t(bj) + std::size_t(bd.j) * std::size_t(bk));
+          rank_[p] = binSize[flat].fetch_add(1, std::memory_order_relaxed);
+          acc.add(bi, bj, bk);
+        }
+        return acc;
+      },
+      [](BaseBox a, const BaseBox& b) {
+        a.join(b);
+        return a;
+      });
+
+  if (const std::size_t bad = firstBad.load(); bad != kNone) {
+    // Restore the invariant before throwing.
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, binCapacity_, 8192),
+                      [&](const tbb::blocked_range<std::size_t>& r) {
+                        for (std::size_t b = r.begin(); b != r.end(); ++b)
+                          binSize[b].store(0, std::memory_order_relaxed);
+                      });
+    key_.clear();
+    activeLo_ = activeHi_ = binLo_ = binDims_ = {0, 0, 0};
+    const Vec3d x = X[bad];
+    if (mat[bad] >= materialCount)
+      throw InvalidArgument(concat("MPM particle ", bad, ": material index ", mat[bad], " is out of range (",
+                                   materialCount, " materials)"));
+    if (!isFinite(x))
+      throw InvalidArgument(
+          concat("MPM particle ", bad, ": position must be finite, got (", x.x, ", ", x.y, ", ", x.z, ") m"));
+    const Vec3d hi = spec_.maxCorner();
+    throw InvalidArgument(concat("MPM particle ", bad, " at (", x.x, ", ", x.y, ", ", x.z,
+                                 ") m is outside the MPM grid: its quadratic stencil needs (x - origin)/dx in "
+                                 "[1/2, dims - 3/2) per axis; the grid spans (",
+                                 o.x, ", ", o.y, ", ", o.z, ") to (", hi.x, ", ", hi.y, ", ", hi.z,
+                                 ") m with dx = ", spec_.dx, " m"));
+  }
+
+  if (np == 0) {
+    activeLo_ = activeHi_ = binLo_ = binDims_ = {0, 0, 0};
+    offsets_.assign(1, 0);
+    sorted_.clear();
+    return;
+  }
+  binLo_ = {box.lo[0], box.lo[1], box.lo[2]};
+  binDims_ = {box.hi[0] - box.lo[0] + 1, box.hi[1] - box.lo[1] + 1, box.hi[2] - box.lo[2] + 1};
+  activeLo_ = binLo_;
+  activeHi_ = {box.hi[0] + 3, box.hi[1] + 3, box.hi[2] + 3};
+
+  // Pass 2: offsets of the bins of the box, x-rows in order (integer prefix
+  // sums: order-free); the final pass also resets the sizes it read.
+  const std::size_t nbx = std::size_t(binDims_.i);
+  const std::size_t rows = std::size_t(binDims_.j) * std::size_t(binDims_.k);
+  const std::size_t nbBox = nbx * rows;
+  offsets_.resize(nbBox + 1);
+  tbb::parallel_scan(
+      tbb::blocked_range<std::size_t>(0, rows, 64), std::uint32_t(0),
+      [&](const tbb::blocked_range<std::size_t>& r, std::uint32_t sum, bool isFinal) {
+        for (std::size_t row = r.begin(); row != r.end(); ++row) {
+          const std::size_t bj = std::size_t(binLo_.j) + row % std::size_t(binDims_.j);
+          const std::size_t bk = std::size_t(binLo_.k) + row / std::size_t(binDims_.j);
+          std::atomic<std::uint32_t>* sizes =
+              binSize + std::size_t(binLo_.i) + std::size_t(bd.i) * (bj + std::size_t(bd.j) * bk);
+          std::uint32_t* off = offsets_.data() + row * nbx;
+          for (std::size_t i = 0; i < nbx; ++i) {
+            const std::uint32_t n = sizes[i].load(std::memory_order_relaxed);
+            if (isFinal) {
+              off[i] = sum;
+              sizes[i].store(0, std::memory_order_relaxed);
+            }
+            sum += n;
+          }
+        }
+        return sum;
+      },
+      std::plus<std::uint32_t>());
+  offsets_[nbBox] = std::uint32_t(np);
+
+  // Pass 3: scatter indices into their bins.
+  sorted_.resize(np);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, np, 8192), [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t p = r.begin(); p != r.end(); ++p) sorted_[offsets_[boxKey(key_[p])] + rank_[p]] = std::uint32_t(p);
+  });
+
+  // Pass 4: ascending particle index within each bin (bins are small:
+  // insertion sort; std::sort for crowded ones).
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nbBox, 4096), [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t b = r.begin(); b != r.end(); ++b) {
+      std::uint32_t* first = sorted_.data() + offsets_[b];
+      std::uint32_t* last = sorted_.data() + offsets_[b + 1];
+      if (last - first < 2) continue;
+      if (last - first > 32) {
+        std::sort(first, last);
+        continue;
+      }
+      for (std::uint32_t* i = first + 1; i != last; ++i) {
+        const std::uint32_t v = *i;
+        std::uint32_t* j = i;
+        while (j != first && *(j - 1) > v) {
+          *j = *(j - 1);
+          --j;
+        }
+        *j = v;
+      }
+    }
+  });
+}
+
+void MpmGrid::particleToGrid(const MpmParticles& particles, const std::vector<MpmMaterial>& materials, double dt,
+                             const Vec3d* particleForces) {
+  require(std::isfinite(dt) && dt >= 0, "MPM P2G: time step must be finite and >= 0 (s), got ", dt);
+  require(!nodes_.empty(), "MPM P2G: the grid was not set up");
+  particles.checkSizes();
+  const auto t0 = Clock::now();
+  const Index3 prevLo = activeLo_, prevHi = activeHi_;
+  bin(particles, materials.size());
+  binningSeconds_ = std::chrono::duration<double>(Clock::now() - t0).count();
+
+  // Zero the union of the previous and the new active boxes: everything
+  // outside the active box stays zero.
+  const Index3 zlo{std::min(prevLo.i, activeLo_.i), std::min(prevLo.j, activeLo_.j), std::min(prevLo.k, activeLo_.k)};
+  const Index3 zhi{std::max(prevHi.i, activeHi_.i), std::max(prevHi.j, activeHi_.j), std::max(prevHi.k, activeHi_.k)};
+  if (prevLo.i < prevHi.i)
+    zeroBox(zlo, zhi);
+  else
+    zeroBox(activeLo_, activeHi_);
+  if (particles.empty()) return;
+
+  const std::vector<MaterialParams> params = paramsOf(materials);
+  const double dx = spec_.dx;
+  const double invDx = 1.0 / dx;
+  const double stressScale = dt * 4.0 * invDx * invDx;  // dt D^-1, s/m^2
+  const Vec3d o = spec_.origin;
+  const std::size_t sj = std::size_t(spec_.dims.i);
+  const std::size_t sk = sj * std::size_t(spec_.dims.j);
+
+  const Vec3d* X = particles.x.data();
+  const Vec3d* V = particles.v.data();
+  const Mat3d* Cp = particles.C.data();
+  const Mat3d* Fp = particles.F.data();
+  const double* Jp = particles.J.data();
+  const double* M = particles.mass.data();
+  const double* V0 = particles.volume0.data();
+  const std::uint32_t* mat = particles.material.data();
+  MpmNode* nodes = nodes_.data();
+
+  auto depositRow = [&](int bj, int bk) {
+    const std::size_t firstBin =
+        std::size_t(binDims_.i) * (std::size_t(bj - binLo_.j) + std::size_t(binDims_.j) * std::size_t(bk - binLo_.k));
+    for (int bi = binLo_.i; bi < binLo_.i + binDims_.i; ++bi) {
+      const std::size_t bin = firstBin + std::size_t(bi - binLo_.i);
+      const std::uint32_t* it = sorted_.data() + offsets_[bin];
+      const std::uint32_t* end = sorted_.data() + offsets_[bin + 1];
+      if (it == end) continue;
+      MpmNode* corner = nodes + spec_.index(bi, bj, bk);
+      for (; it != end; ++it) {
+        const std::size_t p = *it;
+        const Vec3d x = X[p];
+        const double ux = (x.x - o.x) * invDx, uy = (x.y - o.y) * invDx, uz = (x.z - o.z) * invDx;
+        const QuadraticWeights<double> wx = quadraticWeightsAt(ux, bi);
+        const QuadraticWeights<double> wy = quadraticWeightsAt(uy, bj);
+        const QuadraticWeights<double> wz = quadraticWeightsAt(uz, bk);
+        const double fx = ux - bi, fy = uy - bj, fz = uz - bk;  // in [1/2, 3/2)
+
+        const double m = M[p];
+        const MaterialParams& mp = params[mat[p]];
+        // Kirchhoff stress tau = J sigma (Pa): Eq. 18 or Eqs. 19-21.
+        const Mat3d tau = mp.fluid ? viscousFluidKirchhoff(Cp[p], Jp[p], mp.viscosity, mp.bulkModulus)
+                                   : neoHookeanKirchhoff(Fp[p], mp.mu, mp.lambda);
+        // A = m C - dt D^-1 V0 tau (kg/s): the MLS-MPM affine momentum with the stress impulse.
+        Mat3d A;
+        const double s = stressScale * V0[p];
+        for (int a = 0; a < 3; ++a)
+          for (int b = 0; b < 3; ++b) A(a, b) = m * Cp[p](a, b) - s * tau(a, b);
+        // Contribution at node offset (a, b, c): m v + dt f + A d with
+        // d = ((a - fx) dx, (b - fy) dx, (c - fz) dx) = q0 + a A0 + b A1 + c A2.
+        Vec3d q0 = m * V[p] - A * Vec3d{fx * dx, fy * dx, fz * dx};
+        if (particleForces) q0 += dt * particleForces[p];
+        const Vec3d A0{A(0, 0) * dx, A(1, 0) * dx, A(2, 0) * dx};
+        const Vec3d A1{A(0, 1) * dx, A(1, 1) * dx, A(2, 1) * dx};
+        const Vec3d A2{A(0, 2) * dx, A(1, 2) * dx, A(2, 2) * dx};
+        for (int c = 0; c < 3; ++c) {
+          for (int b = 0; b < 3; ++b) {
+            const double wbc = wy.w[b] * wz.w[c];
+            const Vec3d q = q0 + double(b) * A1 + double(c) * A2;
+            MpmNode* line = corner + std::size_t(b) * sj + std::size_t(c) * sk;
+            const double w0 = wx.w[0] * wbc, w1 = wx.w[1] * wbc, w2 = wx.w[2] * wbc;
+            line[0].momentum += w0 * q;
+            line[0].mass += w0 * m;
+            line[1].momentum += w1 * (q + A0);
+            line[1].mass += w1 * m;
+            line[2].momentum += w2 * (q + 2.0 * A0);
+            line[2].mass += w2 * m;
+          }
+        }
+      }
+    }
+  };
+
+  // Nine colours (bj mod 3, bk mod 3) in a fixed order; rows of one colour
+  // write disjoint nodes and run in parallel.
+  const int j0 = activeLo_.j, j1 = activeHi_.j - 2, k0 = activeLo_.k, k1 = activeHi_.k - 2;  // base rows [j0, j1)
+  for (int ck = 0; ck < 3; ++ck) {
+    for (int cj = 0; cj < 3; ++cj) {
+      // First row of this colour at or after j0 / k0.
+      const int fj = j0 + ((cj - j0 % 3) + 3) % 3;
+      const int fk = k0 + ((ck - k0 % 3) + 3) % 3;
+      const int nrj = fj < j1 ? (j1 - fj + 2) / 3 : 0;
+      const int nrk = fk < k1 ? (k1 - fk + 2) / 3 : 0;
+      const std::size_t rows = std::size_t(nrj) * std::size_t(nrk);
+      if (rows == 0) continue;
+      tbb::parallel_for(tbb::blocked_range<std::size_t>(0, rows), [&](const tbb::blocked_range<std::size_t>& r) {
+        for (std::size_t row = r.begin(); row != r.end(); ++row) {
+          const int bj = fj + 3 * int(row % std::size_t(nrj));
+          const int bk = fk + 3 * int(row / std::size_t(nrj));
+          depositRow(bj, bk);
+        }
+      });
+    }
+  }
+}
+
+namespace {
+struct G2PSums {
+  double maxSpeed2 = 0;
+  std::size_t clamped = 0, outside = 0, nonFinite = 0;
+  void join(const G2PSums& o) {
+    maxSpeed2 = std::max(maxSpeed2, o.maxSpeed2);
+    clamped += o.clamped;
+    outside += o.outside;
+    nonFinite += o.nonFinite;
+  }
+};
+}  // namespace
+
+GridToParticleReport MpmGrid::gridToParticle(MpmParticles& particles, const std::vector<MpmMaterial>& materials,
+                                             double dt, const ParticleBounds* bounds) const {
+  require(std::isfinite(dt) && dt >= 0, "MPM G2P: time step must be finite and >= 0 (s), got ", dt);
+  particles.checkSizes();
+  require(particles.size() == key_.size(), "MPM G2P: ", particles.size(), " particles, but the last P2G binned ",
+          key_.size());
+  const std::vector<MaterialParams> params = paramsOf(materials);
+  for (std::uint32_t m : particles.material)
+    require(m < materials.size(), "MPM G2P: material index ", m, " out of range (", materials.size(), " materials)");
+  const double dx = spec_.dx;
+  const double invDx = 1.0 / dx;
+  const double cScale = 4.0 * invDx;  // D^-1 dx, 1/m
+  const Vec3d o = spec_.origin;
+  const std::size_t sj = std::size_t(spec_.dims.i);
+  const std::size_t sk = sj * std::size_t(spec_.dims.j);
+  const Vec3d* vel = velocity_.data();
+
+  Vec3d* X = particles.x.data();
+  Vec3d* V = particles.v.data();
+  Mat3d* Cp = particles.C.data();
+  Mat3d* Fp = particles.F.data();
+  double* Jp = particles.J.data();
+  const std::uint32_t* mat = particles.material.data();
+
+  const bool bounded = bounds != nullptr;
+  const bool clamp = bounded && bounds->clamp;
+  const Vec3d lo = bounded ? bounds->lo : Vec3d{}, hi = bounded ? bounds->hi : Vec3d{};
+  const G2PSums sums = tbb::parallel_reduce(
+      tbb::blocked_range<std::size_t>(0, particles.size(), 1024), G2PSums{},
+      [&](const tbb::blocked_range<std::size_t>& r, G2PSums acc) {
+        for (std::size_t p = r.begin(); p != r.end(); ++p) {
+          const Vec3d x = X[p];
+          const double ux = (x.x - o.x) * invDx, uy = (x.y - o.y) * invDx, uz = (x.z - o.z) * invDx;
+          // The same base as the binning: the same arithmetic on the same,
+          // unmoved position (range-checked there).
+          const int bi = int(quadraticBaseFloor(ux));
+          const int bj = int(quadraticBaseFloor(uy));
+          const int bk = int(quadraticBaseFloor(uz));
+          const QuadraticWeights<double> wx = quadraticWeightsAt(ux, bi);
+          const QuadraticWeights<double> wy = quadraticWeightsAt(uy, bj);
+          const QuadraticWeights<double> wz = quadraticWeightsAt(uz, bk);
+          const double f[3] = {ux - bi, uy - bj, uz - bk};
+
+          // v_p = sum w v_i; S_a = sum w v_i (node offset index along a).
+          Vec3d vp{}, S0{}, S1{}, S2{};
+          const Vec3d* corner = vel + spec_.index(bi, bj, bk);
+          for (int c = 0; c < 3; ++c) {
+            for (int b = 0; b < 3; ++b) {
+              const double wbc = wy.w[b] * wz.w[c];
+              const Vec3d* line = corner + std::size_t(b) * sj + std::size_t(c) * sk;
+              const Vec3d l1 = wx.w[1] * line[1], l2 = wx.w[2] * line[2];
+              const Vec3d s0 = wx.w[0] * line[0] + l1 + l2;
+              const Vec3d s1 = l1 + 2.0 * l2;
+              vp += wbc * s0;
+              S0 += wbc * s1;
+              S1 += (double(b) * wbc) * s0;
+              S2 += (double(c) * wbc) * s0;
+            }
+          }
+          // C = D^-1 sum w v_i d_i^T, d_i = (index - f) dx: column a is (4/dx)(S_a - v_p f_a).
+          Mat3d C;
+          const Vec3d col[3] = {cScale * (S0 - f[0] * vp), cScale * (S1 - f[1] * vp), cScale * (S2 - f[2] * vp)};
+          for (int a = 0; a < 3; ++a) {
+            C(0, a) = col[a].x;
+            C(1, a) = col[a].y;
+            C(2, a) = col[a].z;
+          }
+          // Step 6: MLS update of the deformation (F <- (I + dt C) F, or J alone for fluids).
+          if (params[mat[p]].fluid) {
+            Jp[p] *= 1.0 + dt * trace(C);
+          } else {
+            Mat3d G = Mat3d::identity();
+            for (int a = 0; a < 3; ++a)
+              for (int b = 0; b < 3; ++b) G(a, b) += dt * C(a, b);
+            Fp[p] = G * Fp[p];
+            Jp[p] = determinant(Fp[p]);
+          }
+          Cp[p] = C;
+          // Step 7: advection.
+          Vec3d xn = x + dt * vp;
+          if (!(isFinite(xn) && isFinite(vp) && std::isfinite(Jp[p]))) {
+            ++acc.nonFinite;
+          } else if (bounded &&
+                     (xn.x < lo.x || xn.x > hi.x || xn.y < lo.y || xn.y > hi.y || xn.z < lo.z || xn.z > hi.z)) {
+            if (clamp) {
+              for (int a = 0; a < 3; ++a) {
+                if (xn[a] < lo[a]) {
+                  xn[a] = lo[a];
+                  vp[a] = std::max(vp[a], 0.0);
+                } else if (xn[a] > hi[a]) {
+                  xn[a] = hi[a];
+                  vp[a] = std::min(vp[a], 0.0);
+                }
+              }
+              ++acc.clamped;
+            } else {
+              ++acc.outside;
+            }
+          }
+          V[p] = vp;
+          X[p] = xn;
+          acc.maxSpeed2 = std::max(acc.maxSpeed2, norm2(vp));
+        }
+        return acc;
+      },
+      [](G2PSums a, const G2PSums& b) {
+        a.join(b);
+        return a;
+      });
+  GridToParticleReport rep;
+  rep.maxSpeed = std::sqrt(sums.maxSpeed2);
+  rep.clamped = sums.clamped;
+  rep.outside = sums.outside;
+  rep.nonFinite = sums.nonFinite;
+  return rep;
+}
+
+}  // namespace lodestone

@@ -1,0 +1,108 @@
+#include "lodestone/core/mpm/material.h"
+
+#include <cmath>
+
+#include "lodestone/core/base/error.h"
+
+namespace lodestone {
+
+const char* toString(MpmModel model) {
+  switch (model) {
+    case MpmModel::NeoHookeanSolid:
+      return "Neo-Hookean solid";
+    case MpmModel::ViscousFluid:
+      return "viscous fluid";
+  }
+  return "unknown";
+}
+
+double MpmMaterial::waveSpeed() const {
+  if (model == MpmModel::ViscousFluid) return std::sqrt(bulkModulus / density);
+  return std::sqrt((lambda + 2 * mu) / density);
+}
+
+double MpmMaterial::kinematicViscosity() const { return model == MpmModel::ViscousFluid ? viscosity / density : 0.0; }
+
+void validateMagneticMaterial(const MagneticMaterial& magnetic, const char* who) {
+  const MagnetizationLaw<double>& law = magnetic.law;
+  switch (law.kind) {
+    case LawKind::None:
+      return;
+    case LawKind::Linear:
+      require(std::isfinite(law.chiPerDensity) && law.chiPerDensity >= 0, who,
+              ": linear magnetic law needs a finite susceptibility per density >= 0 (m^3), got ", law.chiPerDensity);
+      break;
+    case LawKind::Langevin:
+      require(std::isfinite(law.moment) && law.moment > 0, who,
+              ": Langevin law needs a positive finite micro-particle moment (A*m^2), got ", law.moment);
+      require(std::isfinite(law.k2) && law.k2 > 0, who, ": Langevin law needs a positive finite k2 (m/A), got ",
+              law.k2);
+      break;
+    default:
+      throw InvalidArgument(concat(who, ": unknown magnetization law kind ", int(law.kind)));
+  }
+  require(std::isfinite(magnetic.numberDensity) && magnetic.numberDensity > 0, who,
+          ": a magnetic material needs a positive finite micro-particle number density n0 (1/m^3), got ",
+          magnetic.numberDensity);
+}
+
+void MpmMaterial::validate() const {
+  require(std::isfinite(density) && density > 0,
+          "MPM material: density must be a positive finite value in kg/m^3, got ", density);
+  switch (model) {
+    case MpmModel::NeoHookeanSolid:
+      require(std::isfinite(mu) && mu > 0, "Neo-Hookean solid: shear modulus mu must be positive and finite (Pa), got ",
+              mu);
+      require(std::isfinite(lambda) && lambda + 2.0 / 3.0 * mu > 0,
+              "Neo-Hookean solid: lambda must be finite with bulk modulus lambda + 2 mu / 3 > 0 (Pa), got lambda = ",
+              lambda, " Pa, mu = ", mu, " Pa");
+      break;
+    case MpmModel::ViscousFluid:
+      require(std::isfinite(viscosity) && viscosity >= 0,
+              "viscous fluid: viscosity mu_N must be finite and >= 0 (Pa*s), got ", viscosity);
+      require(std::isfinite(bulkModulus) && bulkModulus > 0,
+              "viscous fluid: bulk modulus K must be positive and finite (Pa), got ", bulkModulus);
+      break;
+    default:
+      throw InvalidArgument(concat("MPM material: unknown model ", int(model)));
+  }
+  validateMagneticMaterial(magnetic, "MPM material");
+}
+
+std::string MpmMaterial::describe() const {
+  std::string s;
+  if (model == MpmModel::NeoHookeanSolid)
+    s = concat("Neo-Hookean solid: mu = ", mu, " Pa, lambda = ", lambda, " Pa, rho = ", density, " kg/m^3");
+  else
+    s = concat("viscous fluid: mu_N = ", viscosity, " Pa*s, K = ", bulkModulus, " Pa, rho = ", density, " kg/m^3");
+  return s + "; magnetic: " + magnetic.describe();
+}
+
+MpmMaterial neoHookeanSolid(double youngModulus, double poissonRatio, double density,
+                            const MagneticMaterial& magnetic) {
+  require(std::isfinite(youngModulus) && youngModulus > 0,
+          "Neo-Hookean solid: Young's modulus E must be a positive finite value in Pa, got ", youngModulus);
+  require(std::isfinite(poissonRatio) && poissonRatio > -1 && poissonRatio < 0.5,
+          "Neo-Hookean solid: Poisson's ratio nu must lie in (-1, 0.5) (dimensionless), got ", poissonRatio);
+  MpmMaterial m;
+  m.model = MpmModel::NeoHookeanSolid;
+  m.density = density;
+  m.mu = youngModulus / (2 * (1 + poissonRatio));
+  m.lambda = youngModulus * poissonRatio / ((1 + poissonRatio) * (1 - 2 * poissonRatio));
+  m.magnetic = magnetic;
+  m.validate();
+  return m;
+}
+
+MpmMaterial viscousFluid(double viscosity, double bulkModulus, double density, const MagneticMaterial& magnetic) {
+  MpmMaterial m;
+  m.model = MpmModel::ViscousFluid;
+  m.density = density;
+  m.viscosity = viscosity;
+  m.bulkModulus = bulkModulus;
+  m.magnetic = magnetic;
+  m.validate();
+  return m;
+}
+
+}  // namespace lodestone

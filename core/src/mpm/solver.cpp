@@ -1,0 +1,834 @@
+// The reference MLS-MPM step (Section 4.3 of the paper); see mpm_solver.h.
+#include "lodestone/core/mpm/solver.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <sstream>
+
+#include "lodestone/core/sources/cuboid_magnet.h"
+#include "lodestone/core/sources/cylinder_magnet.h"
+#include "lodestone/core/base/error.h"
+#include "lodestone/core/stage/magnetic_force.h"
+#include "lodestone/core/mpm/constitutive.h"
+#include "lodestone/core/base/parallel.h"
+#include "lodestone/core/sources/sphere_magnet.h"
+
+namespace lodestone {
+
+namespace {
+using Clock = std::chrono::steady_clock;
+double secondsSince(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+
+bool sameLaw(const MagnetizationLaw<double>& a, const MagnetizationLaw<double>& b) {
+  return a.kind == b.kind && a.moment == b.moment && a.k2 == b.k2 && a.chiPerDensity == b.chiPerDensity;
+}
+
+bool finiteMat(const Mat3d& m) {
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c)
+      if (!std::isfinite(m(r, c))) return false;
+  return true;
+}
+
+// The first index in [0, n) for which bad(i) holds, or n; deterministic.
+template <typename Bad>
+std::size_t firstBad(std::size_t n, const Bad& bad) {
+  return tbb::parallel_reduce(
+      tbb::blocked_range<std::size_t>(0, n, 4096), n,
+      [&](const tbb::blocked_range<std::size_t>& r, std::size_t found) {
+        for (std::size_t i = r.begin(); i != r.end() && i < found; ++i)
+          if (bad(i)) return i;
+        return found;
+      },
+      [](std::size_t a, std::size_t b) { return std::min(a, b); });
+}
+
+struct DomainCounts {
+  std::size_t clamped = 0, remove = 0, nonFinite = 0;
+  void join(const DomainCounts& o) {
+    clamped += o.clamped;
+    remove += o.remove;
+    nonFinite += o.nonFinite;
+  }
+};
+}  // namespace
+
+// ---------------------------------------------------------------------------
+// The applied field the stage sees: the user's sources plus the magnets.
+
+class MpmSolver::SceneField final : public FieldSource {
+ public:
+  SceneField(const FieldSourceSet& sources, const std::vector<std::unique_ptr<MagnetSource>>& magnets)
+      : sources_(sources), magnets_(magnets) {}
+
+  Vec3d field(const Vec3d& x, double t) const override {
+    Vec3d H = sources_.field(x, t);
+    for (const auto& m : magnets_) H += m->field(x, t);
+    return H;
+  }
+  Vec3d magnetization(const Vec3d& x, double t) const override {
+    Vec3d M = sources_.magnetization(x, t);
+    for (const auto& m : magnets_) M += m->magnetization(x, t);
+    return M;
+  }
+  void accumulateField(const Vec3d* x, std::size_t count, double t, Vec3d* out) const override {
+    sources_.accumulateField(x, count, t, out);
+    for (const auto& m : magnets_) m->accumulateField(x, count, t, out);
+  }
+  bool isUniform() const override { return magnets_.empty() && sources_.isUniform(); }
+  bool appendFieldSignature(double t, std::vector<double>& out) const override {
+    if (!sources_.appendFieldSignature(t, out)) return false;
+    out.push_back(double(magnets_.size()));
+    for (const auto& m : magnets_)
+      if (!m->appendFieldSignature(t, out)) return false;
+    return true;
+  }
+  std::string describe() const override {
+    return concat(sources_.describe(), "; plus ", magnets_.size(), " magnet collider(s)");
+  }
+  std::unique_ptr<FieldSource> clone() const override {
+    auto set = std::make_unique<FieldSourceSet>(sources_);
+    for (const auto& m : magnets_) set->add(*m);
+    return set;
+  }
+  bool empty() const { return sources_.empty() && magnets_.empty(); }
+
+ private:
+  const FieldSourceSet& sources_;
+  const std::vector<std::unique_ptr<MagnetSource>>& magnets_;
+};
+
+// ---------------------------------------------------------------------------
+// Settings and reports
+
+void MpmSettings::validate() const {
+  grid.validate("MPM grid");
+  const int minDim = std::min(grid.dims.i, std::min(grid.dims.j, grid.dims.k));
+  require(minDim >= 4, "MPM grid: at least 4 nodes per axis are needed, got ", grid.dims.i, " x ", grid.dims.j, " x ",
+          grid.dims.k);
+  require(isFinite(gravity), "MPM settings: gravity must be finite (m/s^2), got (", gravity.x, ", ", gravity.y, ", ",
+          gravity.z, ")");
+  walls.validate("MPM walls");
+  require(wallNodes >= 0 && 2 * wallNodes + 2 <= minDim, "MPM settings: wallNodes must be in 0..", (minDim - 2) / 2,
+          " for a grid of ", minDim, " nodes on its shortest axis, got ", wallNodes);
+  require(outOfDomain == OutOfDomainPolicy::Clamp || outOfDomain == OutOfDomainPolicy::Remove,
+          "MPM settings: unknown out-of-domain policy ", int(outOfDomain));
+  require(std::isfinite(fixedDt) && fixedDt >= 0,
+          "MPM settings: fixedDt must be finite and >= 0 (s; 0 = adaptive), got ", fixedDt);
+  require(std::isfinite(cfl) && cfl > 0 && cfl <= 1, "MPM settings: cfl must be in (0, 1], got ", cfl);
+  require(std::isfinite(dtMax) && dtMax > 0, "MPM settings: dtMax must be a positive finite time in s, got ", dtMax);
+  require(std::isfinite(dtMin) && dtMin > 0 && dtMin <= dtMax,
+          "MPM settings: dtMin must be a positive finite time in s, at most dtMax = ", dtMax, " s, got ", dtMin);
+  require(reorderInterval >= 0, "MPM settings: reorderInterval must be >= 0 substeps, got ", reorderInterval);
+  require(magneticSolveInterval >= 0,
+          "MPM settings: magneticSolveInterval must be >= 0 substeps (0 = once per frame), got ",
+          magneticSolveInterval);
+  if (magneticGrid) magneticGrid->validate("magnetic stage grid");
+  magnetic.validate();
+  planner.validate();
+}
+
+std::string MpmFrameReport::summary() const {
+  std::ostringstream os;
+  os.precision(4);
+  os << "frame to t = " << time << " s: " << substeps << " substeps, dt " << minDt << " .. " << maxDt << " s";
+  if (dtAtMinimum) os << " (" << dtAtMinimum << " at dtMin)";
+  os << (cancelled ? ", cancelled" : "") << "\n";
+  os << "time: P2G " << secondsP2G << " s, magnetic " << secondsMagnetic << " s, grid " << secondsGridUpdate
+     << " s, G2P " << secondsG2P << " s, total " << secondsTotal << " s\n";
+  os << "field solves: " << magneticReports.size() << "\n";
+  os << "particles clamped " << clamped << ", removed " << removed << " (non-finite " << nonFinite << ")\n";
+  os << "energy: kinetic " << energies.kinetic << " J, gravitational " << energies.gravitational << " J, elastic "
+     << energies.elastic << " J, total " << energies.total() << " J\n";
+  for (const auto& w : warnings) os << "warning: " << w << "\n";
+  return os.str();
+}
+
+// ---------------------------------------------------------------------------
+// Set-up
+
+MpmSolver::MpmSolver(const MpmSettings& settings) : settings_(settings) {
+  settings_.validate();
+  magneticGrid_ = settings_.magneticGrid ? *settings_.magneticGrid : settings_.grid;
+  sameGrid_ = magneticGrid_ == settings_.grid;
+  grid_ = MpmGrid(settings_.grid);
+  scene_ = std::make_unique<SceneField>(sources_, magnets_);
+  if (sameGrid_) magneticForce_.reset(settings_.grid, Vec3d{});
+}
+
+MpmSolver::~MpmSolver() = default;
+
+std::uint32_t MpmSolver::addMaterial(const MpmMaterial& material) {
+  material.validate();
+  if (material.isMagnetic()) {
+    for (const MpmMaterial& m : materials_)
+      if (m.isMagnetic())
+        require(sameLaw(m.magnetic.law, material.magnetic.law),
+                "MPM solver: every magnetic material must share one magnetization law (one field solve serves them "
+                "all); existing ",
+                m.magnetic.describe(), ", new ", material.magnetic.describe());
+  }
+  require(materials_.size() < 0xFFFFFFFFu, "MPM solver: too many materials");
+  materials_.push_back(material);
+  return std::uint32_t(materials_.size() - 1);
+}
+
+EmitReport MpmSolver::emit(const EmitterShape& shape, std::uint32_t material, EmitterSettings settings) {
+  particlesDirty_ = true;
+  require(material < materials_.size(), "MPM solver: material index ", material, " out of range (", materials_.size(),
+          " materials)");
+  if (settings.cellSize == 0) settings.cellSize = settings_.grid.dx;
+  return emitParticles(particles_, shape, materials_[material], material, settings);
+}
+
+std::size_t MpmSolver::addCollider(const MpmCollider& collider) {
+  colliders_.push_back(collider);
+  return colliders_.size() - 1;
+}
+
+MpmCollider& MpmSolver::collider(std::size_t i) {
+  require(i < colliders_.size(), "MPM solver: collider ", i, " out of range (", colliders_.size(), " colliders)");
+  return colliders_[i];
+}
+
+const MpmCollider& MpmSolver::collider(std::size_t i) const {
+  require(i < colliders_.size(), "MPM solver: collider ", i, " out of range (", colliders_.size(), " colliders)");
+  return colliders_[i];
+}
+
+std::size_t MpmSolver::addMagnet(const MagnetSource& magnet, const ColliderMotion& motion,
+                                 const BoundaryCondition& boundary) {
+  ColliderShape shape;
+  if (const auto* s = dynamic_cast<const SphereMagnet*>(&magnet)) {
+    shape = ColliderShape::sphere(s->radius());
+  } else if (const auto* c = dynamic_cast<const CylinderMagnet*>(&magnet)) {
+    shape = ColliderShape::cylinder(c->radius(), c->halfLength());
+  } else if (const auto* b = dynamic_cast<const CuboidMagnet*>(&magnet)) {
+    shape = ColliderShape::box(b->halfSize());
+  } else {
+    throw InvalidArgument(
+        concat("MPM solver: addMagnet supports sphere, cylinder and cuboid magnets, got ", magnet.describe()));
+  }
+  std::unique_ptr<FieldSource> copy = magnet.clone();
+  std::unique_ptr<MagnetSource> owned(dynamic_cast<MagnetSource*>(copy.get()));
+  require(owned != nullptr, "MPM solver: the magnet's clone is not a magnet");
+  copy.release();
+  owned->setPose(motion.poseAt(time_));
+  colliders_.emplace_back(shape, motion, boundary);
+  magnets_.push_back(std::move(owned));
+  magnetCollider_.push_back(colliders_.size() - 1);
+  return colliders_.size() - 1;
+}
+
+std::size_t MpmSolver::addMagnet(const MagnetSource& magnet, const BoundaryCondition& boundary) {
+  return addMagnet(magnet, ColliderMotion::fixed(magnet.pose()), boundary);
+}
+
+const MagnetSource& MpmSolver::magnet(std::size_t i) const {
+  require(i < magnets_.size(), "MPM solver: magnet ", i, " out of range (", magnets_.size(), " magnets)");
+  return *magnets_[i];
+}
+
+const FieldSource& MpmSolver::appliedField() const { return *scene_; }
+
+void MpmSolver::setTime(double t) {
+  require(std::isfinite(t), "MPM solver: time must be finite (s), got ", t);
+  time_ = t;
+}
+
+// ---------------------------------------------------------------------------
+// Time step
+
+double MpmSolver::suggestedDt() const {
+  if (settings_.fixedDt > 0) return settings_.fixedDt;
+  return cflDt(settings_.cfl, false);
+}
+
+double MpmSolver::stabilityLimitDt() const { return cflDt(1.0, true); }
+
+double MpmSolver::cflDt(double cfl, bool bound) const {
+  const std::size_t np = particles_.size();
+  const Vec3d* v = particles_.v.data();
+  const double vmax = tbb::parallel_reduce(
+      tbb::blocked_range<std::size_t>(0, np, 8192), 0.0,
+      [&](const tbb::blocked_range<std::size_t>& r, double m) {
+        for (std::size_t p = r.begin(); p != r.end(); ++p) m = std::max(m, norm2(v[p]));
+        return m;
+      },
+      [](double a, double b) { return std::max(a, b); });
+  double c = 0, nu = 0;
+  for (const MpmMaterial& m : materials_) {
+    c = std::max(c, m.waveSpeed());
+    nu = std::max(nu, m.kinematicViscosity());
+  }
+  const double dx = settings_.grid.dx;
+  const double speed = std::sqrt(vmax) + c;
+  // The bound: a cell per substep, and the explicit viscous limit dx^2/(6 nu)
+  // (cfl dx^2/(3 nu) at the default cfl = 1/2 of it).
+  if (bound) {
+    double dt = speed > 0 ? dx / speed : std::numeric_limits<double>::infinity();
+    if (nu > 0) dt = std::min(dt, dx * dx / (6 * nu));
+    return dt;
+  }
+  double dt = speed > 0 ? cfl * dx / speed : settings_.dtMax;
+  if (nu > 0) dt = std::min(dt, cfl * dx * dx / (3 * nu));
+  dt = std::min(dt, settings_.dtMax);
+  return std::max(dt, settings_.dtMin);
+}
+
+// ---------------------------------------------------------------------------
+// Domain
+
+ParticleBounds MpmSolver::domainBounds() const {
+  const GridSpec& g = settings_.grid;
+  ParticleBounds b;
+  b.lo = g.origin + g.dx * Vec3d{1, 1, 1};
+  b.hi = g.nodePosition(g.dims.i - 2, g.dims.j - 2, g.dims.k - 2);
+  b.clamp = settings_.outOfDomain == OutOfDomainPolicy::Clamp;
+  return b;
+}
+
+std::size_t MpmSolver::enforceDomain(std::size_t& removedOut, std::size_t& nonFiniteOut) {
+  const ParticleBounds bounds = domainBounds();
+  const Vec3d lo = bounds.lo, hi = bounds.hi;
+  const bool removeOutside = settings_.outOfDomain == OutOfDomainPolicy::Remove;
+  const std::size_t np = particles_.size();
+  std::vector<std::uint8_t> flags(np, 0);
+  Vec3d* X = particles_.x.data();
+  Vec3d* V = particles_.v.data();
+  const double* J = particles_.J.data();
+  const DomainCounts counts = tbb::parallel_reduce(
+      tbb::blocked_range<std::size_t>(0, np, 4096), DomainCounts{},
+      [&](const tbb::blocked_range<std::size_t>& r, DomainCounts acc) {
+        for (std::size_t p = r.begin(); p != r.end(); ++p) {
+          if (!isFinite(X[p]) || !isFinite(V[p]) || !std::isfinite(J[p])) {
+            flags[p] = 1;
+            ++acc.remove;
+            ++acc.nonFinite;
+            continue;
+          }
+          bool outside = false;
+          for (int a = 0; a < 3; ++a) outside = outside || X[p][a] < lo[a] || X[p][a] > hi[a];
+          if (!outside) continue;
+          if (removeOutside) {
+            flags[p] = 1;
+            ++acc.remove;
+            continue;
+          }
+          for (int a = 0; a < 3; ++a) {
+            if (X[p][a] < lo[a]) {
+              X[p][a] = lo[a];
+              if (V[p][a] < 0) V[p][a] = 0;
+            } else if (X[p][a] > hi[a]) {
+              X[p][a] = hi[a];
+              if (V[p][a] > 0) V[p][a] = 0;
+            }
+          }
+          ++acc.clamped;
+        }
+        return acc;
+      },
+      [](DomainCounts a, const DomainCounts& b) {
+        a.join(b);
+        return a;
+      });
+  if (counts.remove > 0) particles_.removeFlagged(flags);
+  removedOut += counts.remove;
+  nonFiniteOut += counts.nonFinite;
+  return counts.clamped;
+}
+
+// ---------------------------------------------------------------------------
+// Magnetism
+
+bool MpmSolver::isMagneticPoint(std::size_t p) const {
+  const std::uint32_t mat = particles_.material[p];
+  return particles_.count[p] > 0 && mat < materials_.size() && materials_[mat].isMagnetic();
+}
+
+const MagneticMaterial* MpmSolver::magneticLaw() const {
+  for (const MpmMaterial& m : materials_)
+    if (m.isMagnetic()) return &m.magnetic;
+  return nullptr;
+}
+
+void MpmSolver::poseMagnetsAt(double t) const {
+  for (std::size_t m = 0; m < magnets_.size(); ++m)
+    magnets_[m]->setPose(colliders_[magnetCollider_[m]].motion().poseAt(t));
+}
+
+bool MpmSolver::magneticStateChanged() {
+  // Moved: any magnetic point farther than the reuse distance from where it
+  // was at the last solve (a changed particle set counts as moved).
+  if (lastSolveX_.size() != particles_.size() || lastSolveSample_.empty()) return true;
+  const double d2 = lastPlan_.reuseDistance * lastPlan_.reuseDistance;
+  for (std::size_t p = 0; p < particles_.size(); ++p)
+    if (isMagneticPoint(p) && norm2(particles_.x[p] - lastSolveX_[p]) > d2) return true;
+  // Applied field changed (magnets moved, time profiles) at the sampled points.
+  poseMagnetsAt(time_);
+  std::vector<Vec3d> H(lastSolveSample_.size());
+  for (std::size_t q = 0; q < H.size(); ++q) H[q] = scene_->field(lastSolveX_[lastSolveSample_[q]], time_);
+  return relativeFieldChange(H, lastSolveH_) > lastPlan_.reuseFieldChange;
+}
+
+MagneticPlan MpmSolver::planMagneticNow() const {
+  std::vector<Vec3d> positions;
+  const MagneticMaterial* law = magneticLaw();
+  for (std::size_t p = 0; p < particles_.size(); ++p)
+    if (isMagneticPoint(p)) positions.push_back(particles_.x[p]);
+  poseMagnetsAt(time_);
+  return planMagnetic(settings_.planner, plannerInputs(positions, law ? *law : nonMagneticMaterial()));
+}
+
+PlannerInputs MpmSolver::plannerInputs(const std::vector<Vec3d>& positions, const MagneticMaterial& law) const {
+  PlannerInputs in;
+  in.positions = positions.data();
+  in.count = positions.size();
+  in.material = law;
+  in.applied = scene_.get();
+  in.appliedEmpty = scene_->empty();
+  in.time = time_;
+  in.grid = magneticGrid_;
+  return in;
+}
+
+bool MpmSolver::anyMagneticParticles() const {
+  bool anyMaterial = false;
+  for (const MpmMaterial& m : materials_) anyMaterial = anyMaterial || m.isMagnetic();
+  if (!anyMaterial) return false;
+  for (std::size_t p = 0; p < particles_.size(); ++p)
+    if (particles_.count[p] > 0) return true;
+  return false;
+}
+
+void MpmSolver::solveMagnetic(MpmStepReport& rep) {
+  const auto t0 = Clock::now();
+  // The magnetic points, handed to the stage as an external host would.
+  std::vector<std::uint32_t> index;
+  std::vector<Vec3d> positions;
+  std::vector<double> counts;
+  const MagneticMaterial* law = magneticLaw();
+  for (std::size_t p = 0; p < particles_.size(); ++p) {
+    if (isMagneticPoint(p)) {
+      index.push_back(std::uint32_t(p));
+      positions.push_back(particles_.x[p]);
+      counts.push_back(particles_.count[p]);
+    }
+  }
+  std::fill(particles_.magneticForce.begin(), particles_.magneticForce.end(), Vec3d{});
+  if (sameGrid_) magneticForce_.fill(Vec3d{});
+  magneticDropped_ = {};
+  haveMagneticForce_ = false;
+  stepsSinceSolve_ = 0;
+  if (index.empty() || !law || scene_->empty()) return;
+
+  poseMagnetsAt(time_);
+  if (settings_.planner.enabled) {
+    // The planner picks the law, whether to solve at all, and the solve grid.
+    lastPlan_ = planMagnetic(settings_.planner, plannerInputs(positions, *law));
+    GridSpec solveGrid = magneticGrid_;
+    if (lastPlan_.activeRegion) {
+      // Keep the current region while it holds the material's; otherwise a
+      // new one with 4 cells of slack (clipped to the full grid).
+      const GridSpec& r = lastPlan_.region;
+      const auto contains = [](const GridSpec& outer, const GridSpec& inner) {
+        for (int a = 0; a < 3; ++a) {
+          const double lo = (inner.origin[a] - outer.origin[a]) / outer.dx;
+          if (lo < -1e-9 || lo + inner.dims[a] - 1 > outer.dims[a] - 1 + 1e-9) return false;
+        }
+        return true;
+      };
+      if (stage_ && !(stage_->grid() == magneticGrid_) && contains(stage_->grid(), r)) {
+        solveGrid = stage_->grid();
+      } else {
+        int lo[3], hi[3];
+        for (int a = 0; a < 3; ++a) {
+          const int first = int(std::lround((r.origin[a] - magneticGrid_.origin[a]) / magneticGrid_.dx));
+          lo[a] = std::max(0, first - 4);
+          hi[a] = std::min(magneticGrid_.dims[a] - 1, first + r.dims[a] - 1 + 4);
+        }
+        solveGrid.origin = magneticGrid_.nodePosition(lo[0], lo[1], lo[2]);
+        solveGrid.dims = {hi[0] - lo[0] + 1, hi[1] - lo[1] + 1, hi[2] - lo[2] + 1};
+      }
+    }
+    if (!stage_ || !(stage_->grid() == solveGrid)) stage_ = std::make_unique<MagneticForceStage>(solveGrid, *law, settings_.magnetic);
+    MagneticStageSettings st = settings_.magnetic;
+    st.appliedFieldOnly = lastPlan_.appliedFieldOnly;
+    stage_->setSettings(st);
+    stage_->setMaterial(lastPlan_.linearLaw ? linearized(*law) : *law);
+    sameGrid_ = solveGrid == settings_.grid;
+    if (sameGrid_ && !(magneticForce_.spec() == settings_.grid)) magneticForce_.reset(settings_.grid, Vec3d{});
+    // What the reuse test compares against.
+    lastSolveX_ = particles_.x;
+    lastSolveSample_.clear();
+    const std::size_t stride = std::max<std::size_t>(1, index.size() / 256);
+    for (std::size_t q = 0; q < index.size(); q += stride) lastSolveSample_.push_back(index[q]);
+    lastSolveH_.resize(lastSolveSample_.size());
+    for (std::size_t q = 0; q < lastSolveSample_.size(); ++q)
+      lastSolveH_[q] = scene_->field(particles_.x[lastSolveSample_[q]], time_);
+  }
+  if (!stage_) stage_ = std::make_unique<MagneticForceStage>(magneticGrid_, *law, settings_.magnetic);
+  const ParticleView view{positions.data(), counts.data(), positions.size()};
+  rep.magnetic = stage_->run(view, *scene_, time_);
+  rep.magneticSolved = true;
+  if (settings_.checkFinite) {
+    const GridView<const Vec3d> H = stage_->field(), f = stage_->nodalForce();
+    const std::size_t nn = magneticGrid_.nodeCount();
+    const std::size_t bad = firstBad(nn, [&](std::size_t i) { return !isFinite(H.data[i]) || !isFinite(f.data[i]); });
+    if (bad < nn)
+      throw Error(concat("MPM finite check: non-finite magnetic ", isFinite(H.data[bad]) ? "nodal force (N)" : "field H (A/m)",
+                         " at magnetic-grid node index ", bad, " after the field solve in substep ", substeps_ + 1,
+                         " at t = ", time_, " s (solve: ", toString(rep.magnetic.solve.status), ", ",
+                         rep.magnetic.solve.message, ")"));
+  }
+  if (sameGrid_) {
+    magneticDropped_ = gatherToSupport(stage_->nodalForce(), stage_->density(), magneticForce_.view());
+  } else {
+    std::vector<Vec3d> forces(positions.size());
+    stage_->particleForces(view, forces.data());
+    for (std::size_t q = 0; q < index.size(); ++q) particles_.magneticForce[index[q]] = forces[q];
+  }
+  haveMagneticForce_ = true;
+  rep.secondsMagnetic = secondsSince(t0);
+}
+
+// ---------------------------------------------------------------------------
+// Grid update (step 4)
+
+void MpmSolver::gridUpdate(double dt, MpmStepReport& rep) {
+  const GridSpec& g = settings_.grid;
+  const Index3 lo = grid_.activeLo(), hi = grid_.activeHi();
+  if (lo.i >= hi.i || lo.j >= hi.j || lo.k >= hi.k) return;
+  const double tNew = time_ + dt;
+  std::vector<ColliderState> states(colliders_.size());
+  for (std::size_t c = 0; c < colliders_.size(); ++c) states[c] = colliders_[c].stateAt(tNew);
+  const Vec3d dg = dt * settings_.gravity;
+  const int W = settings_.wallNodes;
+  const BoundaryCondition walls = settings_.walls;
+  const Vec3d* fmag = magneticForce_.empty() ? nullptr : magneticForce_.data();
+  // The nodal force applies only when it lives on this grid (a restored
+  // state may carry a cached force from another stage grid).
+  const bool magnetic = sameGrid_ && haveMagneticForce_ && fmag && magneticForce_.spec() == settings_.grid;
+  const std::vector<MpmNode>& nodes = grid_.nodes();
+  std::vector<Vec3d>& vel = grid_.velocity();
+  const int nj = hi.j - lo.j;
+  const std::size_t rows = std::size_t(nj) * std::size_t(hi.k - lo.k);
+  std::vector<Vec3d> rowImpulse(magnetic ? rows : 0);
+
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, rows, 4), [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t row = r.begin(); row != r.end(); ++row) {
+      const int j = lo.j + int(row % std::size_t(nj));
+      const int k = lo.k + int(row / std::size_t(nj));
+      Vec3d impulse{};
+      for (int i = lo.i; i < hi.i; ++i) {
+        const std::size_t n = g.index(i, j, k);
+        const double m = nodes[n].mass;
+        if (!(m > 0)) {
+          vel[n] = Vec3d{};
+          continue;
+        }
+        Vec3d p = nodes[n].momentum;
+        if (magnetic) {
+          const Vec3d I = dt * fmag[n];  // N*s
+          p += I;
+          impulse += I;
+        }
+        Vec3d v = p / m + dg;
+        if (!colliders_.empty()) {
+          const Vec3d x = g.nodePosition(i, j, k);
+          for (std::size_t c = 0; c < colliders_.size(); ++c) v = colliders_[c].apply(states[c], x, v);
+        }
+        if (W > 0) {
+          const int idx[3] = {i, j, k};
+          const int dims[3] = {g.dims.i, g.dims.j, g.dims.k};
+          for (int a = 0; a < 3; ++a) {
+            Vec3d nrm{};
+            if (idx[a] < W) {
+              nrm[a] = 1;
+            } else if (idx[a] > dims[a] - 1 - W) {
+              nrm[a] = -1;
+            } else {
+              continue;
+            }
+            v = applyBoundaryCondition(v, Vec3d{}, nrm, walls);
+          }
+        }
+        vel[n] = v;
+      }
+      if (magnetic) rowImpulse[row] = impulse;
+    }
+  });
+  if (magnetic) {
+    Vec3d total{};
+    for (const Vec3d& I : rowImpulse) total += I;
+    rep.magneticImpulse = total;
+  }
+}
+
+// ---------------------------------------------------------------------------
+// Finite checks (MpmSettings::checkFinite)
+
+
+void MpmSolver::checkFiniteParticles(const char* where) const {
+  const MpmParticles& P = particles_;
+  const std::size_t np = P.size();
+  const bool forces = P.magneticForce.size() == np;
+  const std::size_t p = firstBad(np, [&](std::size_t i) {
+    return !isFinite(P.x[i]) || !isFinite(P.v[i]) || !finiteMat(P.C[i]) || !finiteMat(P.F[i]) ||
+           !std::isfinite(P.J[i]) || (forces && !isFinite(P.magneticForce[i]));
+  });
+  if (p == np) return;
+  const char* what = !isFinite(P.x[p])        ? "position x (m)"
+                     : !isFinite(P.v[p])      ? "velocity v (m/s)"
+                     : !finiteMat(P.C[p])     ? "APIC matrix C (1/s)"
+                     : !finiteMat(P.F[p])     ? "deformation gradient F"
+                     : !std::isfinite(P.J[p]) ? "volume ratio J"
+                                              : "magnetic force (N)";
+  throw Error(concat("MPM finite check: non-finite ", what, " of particle ", p, " (id ", P.id[p], ", material ",
+                     P.material[p], ") ", where, " in substep ", substeps_ + 1, " at t = ", time_,
+                     " s; position (", P.x[p].x, ", ", P.x[p].y, ", ", P.x[p].z, ") m, velocity (", P.v[p].x, ", ",
+                     P.v[p].y, ", ", P.v[p].z, ") m/s, J = ", P.J[p]));
+}
+
+void MpmSolver::checkFiniteGrid(const char* where) const {
+  const GridSpec& g = settings_.grid;
+  const std::vector<MpmNode>& nodes = grid_.nodes();
+  const std::vector<Vec3d>& vel = grid_.velocity();
+  const Vec3d* fmag = sameGrid_ && haveMagneticForce_ && !magneticForce_.empty() ? magneticForce_.data() : nullptr;
+  const std::size_t nn = std::min(nodes.size(), vel.size());
+  const std::size_t n = firstBad(nn, [&](std::size_t i) {
+    return !std::isfinite(nodes[i].mass) || !isFinite(nodes[i].momentum) || !isFinite(vel[i]) ||
+           (fmag && !isFinite(fmag[i]));
+  });
+  if (n == nn) return;
+  const char* what = !std::isfinite(nodes[n].mass)      ? "mass (kg)"
+                     : !isFinite(nodes[n].momentum)      ? "momentum (kg m/s)"
+                     : !isFinite(vel[n])                 ? "velocity (m/s)"
+                                                         : "magnetic nodal force (N)";
+  const std::size_t plane = std::size_t(g.dims.i) * std::size_t(g.dims.j);
+  const std::size_t k = n / plane, j = (n % plane) / std::size_t(g.dims.i), i = n % std::size_t(g.dims.i);
+  throw Error(concat("MPM finite check: non-finite grid ", what, " at node (", i, ", ", j, ", ", k, ") ", where,
+                     " in substep ", substeps_ + 1, " at t = ", time_, " s (node mass ", nodes[n].mass, " kg)"));
+}
+
+void MpmSolver::resetMagneticWarmStart() {
+  if (stage_) stage_->resetWarmStart();
+}
+
+// ---------------------------------------------------------------------------
+// Substeps and frames
+
+MpmStepReport MpmSolver::step(double dt) {
+  require(std::isfinite(dt) && dt > 0, "MPM step: dt must be a positive finite time in s, got ", dt);
+  require(time_ + dt > time_, "MPM step: dt = ", dt, " s is below the resolution of the time ", time_, " s");
+  particles_.checkSizes();
+  const auto tStart = Clock::now();
+  MpmStepReport rep;
+  rep.dt = dt;
+
+  // 0. Keep every particle where its stencil fits (G2P does it after
+  // advection; here only when the particles were handed out since).
+  auto t = Clock::now();
+  if (particlesDirty_) {
+    if (settings_.checkFinite) checkFiniteParticles("at the start of the substep");
+    rep.clamped += enforceDomain(rep.removed, rep.nonFinite);
+    particlesDirty_ = false;
+  }
+  const double secondsDomain = secondsSince(t);
+
+  // 2-3. Field solve and magnetic force on the solver's interval.
+  const bool magneticScene = !scene_->empty() && anyMagneticParticles();
+  if (magneticScene) {
+    bool due =
+        settings_.magneticSolveInterval > 0 ? stepsSinceSolve_ >= settings_.magneticSolveInterval : frameStart_;
+    if (due && haveMagneticForce_ && settings_.planner.enabled && lastPlan_.reuseDistance > 0 &&
+        !magneticStateChanged()) {
+      due = false;  // nothing moved or changed enough: the last solve still holds
+      rep.magneticReused = true;
+      stepsSinceSolve_ = 0;
+    }
+    if (due || !haveMagneticForce_) solveMagnetic(rep);
+  } else if (haveMagneticForce_) {
+    solveMagnetic(rep);  // clears the cached force
+  }
+  frameStart_ = false;
+
+  // 1. P2G.
+  t = Clock::now();
+  const bool particleForces = !sameGrid_ && haveMagneticForce_;
+  grid_.particleToGrid(particles_, materials_, dt, particleForces ? particles_.magneticForce.data() : nullptr);
+  if (particleForces) {
+    rep.magneticImpulse =
+        deterministicSum<Vec3d>(particles_.size(), [&](std::size_t p) { return dt * particles_.magneticForce[p]; });
+  }
+  rep.secondsP2G = secondsDomain + secondsSince(t);
+  rep.secondsBinning = grid_.lastBinningSeconds();
+
+  // 4. Grid update.
+  t = Clock::now();
+  gridUpdate(dt, rep);
+  if (settings_.checkFinite) checkFiniteGrid("after the grid update");
+  rep.secondsGridUpdate = secondsSince(t);
+
+  // 5-7. G2P, F/J update, advection.
+  t = Clock::now();
+  const ParticleBounds bounds = domainBounds();
+  const GridToParticleReport g2p = grid_.gridToParticle(particles_, materials_, dt, &bounds);
+  if (settings_.checkFinite) checkFiniteParticles("after G2P and advection");
+  rep.maxSpeed = g2p.maxSpeed;
+  rep.clamped += g2p.clamped;
+  const std::size_t removedBefore = rep.removed;
+  if (g2p.outside + g2p.nonFinite > 0) rep.clamped += enforceDomain(rep.removed, rep.nonFinite);
+  ++substeps_;
+  ++stepsSinceSolve_;
+  if (settings_.reorderInterval > 0 && substeps_ % settings_.reorderInterval == 0 && rep.removed == removedBefore &&
+      grid_.binnedOrder().size() == particles_.size())
+  {
+    if (lastSolveX_.size() == particles_.size()) {
+      std::vector<Vec3d> moved(lastSolveX_.size());
+      const std::vector<std::uint32_t>& order = grid_.binnedOrder();
+      std::vector<std::uint32_t> newIndex(order.size());
+      for (std::size_t p = 0; p < order.size(); ++p) {
+        moved[p] = lastSolveX_[order[p]];
+        newIndex[order[p]] = std::uint32_t(p);
+      }
+      lastSolveX_.swap(moved);
+      for (std::uint32_t& q : lastSolveSample_) q = newIndex[q];
+    }
+    particles_.permute(grid_.binnedOrder());
+  }
+  rep.secondsG2P = secondsSince(t);
+
+  time_ += dt;
+  rep.time = time_;
+  rep.particles = particles_.size();
+  rep.secondsTotal = secondsSince(tStart);
+  return rep;
+}
+
+MpmFrameReport MpmSolver::advanceFrame(double frameDuration, const MpmProgressCallback& progress) {
+  require(std::isfinite(frameDuration) && frameDuration > 0,
+          "MPM frame: duration must be a positive finite time in s, got ", frameDuration);
+  MpmFrameReport fr;
+  const double t0 = time_;
+  const double tEnd = time_ + frameDuration;
+  frameStart_ = true;
+  bool first = true;
+  while (time_ < tEnd) {
+    double dt = suggestedDt();
+    if (settings_.fixedDt == 0 && dt <= settings_.dtMin) ++fr.dtAtMinimum;
+    if (settings_.fixedDt > 0) {
+      // A fixed dt above the stability bound would blow up: substep it.
+      const double limit = stabilityLimitDt();
+      if (dt > limit) {
+        dt = std::max(settings_.cfl * limit, settings_.dtMin);
+        ++fr.dtLimitedByCfl;
+      }
+    }
+    const double remaining = tEnd - time_;
+    bool last = false;
+    if (remaining <= dt * (1 + 1e-9)) {
+      dt = remaining;
+      last = true;
+    } else if (settings_.fixedDt == 0 && remaining < 2 * dt) {
+      dt = 0.5 * remaining;  // two even substeps rather than a sliver
+    }
+    const MpmStepReport r = step(dt);
+    if (last) time_ = tEnd;
+    ++fr.substeps;
+    fr.minDt = first ? dt : std::min(fr.minDt, dt);
+    fr.maxDt = first ? dt : std::max(fr.maxDt, dt);
+    first = false;
+    fr.secondsP2G += r.secondsP2G;
+    fr.secondsMagnetic += r.secondsMagnetic;
+    fr.secondsGridUpdate += r.secondsGridUpdate;
+    fr.secondsG2P += r.secondsG2P;
+    fr.secondsTotal += r.secondsTotal;
+    fr.magneticImpulse += r.magneticImpulse;
+    fr.clamped += r.clamped;
+    fr.removed += r.removed;
+    fr.nonFinite += r.nonFinite;
+    if (r.magneticSolved) {
+      if (!r.magnetic.converged())
+        fr.warnings.push_back(
+            concat("field solve at t = ", time_ - dt, " s did not converge: ", r.magnetic.solve.message));
+      fr.magneticReports.push_back(r.magnetic);
+    }
+    fr.magneticReused += r.magneticReused ? 1 : 0;
+    if (progress) {
+      MpmProgress pr;
+      pr.substep = fr.substeps;
+      pr.time = time_;
+      pr.fraction = std::min(1.0, (time_ - t0) / frameDuration);
+      if (!progress(pr)) {
+        fr.cancelled = !last;
+        break;
+      }
+    }
+    if (last) break;
+  }
+  if (fr.dtAtMinimum > 0)
+    fr.warnings.push_back(concat(fr.dtAtMinimum, " substep(s) needed less than dtMin = ", settings_.dtMin,
+                                 " s and were taken at dtMin; the step may be unstable"));
+  if (fr.nonFinite > 0)
+    fr.warnings.push_back(concat(fr.nonFinite, " particle(s) with a non-finite state were removed"));
+  if (fr.dtLimitedByCfl > 0)
+    fr.warnings.push_back(concat(fr.dtLimitedByCfl, " substep(s): the fixed dt = ", settings_.fixedDt,
+                                 " s exceeded the stability bound (a cell per substep, dx^2/(6 nu)) and was "
+                                 "shortened to cfl times the bound"));
+  fr.time = time_;
+  fr.energies = energies();
+  return fr;
+}
+
+Vec3d MpmSolver::domainLower() const {
+  const GridSpec& g = settings_.grid;
+  const double w = settings_.wallNodes > 0 ? settings_.wallNodes - 0.5 : 1.0;
+  return g.origin + (w * g.dx) * Vec3d{1, 1, 1};
+}
+
+Vec3d MpmSolver::domainUpper() const {
+  const GridSpec& g = settings_.grid;
+  const double w = settings_.wallNodes > 0 ? settings_.wallNodes - 0.5 : 1.0;
+  return g.nodePosition(g.dims.i - 1, g.dims.j - 1, g.dims.k - 1) - (w * g.dx) * Vec3d{1, 1, 1};
+}
+
+MpmEnergies MpmSolver::energies() const {
+  struct Sum {
+    double k = 0, g = 0, e = 0;
+    Sum& operator+=(const Sum& o) {
+      k += o.k;
+      g += o.g;
+      e += o.e;
+      return *this;
+    }
+  };
+  const Vec3d grav = settings_.gravity;
+  const Sum s = deterministicSum<Sum>(particles_.size(), [&](std::size_t p) {
+    Sum t;
+    const double m = particles_.mass[p];
+    t.k = 0.5 * m * norm2(particles_.v[p]);
+    t.g = -m * dot(grav, particles_.x[p]);
+    const std::uint32_t id = particles_.material[p];
+    if (id < materials_.size()) {
+      const MpmMaterial& mat = materials_[id];
+      t.e = particles_.volume0[p] * (mat.model == MpmModel::ViscousFluid
+                                         ? fluidEnergyDensity(particles_.J[p], mat.bulkModulus)
+                                         : neoHookeanEnergyDensity(particles_.F[p], mat.mu, mat.lambda));
+    }
+    return t;
+  });
+  MpmEnergies e;
+  e.kinetic = s.k;
+  e.gravitational = s.g;
+  e.elastic = s.e;
+  return e;
+}
+
+}  // namespace lodestone

@@ -1,0 +1,262 @@
+#include "lodestone/core/stage/magnetic_force.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <vector>
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
+
+#include "lodestone/core/base/constants.h"
+#include "lodestone/core/base/error.h"
+#include "lodestone/core/sources/field_source.h"
+
+namespace lodestone {
+
+const char* toString(ForceMask mask) {
+  switch (mask) {
+    case ForceMask::Material: return "material";
+    case ForceMask::None: return "none";
+  }
+  return "unknown";
+}
+
+void stressDivergence(GridView<const Vec3d> H, GridView<const Vec3d> B, GridView<const Vec3d> Hext,
+                      GridView<const double> n, ForceMask mask, GridView<Vec3d> t, int dilation,
+                      const FieldSource* applied, double time) {
+  require(std::isfinite(time), "stressDivergence: time must be finite, got ", time, " s");
+  require(dilation >= 0 && dilation <= 8, "stressDivergence: mask dilation must be 0..8 nodes, got ", dilation);
+  const GridSpec& g = H.spec;
+  require(B.spec == g && t.spec == g && Hext.spec == g, "stressDivergence: grids differ");
+  require(mask == ForceMask::None || (n.data && n.spec == g), "stressDivergence: the material mask needs n");
+  const int dims[3] = {g.dims.i, g.dims.j, g.dims.k};
+  const std::ptrdiff_t stride[3] = {1, std::ptrdiff_t(g.dims.i), std::ptrdiff_t(g.dims.i) * g.dims.j};
+  // Row a of the self stress at node m: B_d,a H_d - (mu0/2)|H_d|^2 e_a with
+  // H_d = H - H_ext and B_d = B - mu0 H_ext = mu0 (H_d + M).
+  const auto row = [&](std::size_t m, int a) {
+    const Vec3d Hd = H[m] - Hext[m];
+    Vec3d r = (B[m][a] - kMu0 * Hext[m][a]) * Hd;
+    r[a] -= 0.5 * kMu0 * norm2(Hd);
+    return r;
+  };
+  // The material mask: nodes within `dilation` nodes (per axis) of n > 0, a
+  // box dilation done as three one-axis passes.
+  std::vector<std::uint8_t> near;
+  if (mask == ForceMask::Material) {
+    const std::size_t count = g.nodeCount();
+    near.resize(count);
+    std::vector<std::uint8_t> next(count);
+    tbb::parallel_for(std::size_t(0), count, [&](std::size_t m) { near[m] = n[m] > 0; });
+    for (int axis = 0; axis < 3 && dilation > 0; ++axis) {
+      tbb::parallel_for(0, g.dims.k, [&](int k) {
+        for (int j = 0; j < g.dims.j; ++j)
+          for (int i = 0; i < g.dims.i; ++i) {
+            const std::size_t m = g.index(i, j, k);
+            const int p = axis == 0 ? i : (axis == 1 ? j : k);
+            const int from = std::max(p - dilation, 0) - p, to = std::min(p + dilation, dims[axis] - 1) - p;
+            std::uint8_t any = 0;
+            for (int s = from; s <= to && !any; ++s) any = near[std::size_t(std::ptrdiff_t(m) + s * stride[axis])];
+            next[m] = any;
+          }
+      });
+      near.swap(next);
+    }
+  }
+  tbb::parallel_for(0, g.dims.k, [&](int k) {
+    for (int j = 0; j < g.dims.j; ++j)
+      for (int i = 0; i < g.dims.i; ++i) {
+        const std::size_t m = g.index(i, j, k);
+        if (mask == ForceMask::Material && !near[m]) {
+          t[m] = Vec3d{};
+          continue;
+        }
+        const int p[3] = {i, j, k};
+        // div T_self + mu0 (M . grad) H_ext, with M = B/mu0 - H.
+        const Vec3d M = B[m] / kMu0 - H[m];
+        Vec3d div{};
+        for (int a = 0; a < 3; ++a) {
+          const std::size_t up = p[a] < dims[a] - 1 ? m + std::size_t(stride[a]) : m;
+          const std::size_t dn = p[a] > 0 ? m - std::size_t(stride[a]) : m;
+          const double span = g.dx * double((up != m) + (dn != m));
+          div += (row(up, a) - row(dn, a)) / span;
+          if (!applied) div += (kMu0 * M[a] / span) * (Hext[up] - Hext[dn]);
+        }
+        if (applied) {
+          // (M . grad) H_ext as the directional derivative of the source along
+          // M over +-1e-3 dx: exact up to O(1e-6 dx^2 H''') and blind to the
+          // jump of H_ext at a magnet's surface one node away.
+          const double Mn = norm(M);
+          if (Mn > 0) {
+            const Vec3d x = g.nodePosition(i, j, k), d = (1e-3 * g.dx / Mn) * M;
+            div += (kMu0 * Mn / (2e-3 * g.dx)) * (applied->field(x + d, time) - applied->field(x - d, time));
+          }
+        }
+        t[m] = div;
+      }
+  });
+}
+
+void spreadForce(GridView<const Vec3d> t, GridView<Vec3d> f, GridScratch* scratch) {
+  const GridSpec& g = t.spec;
+  require(f.spec == g, "spreadForce: grids differ");
+  const std::size_t count = g.nodeCount();
+  GridScratch local;
+  GridScratch& sc = scratch ? *scratch : local;
+  sc.vector0.resize(count);
+  Vec3d* tmp = sc.vector0.data();
+  // Three one-axis passes, t -> f -> tmp -> f (t is first copied to tmp
+  // when it is f itself, so that no pass reads what it writes).
+  const Vec3d* first = t.data;
+  if (t.data == f.data) {
+    std::copy(t.data, t.data + count, tmp);
+    first = tmp;
+  }
+  const int dims[3] = {g.dims.i, g.dims.j, g.dims.k};
+  const std::size_t stride[3] = {1, std::size_t(g.dims.i), std::size_t(g.dims.i) * std::size_t(g.dims.j)};
+  const double r0 = 2.0 * g.dx / 3.0, r1 = g.dx / 6.0;
+  const Vec3d* src[3] = {first, f.data, tmp};
+  Vec3d* dst[3] = {f.data, tmp, f.data};
+  for (int axis = 0; axis < 3; ++axis) {
+    const Vec3d* a = src[axis];
+    Vec3d* b = dst[axis];
+    tbb::parallel_for(0, g.dims.k, [&](int k) {
+      for (int j = 0; j < g.dims.j; ++j)
+        for (int i = 0; i < g.dims.i; ++i) {
+          const std::size_t m = g.index(i, j, k);
+          const int p = axis == 0 ? i : (axis == 1 ? j : k);
+          Vec3d s = r0 * a[m];
+          if (p > 0) s += r1 * a[m - stride[axis]];
+          if (p < dims[axis] - 1) s += r1 * a[m + stride[axis]];
+          b[m] = s;
+        }
+    });
+  }
+}
+
+Vec3d gatherToSupport(GridView<const Vec3d> f, GridView<const double> n, GridView<Vec3d> out, int maxDistance) {
+  const GridSpec& g = f.spec;
+  require(n.spec == g && out.spec == g, "gatherToSupport: grids differ");
+  require(maxDistance >= 0 && maxDistance <= 16, "gatherToSupport: maxDistance must be 0..16 nodes, got ", maxDistance);
+  const std::size_t count = g.nodeCount();
+  constexpr int kFar = 1 << 20;
+  // Only the box of the support (n > 0) grown by maxDistance can hold a node
+  // within reach; every node outside it is farther (kFar). The passes run
+  // over that box alone (the material is usually a small part of the grid).
+  struct Box {
+    int lo[3] = {1 << 30, 1 << 30, 1 << 30}, hi[3] = {-1, -1, -1};
+    void add(const Box& o) {
+      for (int a = 0; a < 3; ++a) {
+        lo[a] = std::min(lo[a], o.lo[a]);
+        hi[a] = std::max(hi[a], o.hi[a]);
+      }
+    }
+  };
+  const Box support = tbb::parallel_reduce(
+      tbb::blocked_range<int>(0, g.dims.k), Box{},
+      [&](const tbb::blocked_range<int>& r, Box b) {
+        for (int k = r.begin(); k != r.end(); ++k)
+          for (int j = 0; j < g.dims.j; ++j)
+            for (int i = 0; i < g.dims.i; ++i)
+              if (n[g.index(i, j, k)] > 0) {
+                const int c[3] = {i, j, k};
+                for (int a = 0; a < 3; ++a) {
+                  b.lo[a] = std::min(b.lo[a], c[a]);
+                  b.hi[a] = std::max(b.hi[a], c[a]);
+                }
+              }
+        return b;
+      },
+      [](Box a, const Box& b) {
+        a.add(b);
+        return a;
+      });
+  if (support.hi[0] < 0) {  // no support: everything is dropped
+    Vec3d lost{};
+    for (std::size_t m = 0; m < count; ++m) lost += f[m];
+    std::fill(out.data, out.data + count, Vec3d{});
+    return lost;
+  }
+  int lo[3], dims[3];
+  for (int a = 0; a < 3; ++a) {
+    lo[a] = std::max(support.lo[a] - maxDistance, 0);
+    dims[a] = std::min(support.hi[a] + maxDistance, g.dims[a] - 1) - lo[a] + 1;
+  }
+  const std::size_t boxCount = std::size_t(dims[0]) * std::size_t(dims[1]) * std::size_t(dims[2]);
+  const auto local = [&](int i, int j, int k) {
+    return std::size_t(i) + std::size_t(dims[0]) * (std::size_t(j) + std::size_t(dims[1]) * std::size_t(k));
+  };
+  const auto global = [&](int i, int j, int k) { return g.index(i + lo[0], j + lo[1], k + lo[2]); };
+  const auto forBox = [&](const auto& fn) {  // fn(i, j, k) in box coordinates, z-slabs in parallel
+    tbb::parallel_for(0, dims[2], [&](int k) {
+      for (int j = 0; j < dims[1]; ++j)
+        for (int i = 0; i < dims[0]; ++i) fn(i, j, k);
+    });
+  };
+  // d: node distance (26-connectivity) to the support, up to maxDistance.
+  std::vector<int> d(boxCount, kFar);
+  forBox([&](int i, int j, int k) { d[local(i, j, k)] = n[global(i, j, k)] > 0 ? 0 : kFar; });
+  const auto forNeighbours = [&](int i, int j, int k, const auto& fn) {
+    for (int c = std::max(k - 1, 0); c <= std::min(k + 1, dims[2] - 1); ++c)
+      for (int b = std::max(j - 1, 0); b <= std::min(j + 1, dims[1] - 1); ++b)
+        for (int a = std::max(i - 1, 0); a <= std::min(i + 1, dims[0] - 1); ++a)
+          if (a != i || b != j || c != k) fn(local(a, b, c));
+  };
+  for (int level = 1; level <= maxDistance; ++level) {
+    forBox([&](int i, int j, int k) {
+      const std::size_t m = local(i, j, k);
+      if (d[m] != kFar) return;
+      bool next = false;
+      forNeighbours(i, j, k, [&](std::size_t o) { next = next || d[o] == level - 1; });
+      if (next) d[m] = -level;  // mark; committed below so this pass reads only older levels
+    });
+    tbb::parallel_for(std::size_t(0), boxCount, [&](std::size_t m) {
+      if (d[m] < 0) d[m] = -d[m];
+    });
+  }
+  // Each node at distance L > 0 splits what it holds equally among its
+  // neighbours at distance L - 1, outermost level first.
+  std::vector<Vec3d> acc(boxCount);
+  std::vector<int> inward(boxCount, 0);
+  forBox([&](int i, int j, int k) {
+    const std::size_t m = local(i, j, k);
+    acc[m] = f[global(i, j, k)];
+    if (d[m] == 0 || d[m] == kFar) return;
+    int c = 0;
+    forNeighbours(i, j, k, [&](std::size_t o) { c += d[o] == d[m] - 1; });
+    inward[m] = c;
+  });
+  for (int level = maxDistance - 1; level >= 0; --level) {
+    forBox([&](int i, int j, int k) {
+      const std::size_t m = local(i, j, k);
+      if (d[m] != level) return;
+      Vec3d pulled{};
+      forNeighbours(i, j, k, [&](std::size_t o) {
+        if (d[o] == level + 1) pulled += acc[o] / double(inward[o]);
+      });
+      acc[m] += pulled;
+    });
+  }
+  // Out of reach (outside the box, or in it beyond maxDistance): dropped,
+  // summed in index order.
+  Vec3d lost{};
+  for (int k = 0; k < g.dims.k; ++k)
+    for (int j = 0; j < g.dims.j; ++j) {
+      const bool rowInBox = k >= lo[2] && k < lo[2] + dims[2] && j >= lo[1] && j < lo[1] + dims[1];
+      const std::size_t row = g.index(0, j, k);
+      for (int i = 0; i < g.dims.i; ++i) {
+        const bool inBox = rowInBox && i >= lo[0] && i < lo[0] + dims[0];
+        const int dm = inBox ? d[local(i - lo[0], j - lo[1], k - lo[2])] : kFar;
+        if (dm == 0) {
+          out[row + std::size_t(i)] = acc[local(i - lo[0], j - lo[1], k - lo[2])];
+        } else {
+          if (dm == kFar) lost += f[row + std::size_t(i)];
+          out[row + std::size_t(i)] = Vec3d{};
+        }
+      }
+    }
+  return lost;
+}
+
+}  // namespace lodestone

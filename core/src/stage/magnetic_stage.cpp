@@ -1,0 +1,199 @@
+#include "lodestone/core/stage/magnetic_stage.h"
+
+#include <chrono>
+#include <cmath>
+#include <cstring>
+#include <sstream>
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include "lodestone/core/base/error.h"
+#include "lodestone/core/field/magnetostatic_problem.h"
+#include "lodestone/core/stage/nodal_field.h"
+#include "lodestone/core/base/parallel.h"
+
+namespace lodestone {
+
+namespace {
+using Clock = std::chrono::steady_clock;
+double secondsSince(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+
+AppliedFieldFunction appliedFieldOf(const FieldSource& sources, double time) {
+  return [&sources, time](const Vec3d* x, std::size_t count, Vec3d* H) {
+    for (std::size_t m = 0; m < count; ++m) H[m] = Vec3d{};
+    sources.accumulateField(x, count, time, H);
+  };
+}
+}  // namespace
+
+void MagneticStageSettings::validate() const {
+  solve.validate();
+  require(forceMaskDilation >= 0 && forceMaskDilation <= 8,
+          "magnetic stage: forceMaskDilation must be 0..8 nodes, got ", forceMaskDilation);
+}
+
+std::string MagneticStageReport::summary() const {
+  std::ostringstream os;
+  os.precision(4);
+  if (transfer.particles > 0)
+    os << "transfer: " << transfer.particles << " particles (" << transfer.skipped << " skipped), "
+       << secondsTransfer << " s\n";
+  os << "field solve: " << toString(solve.status) << ", " << solve.newtonIterations << " Newton / "
+     << solve.cgIterations << " CG iterations (" << solve.preconditioner << "), relative residual "
+     << solve.relativeResidual << ", " << solve.materialCells << " material cells, " << secondsSolve << " s\n";
+  if (!solve.message.empty()) os << "  " << solve.message << "\n";
+  os << "applied field " << secondsAppliedField << " s" << (appliedFieldReused ? " (nodes reused: sources unchanged)" : "")
+     << ", nodal fields " << secondsFields << " s, force " << secondsForce << " s, total " << secondsTotal << " s\n";
+  os << "total force (" << totalForce.x << ", " << totalForce.y << ", " << totalForce.z << ") N\n";
+  for (const auto& w : warnings) os << "warning: " << w << "\n";
+  return os.str();
+}
+
+MagneticForceStage::MagneticForceStage(const GridSpec& grid, const MagneticMaterial& material,
+                                       const MagneticStageSettings& settings)
+    : grid_(grid), material_(material), settings_(settings) {
+  grid_.validate("magnetic stage grid");
+  settings_.validate();
+  n_.reset(grid_, 0.0);
+  phi_.assign(grid_.nodeCount(), 0.0);
+  hext_.reset(grid_);
+  h_.reset(grid_);
+  m_.reset(grid_);
+  b_.reset(grid_);
+  t_.reset(grid_);
+  f_.reset(grid_);
+}
+
+void MagneticForceStage::resetWarmStart() { std::fill(phi_.begin(), phi_.end(), 0.0); }
+
+void MagneticForceStage::setSettings(const MagneticStageSettings& settings) {
+  settings.validate();
+  if (settings.boundary != settings_.boundary) {
+    resetWarmStart();
+    problem_.reset();
+  }
+  settings_ = settings;
+}
+
+void MagneticForceStage::setMaterial(const MagneticMaterial& material) {
+  material_ = material;
+  problem_.reset();  // the law lives in the problem
+}
+
+MagneticStageReport MagneticForceStage::run(const ParticleView& particles, const FieldSource& sources, double time) {
+  const auto t0 = Clock::now();
+  MagneticStageReport rep;
+  rep.transfer = depositNumberDensity(particles, n_.view(), settings_.outOfGrid, binning_);
+  rep.secondsTransfer = secondsSince(t0);
+  if (rep.transfer.skipped > 0)
+    rep.warnings.push_back(concat(rep.transfer.skipped, " of ", rep.transfer.particles,
+                                  " particles lie outside the grid and were skipped"));
+  rep = solveAndForce(sources, time, rep);
+  rep.secondsTotal = secondsSince(t0);
+  return rep;
+}
+
+MagneticStageReport MagneticForceStage::runOnDensity(GridView<const double> density, const FieldSource& sources,
+                                                     double time) {
+  const auto t0 = Clock::now();
+  require(density.spec == grid_, "magnetic stage: the density grid does not match the stage grid");
+  std::copy(density.data, density.data + grid_.nodeCount(), n_.data());
+  MagneticStageReport rep = solveAndForce(sources, time, MagneticStageReport{});
+  rep.secondsTotal = secondsSince(t0);
+  return rep;
+}
+
+MagneticStageReport MagneticForceStage::solveAndForce(const FieldSource& sources, double time,
+                                                      MagneticStageReport rep) {
+  require(std::isfinite(time), "magnetic stage: time must be finite, got ", time, " s");
+  const AppliedFieldFunction applied = appliedFieldOf(sources, time);
+
+  // Applied field at the nodes (kept when the sources are unchanged: a
+  // static magnet is evaluated once) and the material Gauss points.
+  auto t = Clock::now();
+  const std::size_t count = grid_.nodeCount();
+  std::vector<double> signature;
+  const bool signed_ = sources.appendFieldSignature(time, signature);
+  rep.appliedFieldReused = signed_ && !hextSignature_.empty() && signature.size() == hextSignature_.size() &&
+                           std::memcmp(signature.data(), hextSignature_.data(), signature.size() * sizeof(double)) == 0;
+  if (!rep.appliedFieldReused) {
+    hextSignature_.clear();  // hext_ is being overwritten: an exception below leaves nothing to reuse
+    tbb::parallel_for(0, grid_.dims.k, [&](int k) {
+      std::vector<Vec3d> x(std::size_t(grid_.dims.i));
+      for (int j = 0; j < grid_.dims.j; ++j) {
+        for (int i = 0; i < grid_.dims.i; ++i) x[std::size_t(i)] = grid_.nodePosition(i, j, k);
+        applied(x.data(), x.size(), &hext_(0, j, k));
+      }
+    });
+    if (signed_) hextSignature_ = std::move(signature);
+  }
+  if (!problem_) problem_ = std::make_unique<MagnetostaticProblem>(grid_, material_.law, settings_.boundary);
+  if (!workspace_) workspace_ = std::make_unique<FieldSolveWorkspace>();
+  MagnetostaticProblem& problem = *problem_;
+  problem.setMaterial(n_.view(), applied);
+  rep.secondsAppliedField = secondsSince(t);
+  rep.totalCount = problem.totalCount();
+  if (settings_.boundary == BoundaryKind::Open && problem.materialCellCount() > 0 &&
+      problem.materialWallClearance() < 2)
+    rep.warnings.push_back(concat("magnetic material lies ", problem.materialWallClearance(),
+                                  " cell(s) from the grid wall; the open (far-field) boundary assumes a margin of a "
+                                  "few cells and loses accuracy there"));
+
+  // Field solve.
+  t = Clock::now();
+  if (!settings_.warmStart || settings_.appliedFieldOnly) resetWarmStart();
+  if (settings_.appliedFieldOnly) {
+    rep.solve = FieldSolveReport{};
+    rep.solve.status = SolveStatus::Trivial;
+    rep.solve.materialCells = problem.materialCellCount();
+    rep.solve.message = "skipped (applied field only): phi = 0, H = H_ext";
+  } else {
+    rep.solve = solveField(problem, phi_, settings_.solve, progress_, workspace_.get());
+  }
+  rep.secondsSolve = secondsSince(t);
+  if (!rep.solve.converged()) rep.warnings.push_back("field solve: " + rep.solve.message);
+
+  // Nodal fields.
+  t = Clock::now();
+  recoverNodalFields(GridView<const double>{phi_.data(), grid_}, hext_.view(), n_.view(), material_.law, h_.view(),
+                     m_.view(), b_.view(), &scratch_);
+  rep.secondsFields = secondsSince(t);
+
+  // Force.
+  t = Clock::now();
+  stressDivergence(h_.view(), b_.view(), hext_.view(), n_.view(), settings_.forceMask, t_.view(),
+                   settings_.forceMaskDilation, &sources, time);
+  spreadForce(t_.view(), f_.view(), &scratch_);
+  rep.totalForce = deterministicSum<Vec3d>(count, [&](std::size_t m) { return f_[m]; });
+  rep.secondsForce = secondsSince(t);
+  return rep;
+}
+
+TransferReport MagneticForceStage::sampleForceDensity(const Vec3d* positions, std::size_t count, Vec3d* out) const {
+  TransferReport r = sampleToParticles(f_.view(), positions, count, out, settings_.outOfGrid);
+  const double inv = 1.0 / grid_.cellVolume();
+  tbb::parallel_for(std::size_t(0), count, [&](std::size_t p) { out[p] *= inv; });
+  return r;
+}
+
+TransferReport MagneticForceStage::particleForces(const ParticleView& particles, Vec3d* out) const {
+  // gatherToSupport writes every node: the kept grid needs no clearing.
+  if (!(onSupport_.spec() == grid_) || onSupport_.size() != grid_.nodeCount()) onSupport_.reset(grid_);
+  DenseGrid<Vec3d>& onSupport = onSupport_;
+  gatherToSupport(f_.view(), n_.view(), onSupport.view());
+  // g_i = f_i / (n_i dx^3): force per micro-particle at node i.
+  const double inv = 1.0 / grid_.cellVolume();
+  tbb::parallel_for(std::size_t(0), grid_.nodeCount(), [&](std::size_t m) {
+    onSupport[m] = n_[m] > 0 ? onSupport[m] * (inv / n_[m]) : Vec3d{};
+  });
+  TransferReport r = sampleToParticles(onSupport.view(), particles.positions, particles.size, out, settings_.outOfGrid);
+  tbb::parallel_for(std::size_t(0), particles.size, [&](std::size_t p) { out[p] *= particles.counts[p]; });
+  return r;
+}
+
+TransferReport MagneticForceStage::sampleField(const Vec3d* positions, std::size_t count, Vec3d* out) const {
+  return sampleToParticles(h_.view(), positions, count, out, settings_.outOfGrid);
+}
+
+}  // namespace lodestone
