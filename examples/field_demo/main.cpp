@@ -36,6 +36,7 @@
 #include <tbb/info.h>
 
 #include "colormap.h"
+#include "lodestone/core/base/stopwatch.h"
 #include "lodestone/core/base/constants.h"
 #include "lodestone/core/sources/cylinder_magnet.h"
 #include "lodestone/core/base/error.h"
@@ -52,7 +53,6 @@ using namespace lodestone;
 using namespace lodestone::examples;
 using Clock = std::chrono::steady_clock;
 
-double secondsSince(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
 // ---------------------------------------------------------------------------
 // Scene (SI units). The grid is a cube of side kBoxSide centred on the origin;

@@ -38,6 +38,7 @@
 #include <tbb/parallel_for.h>
 
 #include "bench_args.h"
+#include "lodestone/core/base/stopwatch.h"
 #include "lodestone/core/base/constants.h"
 #include "lodestone/core/base/error.h"
 #include "lodestone/core/field/langevin.h"
@@ -52,7 +53,6 @@ using lodestone::bench::parseList;
 namespace {
 
 using Clock = std::chrono::steady_clock;
-double secondsSince(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
 /// A number as printf's %g writes it (short, for labels).
 std::string shortNumber(double x) {

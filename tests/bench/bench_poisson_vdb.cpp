@@ -39,6 +39,7 @@
 #include <tbb/parallel_for.h>
 
 #include "bench_args.h"
+#include "lodestone/core/base/stopwatch.h"
 #include "lodestone/core/base/error.h"
 #include "lodestone/core/field/langevin.h"
 #include "lodestone/core/stage/magnetic_stage.h"
@@ -51,7 +52,6 @@ using lodestone::bench::parseList;
 namespace {
 
 using Clock = std::chrono::steady_clock;
-double secondsSince(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
 constexpr double kRadius = 0.05;  // m
 

@@ -881,15 +881,6 @@ double MultigridPreconditioner::Hierarchy<T>::applyDot(const double* r, double* 
   return total;
 }
 
-void MultigridSettings::validate() const {
-  require(preSmoothing >= 1 && preSmoothing <= 20, "multigrid: preSmoothing must be 1..20, got ", preSmoothing);
-  require(postSmoothing == preSmoothing, "multigrid: postSmoothing must equal preSmoothing (",
-          preSmoothing, ") to keep the cycle symmetric, got ", postSmoothing);
-  require(std::isfinite(jacobiWeight) && jacobiWeight > 0 && jacobiWeight <= 1,
-          "multigrid: jacobiWeight must be in (0, 1], got ", jacobiWeight);
-  require(coarsestNodes >= 3, "multigrid: coarsestNodes must be >= 3, got ", coarsestNodes);
-}
-
 MultigridPreconditioner::MultigridPreconditioner(const MultigridSettings& settings) : settings_(settings) {
   settings_.validate();
 }

@@ -1,4 +1,5 @@
 // The reference MLS-MPM step (Section 4.3 of the paper); see mpm_solver.h.
+#include "lodestone/core/base/stopwatch.h"
 #include "lodestone/core/mpm/solver.h"
 
 #include <tbb/blocked_range.h>
@@ -23,7 +24,6 @@ namespace lodestone {
 
 namespace {
 using Clock = std::chrono::steady_clock;
-double secondsSince(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
 bool sameLaw(const MagnetizationLaw<double>& a, const MagnetizationLaw<double>& b) {
   return a.kind == b.kind && a.moment == b.moment && a.k2 == b.k2 && a.chiPerDensity == b.chiPerDensity;

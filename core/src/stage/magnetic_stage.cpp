@@ -1,3 +1,4 @@
+#include "lodestone/core/base/stopwatch.h"
 #include "lodestone/core/stage/magnetic_stage.h"
 
 #include <chrono>
@@ -17,7 +18,6 @@ namespace lodestone {
 
 namespace {
 using Clock = std::chrono::steady_clock;
-double secondsSince(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
 AppliedFieldFunction appliedFieldOf(const FieldSource& sources, double time) {
   return [&sources, time](const Vec3d* x, std::size_t count, Vec3d* H) {

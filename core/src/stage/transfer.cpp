@@ -1,6 +1,7 @@
 // Particle <-> grid transfers: deterministic parallel deposit of the
 // micro-particle number density and B-spline sampling to particles.
 // The determinism argument is in transfer.h.
+#include "lodestone/core/base/stopwatch.h"
 #include "lodestone/core/stage/transfer.h"
 
 #include <tbb/blocked_range.h>
@@ -27,7 +28,6 @@ constexpr std::uint64_t kNonFinite = std::numeric_limits<std::uint64_t>::max();
 constexpr std::uint64_t kOutside = std::numeric_limits<std::uint64_t>::max() - 1;
 constexpr std::size_t kNone = std::numeric_limits<std::size_t>::max();
 
-double secondsSince(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
 void atomicMin(std::atomic<std::size_t>& a, std::size_t v) {
   std::size_t cur = a.load(std::memory_order_relaxed);

@@ -30,18 +30,9 @@
 #include <vector>
 
 #include "lodestone/core/field/pcg.h"
+#include "lodestone/core/field/solve_settings.h"
 
 namespace lodestone {
-
-struct MultigridSettings {
-  int preSmoothing = 2;         ///< damped-Jacobi sweeps before the coarse correction
-  int postSmoothing = 2;        ///< and after (same count keeps the cycle symmetric)
-  double jacobiWeight = 0.7;    ///< smoother damping in (0, 1]
-  int coarsestNodes = 5;        ///< stop coarsening when an axis has this many nodes or fewer
-  bool singlePrecision = true;  ///< store and cycle the levels in float (false: double)
-
-  void validate() const;
-};
 
 class MultigridPreconditioner final : public Preconditioner {
  public:
