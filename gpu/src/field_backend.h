@@ -40,7 +40,7 @@ struct Evaluation {
   bool finite = true;
 };
 
-constexpr int kWorkSlots = 24;
+constexpr int kWorkSlots = 40;
 
 class FieldBackend {
  public:

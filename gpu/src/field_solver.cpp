@@ -1,59 +1,23 @@
 #include "lodestone/gpu/field_solver.h"
 
-#include <chrono>
+#include <algorithm>
 #include <cmath>
 
 #include "field_backend.h"
 #include "lodestone/core/base/error.h"
 #include "lodestone/core/field/q1_element.h"
-#include "newton_driver.h"
+#include "device_solve_backend.h"
+#include "lodestone/core/base/stopwatch.h"
+#include "lodestone/core/field/newton_solver.h"
+#include "lodestone/core/field/wall_clearance.h"
 
 namespace lodestone {
 namespace gpu {
 
-void FieldSolveSettings::validate() const {
-  require(std::isfinite(tolerance) && tolerance > 0 && tolerance < 1,
-          "gpu field solve: tolerance must be in (0, 1), got ", tolerance);
-  require(maxNewtonIterations >= 1, "gpu field solve: maxNewtonIterations must be >= 1, got ", maxNewtonIterations);
-  require(maxCgIterations >= 1, "gpu field solve: maxCgIterations must be >= 1, got ", maxCgIterations);
-  require(std::isfinite(forcingMax) && forcingMax > 0 && forcingMax < 1,
-          "gpu field solve: forcingMax must be in (0, 1), got ", forcingMax);
-  require(std::isfinite(forcingGamma) && forcingGamma > 0 && forcingGamma <= 1,
-          "gpu field solve: forcingGamma must be in (0, 1], got ", forcingGamma);
-  require(std::isfinite(forcingAlpha) && forcingAlpha > 1 && forcingAlpha <= 2,
-          "gpu field solve: forcingAlpha must be in (1, 2], got ", forcingAlpha);
-  require(maxLineSearchCuts >= 1, "gpu field solve: maxLineSearchCuts must be >= 1, got ", maxLineSearchCuts);
-  require(std::isfinite(armijo) && armijo > 0 && armijo < 0.5, "gpu field solve: armijo must be in (0, 0.5), got ",
-          armijo);
-  require(preconditioner == Preconditioner::Jacobi || preconditioner == Preconditioner::Multigrid,
-          "gpu field solve: unknown preconditioner ", int(preconditioner));
-  require(smoothing >= 1 && smoothing <= 20, "gpu field solve: smoothing must be 1..20, got ", smoothing);
-  require(std::isfinite(jacobiWeight) && jacobiWeight > 0 && jacobiWeight <= 1,
-          "gpu field solve: jacobiWeight must be in (0, 1], got ", jacobiWeight);
-  require(coarsestNodes >= 3, "gpu field solve: coarsestNodes must be >= 3, got ", coarsestNodes);
-}
-
-const char* toString(SolveStatus status) {
-  switch (status) {
-    case SolveStatus::Converged:
-      return "converged";
-    case SolveStatus::Trivial:
-      return "trivial";
-    case SolveStatus::IterationCap:
-      return "iteration-cap";
-    case SolveStatus::LineSearchFailed:
-      return "line-search-failed";
-    case SolveStatus::LinearSolverFailed:
-      return "linear-solver-failed";
-    case SolveStatus::NonFinite:
-      return "non-finite";
-  }
-  return "unknown";
-}
-
 struct FieldSolver::Impl {
   std::unique_ptr<detail::FieldBackend> backend;
   std::size_t cells = 0;
+  int wallClearance = 1 << 30;  ///< cells between the material and the open wall
 };
 
 FieldSolver::FieldSolver(const GridSpec& grid, const MagnetizationLaw<double>& law, BoundaryKind boundary,
@@ -129,23 +93,30 @@ void FieldSolver::setMaterial(const double* n, const AppliedField& appliedField)
       detail::prepareProblem(grid_, law_, boundary_ == BoundaryKind::Shield, n, appliedField);
   impl_->backend->setProblem(data);
   impl_->cells = data.cellBase.size();
+  impl_->wallClearance = materialWallClearance(grid_, data.cellBase.data(), data.cellBase.size());
 }
 
 FieldSolveReport FieldSolver::solve(double* phi, const FieldSolveSettings& settings) {
   require(phi != nullptr, "gpu field solve: no potential array given");
   settings.validate();
-  const auto t0 = std::chrono::steady_clock::now();
+  const auto t0 = SteadyClock::now();
   detail::FieldBackend& be = *impl_->backend;
   const std::size_t n = grid_.nodeCount();
-  bool finite = true;
-  for (std::size_t m = 0; m < n && finite; ++m) finite = std::isfinite(phi[m]);
+  bool finite = true, cold = true;
+  for (std::size_t m = 0; m < n && finite; ++m) {
+    finite = std::isfinite(phi[m]);
+    cold = cold && phi[m] == 0.0;
+  }
   if (!finite) std::fill(phi, phi + n, 0.0);  // a poisoned warm start is discarded
+  cold = cold || !finite;
   double* dphi = be.work(0, 0);
   be.upload(phi, n, dphi);
-  FieldSolveReport rep =
-      detail::runNewton(be, dphi, settings, boundary_ == BoundaryKind::Open ? wallUpdate_ : WallUpdate{});
-  be.download(dphi, n, phi);
-  rep.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  const bool open = boundary_ == BoundaryKind::Open;
+  detail::DeviceSolveBackend backend(be, grid_, settings, dphi, cold, impl_->wallClearance,
+                                     open ? wallValues_ : WallUpdate{}, open ? wallMove_ : WallUpdate{});
+  FieldSolveReport rep = NewtonSolver(backend, settings).solve();
+  be.download(backend.phi(), n, phi);
+  rep.seconds = secondsSince(t0);
   return rep;
 }
 

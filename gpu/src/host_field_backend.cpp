@@ -207,7 +207,7 @@ class HostFieldBackend final : public FieldBackend {
     if (v.size() != n) v.assign(n, 0.0);
     return v.data();
   }
-  const char* name() const override { return "cpu"; }
+  const char* name() const override { return "host"; }
 
  private:
   kernels::FineView view() const {

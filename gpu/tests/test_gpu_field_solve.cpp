@@ -87,7 +87,7 @@ WallUpdate dipoleWalls(const Sphere& s) {
   };
 }
 
-SolveResult solveSphere(const Sphere& s, Backend backend, Preconditioner pre, BoundaryKind boundary,
+SolveResult solveSphere(const Sphere& s, Backend backend, PreconditionerKind pre, BoundaryKind boundary,
                         bool updateWalls = false) {
   FieldSolver solver(s.grid, s.law, boundary, backend);
   if (updateWalls) solver.setWallUpdate(dipoleWalls(s));
@@ -135,7 +135,7 @@ TEST(GpuFieldSolveHost, SphereMatchesTheClosedForm) {
   // magnetization term would miss it by ~100%).
   for (double H0 : {1e4, 1e5, 1e6}) {
     const Sphere s = makeSphere(paperLaw(), H0, 33);
-    const SolveResult r = solveSphere(s, Backend::Cpu, Preconditioner::Multigrid, BoundaryKind::Open);
+    const SolveResult r = solveSphere(s, Backend::Cpu, PreconditionerKind::Multigrid, BoundaryKind::Open);
     SCOPED_TRACE(::testing::Message() << "H0 = " << H0 << " A/m: " << r.report.message << "; mean H_z " << r.meanHz
                                       << ", closed form " << s.exact);
     EXPECT_EQ(r.report.status, SolveStatus::Converged);
@@ -155,8 +155,8 @@ TEST(GpuFieldSolveHost, OpenWallsUpdatedEachNewtonStepReachTheClosedForm) {
   // fixed-wall solution up to the difference between the rasterized sphere's
   // dipole and the closed form's.
   const Sphere s = makeSphere(paperLaw(), 1e5, 33);
-  const SolveResult fixedWalls = solveSphere(s, Backend::Cpu, Preconditioner::Multigrid, BoundaryKind::Open);
-  const SolveResult updated = solveSphere(s, Backend::Cpu, Preconditioner::Multigrid, BoundaryKind::Open, true);
+  const SolveResult fixedWalls = solveSphere(s, Backend::Cpu, PreconditionerKind::Multigrid, BoundaryKind::Open);
+  const SolveResult updated = solveSphere(s, Backend::Cpu, PreconditionerKind::Multigrid, BoundaryKind::Open, true);
   SCOPED_TRACE(updated.report.message);
   EXPECT_EQ(updated.report.status, SolveStatus::Converged);
   EXPECT_GT(updated.report.newtonIterations, fixedWalls.report.newtonIterations);
@@ -168,8 +168,8 @@ TEST(GpuFieldSolveHost, OpenWallsUpdatedEachNewtonStepReachTheClosedForm) {
 
 TEST(GpuFieldSolveHost, LinearLawIsOneNewtonStepAndPreconditionersAgree) {
   const Sphere s = makeSphere(linearLaw(), 1e5, 25);
-  const SolveResult mg = solveSphere(s, Backend::Cpu, Preconditioner::Multigrid, BoundaryKind::Shield);
-  const SolveResult jac = solveSphere(s, Backend::Cpu, Preconditioner::Jacobi, BoundaryKind::Shield);
+  const SolveResult mg = solveSphere(s, Backend::Cpu, PreconditionerKind::Multigrid, BoundaryKind::Shield);
+  const SolveResult jac = solveSphere(s, Backend::Cpu, PreconditionerKind::Jacobi, BoundaryKind::Shield);
   EXPECT_EQ(mg.report.status, SolveStatus::Converged) << mg.report.message;
   EXPECT_EQ(jac.report.status, SolveStatus::Converged) << jac.report.message;
   EXPECT_EQ(mg.report.newtonIterations, 1);
@@ -184,7 +184,7 @@ TEST(GpuFieldSolveDevice, SphereMatchesTheHostAndTheClosedForm) {
   LODESTONE_REQUIRE_DEVICE();
   for (double H0 : {1e4, 1e5, 1e6}) {
     const Sphere s = makeSphere(paperLaw(), H0, 33);
-    for (Preconditioner pre : {Preconditioner::Multigrid, Preconditioner::Jacobi}) {
+    for (PreconditionerKind pre : {PreconditionerKind::Multigrid, PreconditionerKind::Jacobi}) {
       const SolveResult h = solveSphere(s, Backend::Cpu, pre, BoundaryKind::Open);
       const SolveResult d = solveSphere(s, Backend::Cuda, pre, BoundaryKind::Open);
       SCOPED_TRACE(::testing::Message() << "H0 = " << H0 << ", pre " << int(pre) << ": " << d.report.message);
@@ -202,8 +202,8 @@ TEST(GpuFieldSolveDevice, SphereMatchesTheHostAndTheClosedForm) {
 TEST(GpuFieldSolveDevice, OpenWallsUpdatedEachNewtonStepMatchTheHost) {
   LODESTONE_REQUIRE_DEVICE();
   const Sphere s = makeSphere(paperLaw(), 1e5, 33);
-  const SolveResult h = solveSphere(s, Backend::Cpu, Preconditioner::Multigrid, BoundaryKind::Open, true);
-  const SolveResult d = solveSphere(s, Backend::Cuda, Preconditioner::Multigrid, BoundaryKind::Open, true);
+  const SolveResult h = solveSphere(s, Backend::Cpu, PreconditionerKind::Multigrid, BoundaryKind::Open, true);
+  const SolveResult d = solveSphere(s, Backend::Cuda, PreconditionerKind::Multigrid, BoundaryKind::Open, true);
   EXPECT_EQ(d.report.status, SolveStatus::Converged) << d.report.message;
   EXPECT_NEAR(d.report.newtonIterations, h.report.newtonIterations, 1);
   EXPECT_LT(relativeDifference(d.phi, h.phi), 1e-7);
@@ -213,8 +213,8 @@ TEST(GpuFieldSolveDevice, ShieldSolveMatchesTheHost) {
   LODESTONE_REQUIRE_DEVICE();
   for (double H0 : {3e4, 3e5}) {
     const Sphere s = makeSphere(paperLaw(), H0, 29);
-    const SolveResult h = solveSphere(s, Backend::Cpu, Preconditioner::Multigrid, BoundaryKind::Shield);
-    const SolveResult d = solveSphere(s, Backend::Cuda, Preconditioner::Multigrid, BoundaryKind::Shield);
+    const SolveResult h = solveSphere(s, Backend::Cpu, PreconditionerKind::Multigrid, BoundaryKind::Shield);
+    const SolveResult d = solveSphere(s, Backend::Cuda, PreconditionerKind::Multigrid, BoundaryKind::Shield);
     EXPECT_EQ(d.report.status, SolveStatus::Converged) << d.report.message;
     EXPECT_NEAR(d.report.newtonIterations, h.report.newtonIterations, 1);
     EXPECT_LT(relativeDifference(d.phi, h.phi), 1e-7);

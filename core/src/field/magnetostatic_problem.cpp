@@ -1,4 +1,5 @@
 #include "lodestone/core/field/magnetostatic_problem.h"
+#include "lodestone/core/field/wall_clearance.h"
 
 #include <algorithm>
 #include <cmath>
@@ -152,12 +153,7 @@ void MagnetostaticProblem::setMaterial(GridView<const double> n, const AppliedFi
                                    cellOrigin(cellBase_[m / 8]).z, ") m"));
 
   // Clearance to the wall, total count and centroid.
-  wallClearance_ = 1 << 30;
-  for (std::size_t s = 0; s < cells; ++s) {
-    const std::size_t b = cellBase_[s], nx = std::size_t(grid_.dims.i), ny = std::size_t(grid_.dims.j);
-    const int i = int(b % nx), j = int((b / nx) % ny), k = int(b / (nx * ny));
-    wallClearance_ = std::min({wallClearance_, i, j, k, cd.i - 1 - i, cd.j - 1 - j, cd.k - 1 - k});
-  }
+  wallClearance_ = lodestone::materialWallClearance(grid_, cellBase_.data(), cells);
   const double w = grid_.cellVolume() / 8.0;
   struct Moments {
     double count = 0;

@@ -97,7 +97,7 @@ NewtonIterationRecord NewtonSolver::beginIteration(int it) {
   const auto ti = iterationStart_ = SteadyClock::now();
   NewtonIterationRecord rec;
   rec.iteration = it;
-  if (open_ && ev_.finite && !wallCurrent_) {
+  if (open_ && be_.wallNodeCount() > 0 && ev_.finite && !wallCurrent_) {
     // Far-field values from the magnetization just evaluated.
     updateWall(NodeVec::Phi, NodeVec::F, NodeVec::Kphi, ev_);
     rec.secondsWall = secondsSince(ti);
@@ -177,7 +177,7 @@ double NewtonSolver::forcingTerm(int it) {
 // leaves, not by the wall (measured at 128^3: 5-7 Newton steps either way,
 // CG iterations -15% to +48% with the prediction).
 bool NewtonSolver::predicting() const {
-  return open_ && s_.predictWall && be_.wallNodeCount() > 0 && wallStrikes_ < kWallStrikes &&
+  return open_ && s_.predictWall && be_.predictsWall() && be_.wallNodeCount() > 0 && wallStrikes_ < kWallStrikes &&
          be_.materialWallClearance() >= 1 && s_.preconditioner == PreconditionerKind::Multigrid;
 }
 

@@ -65,6 +65,7 @@ class CpuSolveBackend final : public FieldSolveBackend {
   int preconditionerLevels() const override;
   PcgResult solveJacobian(NodeVec rhs, NodeVec x, double relTol, int maxIterations) override;
 
+  bool predictsWall() const override { return true; }
   void setFarField(const FieldEvaluation& e, NodeVec p) override;
   void setLinearizedFarField(NodeVec d, NodeVec out) override;
   void addWallCoupling(NodeVec v, NodeVec out) override;

@@ -124,6 +124,9 @@ class FieldSolveBackend {
   virtual PcgResult solveJacobian(NodeVec rhs, NodeVec x, double relTol, int maxIterations) = 0;
 
   // The open wall.
+  /// setLinearizedFarField() is available: the wall can move with each
+  /// Newton step (FieldSolveSettings::predictWall).
+  virtual bool predictsWall() const = 0;
   /// Moves the wall values of p to the far field of e's magnetization.
   virtual void setFarField(const FieldEvaluation& e, NodeVec p) = 0;
   /// Wall values of the far field of the linearized change of M along d

@@ -1,0 +1,216 @@
+#pragma once
+// The backend of core's Newton solver (lodestone/core/field/newton_solver.h)
+// over the device operations of FieldBackend (field_backend.h): the CUDA
+// backend and its serial host reference run the same Newton iteration as
+// core's TBB backend. What is the device's own stays here: preconditioned CG
+// and the V-cycle over the backend's levels (the algorithm of core's pcg.cpp
+// and multigrid.cpp in double precision), and the open wall's operations,
+// with the far field computed on the host (FieldSolver::setWallUpdate).
+//
+// Node vectors are the backend's level-0 work slots; swap() exchanges
+// pointers. Wall vectors are node vectors whose free entries are 0.
+#include <cstddef>
+#include <utility>
+#include <vector>
+
+#include "field_backend.h"
+#include "lodestone/core/field/solve_backend.h"
+#include "lodestone/core/field/solve_settings.h"
+#include "lodestone/gpu/field_solver.h"
+
+namespace lodestone {
+namespace gpu {
+namespace detail {
+
+/// Level-0 work slots: 0 holds phi on entry; the CG and V-cycle slots;
+/// then the Newton solver's vectors.
+enum Slot : int {
+  kPcgOuter = 8,    // 8..11
+  kMgR = 12,
+  kPcgCoarse = 13,  // 13..16: CG on the coarsest level
+  kMgX = 17,
+  kMgB = 18,
+  kSolverFirst = 19,  // the node roles but Phi, then the wall vectors, then 2 scratch vectors
+};
+static_assert(kSolverFirst + (kNodeVecCount - 1) + kWallVecCount + 2 <= kWorkSlots, "too few work slots");
+
+/// Preconditioned CG on a level from x = 0 with the given preconditioner
+/// apply (z = P^-1 r), on work slots firstSlot..firstSlot+3 of that level.
+template <typename Precondition>
+PcgResult pcg(FieldBackend& be, int level, const double* b, double* x, double relTol, int maxIterations, bool project,
+               int firstSlot, const Precondition& precondition) {
+  PcgResult res;
+  const std::size_t n = be.levelNodes(level);
+  double* r = be.work(level, firstSlot);
+  double* z = be.work(level, firstSlot + 1);
+  double* p = be.work(level, firstSlot + 2);
+  double* Ap = be.work(level, firstSlot + 3);
+  be.copy(n, b, r);
+  be.fill(n, 0.0, x);
+  if (project) be.removeMean(n, r);
+  const double bnorm = std::sqrt(be.dot(n, r, r));
+  if (!(bnorm > 0)) {
+    res.converged = std::isfinite(bnorm);
+    res.breakdown = !std::isfinite(bnorm);
+    return res;
+  }
+  precondition(r, z);
+  if (project) be.removeMean(n, z);
+  be.copy(n, z, p);
+  double rz = be.dot(n, r, z);
+  double rnorm = bnorm;
+  while (res.iterations < maxIterations) {
+    be.applyLevel(level, p, Ap);
+    const double pAp = be.dot(n, p, Ap);
+    if (!(pAp > 0) || !std::isfinite(pAp) || !std::isfinite(rz)) {
+      res.breakdown = true;
+      break;
+    }
+    const double alpha = rz / pAp;
+    be.axpby(n, 1.0, x, alpha, p, x);
+    be.axpby(n, 1.0, r, -alpha, Ap, r);
+    if (project) be.removeMean(n, r);
+    ++res.iterations;
+    rnorm = std::sqrt(be.dot(n, r, r));
+    if (rnorm <= relTol * bnorm) {
+      res.converged = true;
+      break;
+    }
+    precondition(r, z);
+    if (project) be.removeMean(n, z);
+    const double rzNew = be.dot(n, r, z);
+    const double beta = rzNew / rz;
+    rz = rzNew;
+    be.axpby(n, 1.0, z, beta, p, p);
+  }
+  res.relativeResidual = rnorm / bnorm;
+  if (project) be.removeMean(n, x);
+  return res;
+}
+
+/// The V-cycle of multigrid.cpp over the backend's levels.
+class VCycle {
+ public:
+  VCycle(FieldBackend& be, const MultigridSettings& s) : be_(be), s_(s) {}
+
+  void operator()(const double* b, double* x) const { cycle(0, b, x); }
+
+ private:
+  void cycle(int level, const double* b, double* x) const {
+    const std::size_t n = be_.levelNodes(level);
+    const double* dinv = be_.inverseDiagonal(level, false);
+    double* r = be_.work(level, kMgR);
+    if (level + 1 == be_.levelCount()) {
+      // Coarsest grid: diagonally preconditioned CG to a tight tolerance.
+      if (be_.solveCoarsest(level, b, x)) return;
+      pcg(be_, level, b, x, 1e-10, 10 * int(n), be_.shield(), kPcgCoarse,
+          [&](const double* in, double* out) { be_.jacobi(n, 1.0, dinv, in, nullptr, out); });
+      return;
+    }
+    const double w = s_.jacobiWeight;
+    be_.jacobi(n, w, dinv, b, nullptr, x);
+    for (int s = 1; s < s_.preSmoothing; ++s) {
+      be_.applyLevel(level, x, r);
+      be_.jacobi(n, w, dinv, b, r, x);
+    }
+    be_.applyLevel(level, x, r);
+    be_.axpby(n, 1.0, b, -1.0, r, r);
+    double* cb = be_.work(level + 1, kMgB);
+    double* cx = be_.work(level + 1, kMgX);
+    be_.restrictTo(level, r, cb);
+    be_.zeroFixed(level + 1, cb);
+    cycle(level + 1, cb, cx);
+    be_.prolong(level, cx, r);
+    be_.zeroFixed(level, r);
+    be_.axpby(n, 1.0, x, 1.0, r, x);
+    for (int s = 0; s < s_.preSmoothing; ++s) {
+      be_.applyLevel(level, x, r);
+      be_.jacobi(n, w, dinv, b, r, x);
+    }
+  }
+
+  FieldBackend& be_;
+  const MultigridSettings& s_;
+};
+
+class DeviceSolveBackend final : public FieldSolveBackend {
+ public:
+  /// `phi` is backend memory holding the warm start; `cold` says it is all zeros.
+  DeviceSolveBackend(FieldBackend& be, const GridSpec& grid, const FieldSolveSettings& settings, double* phi, bool cold,
+                     int wallClearance, const WallUpdate& wallValues, const WallUpdate& wallMove);
+
+  /// Where the solution is at the end (the roles' storage moves with swap()).
+  double* phi() { return v_[int(NodeVec::Phi)]; }
+
+  const char* name() const override { return be_.name(); }
+  std::size_t nodeCount() const override { return n_; }
+  std::size_t materialCellCount() const override { return be_.materialCellCount(); }
+  BoundaryKind boundary() const override { return be_.shield() ? BoundaryKind::Shield : BoundaryKind::Open; }
+  LawKind lawKind() const override { return be_.law().kind; }
+  int materialWallClearance() const override { return clearance_; }
+  std::size_t wallNodeCount() const override { return wallNodes_; }
+  bool predictsWall() const override { return bool(wallMove_); }
+  bool prepareStart() override { return cold_; }
+
+  FieldEvaluation evaluate(NodeVec p, NodeVec f, bool jacobian, NodeVec vacuum = NodeVec::None) override;
+  void residualAtZero(NodeVec f) override { be_.residualAtZero(v(f)); }
+  void applyVacuum(NodeVec x, NodeVec out) override { be_.applyVacuum(v(x), v(out)); }
+  double materialEnergyAlong(NodeVec p, NodeVec d, double lambda, double* absSum) override {
+    return be_.energyAlong(v(p), v(d), lambda, absSum);
+  }
+
+  double norm(NodeVec x) override;
+  void fill(NodeVec x, double value) override { be_.fill(n_, value, v(x)); }
+  void copy(NodeVec from, NodeVec to) override { be_.copy(n_, v(from), v(to)); }
+  void swap(NodeVec a, NodeVec b) override { std::swap(v_[int(a)], v_[int(b)]); }
+  void negate(NodeVec from, NodeVec to) override { be_.axpby(n_, -1.0, v(from), 0.0, v(from), v(to)); }
+  void axpy(double a, NodeVec x, NodeVec y) override { be_.axpby(n_, a, v(x), 1.0, v(y), v(y)); }
+  void formTrialAlong(double lambda) override;
+  void advance(double lambda) override;
+  void removeMean(NodeVec x) override { be_.removeMean(n_, v(x)); }
+  StepSlopes formFullStep() override;
+
+  void updatePreconditioner() override;
+  int preconditionerLevels() const override { return multigrid_ ? be_.levelCount() : 0; }
+  PcgResult solveJacobian(NodeVec rhs, NodeVec x, double relTol, int maxIterations) override;
+
+  void setFarField(const FieldEvaluation& e, NodeVec p) override;
+  void setLinearizedFarField(NodeVec d, NodeVec out) override;
+  void addWallCoupling(NodeVec x, NodeVec out) override;
+  void gatherWall(NodeVec p, WallVec out) override { wallPart(v(p), w(out)); }
+  void scatterWall(WallVec in, double scale, NodeVec p) override;
+  void zeroWall(NodeVec p) override { be_.zeroFixed(0, v(p)); }
+  void wallDifference(NodeVec p, WallVec old, WallVec step) override;
+  void relaxWall(NodeVec p, WallVec step, double theta) override;
+  double wallDot(WallVec a, WallVec b) override { return be_.dot(n_, w(a), w(b)); }
+  void copyWall(WallVec from, WallVec to) override { be_.copy(n_, w(from), w(to)); }
+  void swapWall(WallVec a, WallVec b) override { std::swap(wall_[int(a)], wall_[int(b)]); }
+
+ private:
+  double* v(NodeVec role) { return v_[int(role)]; }
+  double* w(WallVec role) { return wall_[int(role)]; }
+  /// out = the wall entries of x, 0 on the free nodes.
+  void wallPart(const double* x, double* out);
+  /// The wall entries of p = those of x (x's free entries are ignored).
+  void replaceWall(double* p, const double* x);
+  /// A host function of phi (all nodes) into the wall nodes of p.
+  void fromHost(const WallUpdate& fn, const double* x, double* p, bool startFromX);
+
+  FieldBackend& be_;
+  std::size_t n_;
+  MultigridSettings mgSettings_;
+  bool multigrid_;
+  bool cold_;
+  int clearance_;
+  std::size_t wallNodes_ = 0;
+  WallUpdate wallValues_, wallMove_;
+  VCycle vcycle_;
+  double* v_[kNodeVecCount];
+  double* wall_[kWallVecCount];
+  double *scratchA_, *scratchB_;
+  std::vector<double> hostIn_, hostOut_;
+};
+
+}  // namespace detail
+}  // namespace gpu
+}  // namespace lodestone
