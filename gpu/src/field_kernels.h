@@ -21,6 +21,7 @@
 #include "lodestone/core/base/hostdev.h"
 #include "lodestone/core/field/magnetization_law.h"
 #include "lodestone/core/base/mat3.h"
+#include "lodestone/core/field/q1_axis_weights.h"
 #include "lodestone/core/field/q1_element.h"
 #include "lodestone/core/base/vec3.h"
 
@@ -82,18 +83,9 @@ inline Tables makeTables() {
       for (int d = c; d < 8; ++d, ++e) t.gram[g][e] = dot(q.dN[g][c], q.dN[g][d]);
   for (int c = 0, e = 0; c < 8; ++c)
     for (int d = c; d < 8; ++d, ++e) {
-      double s[6] = {0, 0, 0, 0, 0, 0};
-      for (int g = 0; g < 8; ++g) {
-        const Vec3d& u = q.dN[g][c];
-        const Vec3d& v = q.dN[g][d];
-        s[0] += u.x * v.x;
-        s[1] += u.y * v.y;
-        s[2] += u.z * v.z;
-        s[3] += u.x * v.y + u.y * v.x;
-        s[4] += u.x * v.z + u.z * v.x;
-        s[5] += u.y * v.z + u.z * v.y;
-      }
-      for (int a = 0; a < 6; ++a) t.basis[a][e] = s[a] / 8;
+      double s[6];
+      q1::gradientProducts(q, c, d, s);
+      for (int a = 0; a < 6; ++a) t.basis[a][e] = s[a];
     }
   t.abscissa[0] = q1::gaussAbscissa(0);
   t.abscissa[1] = q1::gaussAbscissa(1);
@@ -127,26 +119,9 @@ LODESTONE_HOSTDEV inline std::size_t cornerOffset(const Dims& g, int c) {
 // ---------------------------------------------------------------------------
 // Vacuum Q1 stencil (q1_stencil.cpp).
 
-struct AxisWeights {
-  double k[3], m[3];
-};
-LODESTONE_HOSTDEV inline AxisWeights axisWeights(int p, int count) {
-  const bool left = p > 0, right = p < count - 1;
-  const double cells = double(left) + double(right);
-  AxisWeights a;
-  a.k[0] = left ? -1.0 : 0.0;
-  a.k[1] = cells;
-  a.k[2] = right ? -1.0 : 0.0;
-  a.m[0] = left ? 1.0 / 6 : 0.0;
-  a.m[1] = cells * (2.0 / 6);
-  a.m[2] = right ? 1.0 / 6 : 0.0;
-  return a;
-}
-
 /// Diagonal of the vacuum stiffness at node (i,j,k), m.
 LODESTONE_HOSTDEV inline double laplacianDiagonal(const Dims& g, int i, int j, int k) {
-  const AxisWeights x = axisWeights(i, g.nx), y = axisWeights(j, g.ny), z = axisWeights(k, g.nz);
-  return g.dx * (x.k[1] * y.m[1] * z.m[1] + x.m[1] * y.k[1] * z.m[1] + x.m[1] * y.m[1] * z.k[1]);
+  return q1::laplacianDiagonal(g.nx, g.ny, g.nz, g.dx, i, j, k);
 }
 
 /// Row (i,j,k) of the vacuum stiffness times v (any node, walls included).
@@ -162,21 +137,7 @@ LODESTONE_HOSTDEV inline double laplacianRow(const Dims& g, int i, int j, int k,
     const double h = g.dx;
     return h * 8.0 / 3.0 * c[0] + (-h / 6.0) * edges + (-h / 12.0) * corners;
   }
-  const AxisWeights x = axisWeights(i, g.nx), y = axisWeights(j, g.ny), z = axisWeights(k, g.nz);
-  double s = 0;
-  for (int c = -1; c <= 1; ++c) {
-    if (z.m[c + 1] == 0) continue;
-    for (int b = -1; b <= 1; ++b) {
-      if (y.m[b + 1] == 0) continue;
-      for (int a = -1; a <= 1; ++a) {
-        if (x.m[a + 1] == 0) continue;
-        const double w = x.k[a + 1] * y.m[b + 1] * z.m[c + 1] + x.m[a + 1] * y.k[b + 1] * z.m[c + 1] +
-                         x.m[a + 1] * y.m[b + 1] * z.k[c + 1];
-        s += w * v[g.index(i + a, j + b, k + c)];
-      }
-    }
-  }
-  return g.dx * s;
+  return q1::laplacianRow(g.nx, g.ny, g.nz, g.dx, i, j, k, v);
 }
 
 // ---------------------------------------------------------------------------

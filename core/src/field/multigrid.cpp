@@ -31,23 +31,14 @@ struct ElementBasis {
     const q1::Tables t = q1::makeTables();
     for (int c = 0, e = 0; c < 8; ++c)
       for (int d = c; d < 8; ++d, ++e) {
-        double s[6] = {0, 0, 0, 0, 0, 0};
-        for (int q = 0; q < 8; ++q) {
-          const Vec3d& u = t.dN[q][c];
-          const Vec3d& v = t.dN[q][d];
-          s[0] += u.x * v.x;
-          s[1] += u.y * v.y;
-          s[2] += u.z * v.z;
-          s[3] += u.x * v.y + u.y * v.x;
-          s[4] += u.x * v.z + u.z * v.x;
-          s[5] += u.y * v.z + u.z * v.y;
-        }
-        xx[e] = s[0] / 8;
-        yy[e] = s[1] / 8;
-        zz[e] = s[2] / 8;
-        xy[e] = s[3] / 8;
-        xz[e] = s[4] / 8;
-        yz[e] = s[5] / 8;
+        double s[6];
+        q1::gradientProducts(t, c, d, s);
+        xx[e] = s[0];
+        yy[e] = s[1];
+        zz[e] = s[2];
+        xy[e] = s[3];
+        xz[e] = s[4];
+        yz[e] = s[5];
       }
   }
 };

@@ -1,5 +1,7 @@
 #include "lodestone/core/field/q1_stencil.h"
 
+#include "lodestone/core/field/q1_axis_weights.h"
+
 #include <algorithm>
 #include <vector>
 
@@ -21,40 +23,13 @@ const char* toString(BoundaryKind kind) {
 // with 1D stiffness k = [-1 2 -1] and mass m = [1/6 4/6 1/6] (halved at walls).
 // Interior rows: centre 8/3, face 0, edge -1/6, corner -1/12 (times dx).
 
-namespace {
-struct Axis1D {
-  double k[3], m[3];
-};
-inline Axis1D axisWeights(int p, int count) {
-  const bool left = p > 0, right = p < count - 1;
-  const double cells = double(left) + double(right);
-  return {{left ? -1.0 : 0.0, cells, right ? -1.0 : 0.0},
-          {left ? 1.0 / 6 : 0.0, cells * (2.0 / 6), right ? 1.0 / 6 : 0.0}};
-}
-}  // namespace
-
 double q1LaplacianDiagonal(const GridSpec& grid, int i, int j, int k) {
-  const Axis1D x = axisWeights(i, grid.dims.i), y = axisWeights(j, grid.dims.j), z = axisWeights(k, grid.dims.k);
-  return grid.dx * (x.k[1] * y.m[1] * z.m[1] + x.m[1] * y.k[1] * z.m[1] + x.m[1] * y.m[1] * z.k[1]);
+  return q1::laplacianDiagonal(grid.dims.i, grid.dims.j, grid.dims.k, grid.dx, i, j, k);
 }
 
 template <typename T>
 double q1LaplacianRowT(const GridSpec& grid, int i, int j, int k, const T* v) {
-  const Axis1D x = axisWeights(i, grid.dims.i), y = axisWeights(j, grid.dims.j), z = axisWeights(k, grid.dims.k);
-  double s = 0;
-  for (int c = -1; c <= 1; ++c) {
-    if (z.m[c + 1] == 0) continue;
-    for (int b = -1; b <= 1; ++b) {
-      if (y.m[b + 1] == 0) continue;
-      for (int a = -1; a <= 1; ++a) {
-        if (x.m[a + 1] == 0) continue;
-        const double wgt = x.k[a + 1] * y.m[b + 1] * z.m[c + 1] + x.m[a + 1] * y.k[b + 1] * z.m[c + 1] +
-                           x.m[a + 1] * y.m[b + 1] * z.k[c + 1];
-        s += wgt * double(v[grid.index(i + a, j + b, k + c)]);
-      }
-    }
-  }
-  return grid.dx * s;
+  return q1::laplacianRow(grid.dims.i, grid.dims.j, grid.dims.k, grid.dx, i, j, k, v);
 }
 
 double q1LaplacianRow(const GridSpec& grid, int i, int j, int k, const double* v) {

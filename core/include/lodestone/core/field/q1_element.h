@@ -134,5 +134,25 @@ LODESTONE_HOSTDEV inline void gaussDivergenceTranspose(const double f[kGaussPoin
   }
 }
 
+/// The Gauss-integrated products of the reference gradients of corners c and
+/// d: s = (1/8) sum_q (x x, y y, z z, x y + y x, x z + z x, y z + z y) of
+/// dN_qc and dN_qd. The unit cell's element matrices of d_a N . d_b N
+/// (symmetrized for a != b): E(D) = dx sum_ab D_ab s_ab (the multigrid's
+/// coarse levels, on the host and the device).
+LODESTONE_HOSTDEV inline void gradientProducts(const Tables& t, int c, int d, double s[6]) {
+  for (int a = 0; a < 6; ++a) s[a] = 0;
+  for (int q = 0; q < kGaussPoints; ++q) {
+    const Vec3d& u = t.dN[q][c];
+    const Vec3d& v = t.dN[q][d];
+    s[0] += u.x * v.x;
+    s[1] += u.y * v.y;
+    s[2] += u.z * v.z;
+    s[3] += u.x * v.y + u.y * v.x;
+    s[4] += u.x * v.z + u.z * v.x;
+    s[5] += u.y * v.z + u.z * v.y;
+  }
+  for (int a = 0; a < 6; ++a) s[a] /= 8;
+}
+
 }  // namespace q1
 }  // namespace lodestone
