@@ -363,18 +363,15 @@ void MpmSolver::poseMagnetsAt(double t) const {
     magnets_[m]->setPose(colliders_[magnetCollider_[m]].motion().poseAt(t));
 }
 
-bool MpmSolver::magneticStateChanged() {
-  // Moved: any magnetic point farther than the reuse distance from where it
-  // was at the last solve (a changed particle set counts as moved).
-  if (lastSolveX_.size() != particles_.size() || lastSolveSample_.empty()) return true;
-  const double d2 = lastPlan_.reuseDistance * lastPlan_.reuseDistance;
-  for (std::size_t p = 0; p < particles_.size(); ++p)
-    if (isMagneticPoint(p) && norm2(particles_.x[p] - lastSolveX_[p]) > d2) return true;
-  // Applied field changed (magnets moved, time profiles) at the sampled points.
+bool MpmSolver::lastSolveHolds() {
+  // The planner's reuse (field_reuse.h): only with a force to keep and a
+  // plan that allows it; the applied field is compared only when no magnetic
+  // point moved too far, with the magnets where they are now.
+  if (!haveMagneticForce_ || !settings_.planner.enabled || !(lastPlan_.reuseDistance > 0)) return false;
+  const auto magnetic = [this](std::size_t p) { return isMagneticPoint(p); };
+  if (!reuse_.pointsWithin(particles_.x, magnetic, lastPlan_.reuseDistance)) return false;
   poseMagnetsAt(time_);
-  std::vector<Vec3d> H(lastSolveSample_.size());
-  for (std::size_t q = 0; q < H.size(); ++q) H[q] = scene_->field(lastSolveX_[lastSolveSample_[q]], time_);
-  return relativeFieldChange(H, lastSolveH_) > lastPlan_.reuseFieldChange;
+  return reuse_.fieldWithin(*scene_, time_, lastPlan_.reuseFieldChange);
 }
 
 MagneticPlan MpmSolver::planMagneticNow() const {
@@ -465,13 +462,7 @@ void MpmSolver::solveMagnetic(MpmStepReport& rep) {
     sameGrid_ = solveGrid == settings_.grid;
     if (sameGrid_ && !(magneticForce_.spec() == settings_.grid)) magneticForce_.reset(settings_.grid, Vec3d{});
     // What the reuse test compares against.
-    lastSolveX_ = particles_.x;
-    lastSolveSample_.clear();
-    const std::size_t stride = std::max<std::size_t>(1, index.size() / 256);
-    for (std::size_t q = 0; q < index.size(); q += stride) lastSolveSample_.push_back(index[q]);
-    lastSolveH_.resize(lastSolveSample_.size());
-    for (std::size_t q = 0; q < lastSolveSample_.size(); ++q)
-      lastSolveH_[q] = scene_->field(particles_.x[lastSolveSample_[q]], time_);
+    reuse_.record(particles_.x, index, *scene_, time_);
   }
   if (!stage_) stage_ = std::make_unique<MagneticForceStage>(magneticGrid_, *law, settings_.magnetic);
   const ParticleView view{positions.data(), counts.data(), positions.size()};
@@ -647,8 +638,7 @@ MpmStepReport MpmSolver::step(double dt) {
   if (magneticScene) {
     bool due =
         settings_.magneticSolveInterval > 0 ? stepsSinceSolve_ >= settings_.magneticSolveInterval : frameStart_;
-    if (due && haveMagneticForce_ && settings_.planner.enabled && lastPlan_.reuseDistance > 0 &&
-        !magneticStateChanged()) {
+    if (due && lastSolveHolds()) {
       due = false;  // nothing moved or changed enough: the last solve still holds
       rep.magneticReused = true;
       stepsSinceSolve_ = 0;
@@ -690,17 +680,7 @@ MpmStepReport MpmSolver::step(double dt) {
   if (settings_.reorderInterval > 0 && substeps_ % settings_.reorderInterval == 0 && rep.removed == removedBefore &&
       grid_.binnedOrder().size() == particles_.size())
   {
-    if (lastSolveX_.size() == particles_.size()) {
-      std::vector<Vec3d> moved(lastSolveX_.size());
-      const std::vector<std::uint32_t>& order = grid_.binnedOrder();
-      std::vector<std::uint32_t> newIndex(order.size());
-      for (std::size_t p = 0; p < order.size(); ++p) {
-        moved[p] = lastSolveX_[order[p]];
-        newIndex[order[p]] = std::uint32_t(p);
-      }
-      lastSolveX_.swap(moved);
-      for (std::uint32_t& q : lastSolveSample_) q = newIndex[q];
-    }
+    reuse_.permute(grid_.binnedOrder());
     particles_.permute(grid_.binnedOrder());
   }
   rep.secondsG2P = secondsSince(t);

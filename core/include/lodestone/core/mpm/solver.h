@@ -10,7 +10,8 @@
 //      per frame) the magnetic points (their positions at the start of the
 //      substep, as P2G sees them) are handed to MagneticForceStage::run
 //      exactly as an external host would, and its nodal force is kept and
-//      reused until the next solve;
+//      reused until the next solve; with the planner on, a due solve is
+//      skipped while the last one still holds (mpm/field_reuse.h);
 //   4. grid update: v_i = (m v_i + dt f_i) / m_i + dt g, then the colliders'
 //      and the domain walls' boundary conditions;
 //   5-7. G2P (APIC), MLS update of F or J, advection (mpm_grid.h); advected
@@ -68,6 +69,7 @@
 #include "lodestone/core/stage/magnetic_stage.h"
 #include "lodestone/core/mpm/collider.h"
 #include "lodestone/core/mpm/emitter.h"
+#include "lodestone/core/mpm/field_reuse.h"
 #include "lodestone/core/mpm/grid.h"
 #include "lodestone/core/mpm/material.h"
 #include "lodestone/core/mpm/particles.h"
@@ -282,7 +284,7 @@ class MpmSolver {
   ParticleBounds domainBounds() const;
   bool anyMagneticParticles() const;
   void solveMagnetic(MpmStepReport& rep);
-  bool magneticStateChanged();
+  bool lastSolveHolds();  // the planner's reuse test (field_reuse.h); poses the magnets when it samples the field
   bool isMagneticPoint(std::size_t p) const;    // a particle with n_p > 0 of a magnetic material
   const MagneticMaterial* magneticLaw() const;  // the (shared) law of the magnetic materials, or null
   void poseMagnetsAt(double t) const;           // move the magnets to their motion's pose at t (s)
@@ -308,9 +310,7 @@ class MpmSolver {
   bool particlesDirty_ = true;
   int stepsSinceSolve_ = 0;
   MagneticPlan lastPlan_;
-  std::vector<Vec3d> lastSolveX_;   // particle positions at the last solve (planner reuse), permuted with the particles
-  std::vector<Vec3d> lastSolveH_;   // applied field at sampled magnetic points at the last solve, A/m
-  std::vector<std::uint32_t> lastSolveSample_;  // particle indices of those samples
+  FieldReuse reuse_;  // the last solve's record for the planner's reuse test, permuted with the particles
   long long substeps_ = 0;
   double time_ = 0;
 };
