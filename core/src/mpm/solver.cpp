@@ -16,6 +16,7 @@
 #include "lodestone/core/base/error.h"
 #include "lodestone/core/stage/magnetic_force.h"
 #include "lodestone/core/mpm/constitutive.h"
+#include "lodestone/core/mpm/particle_order.h"
 #include "lodestone/core/base/parallel.h"
 #include "lodestone/core/sources/sphere_magnet.h"
 
@@ -677,12 +678,8 @@ MpmStepReport MpmSolver::step(double dt) {
   if (g2p.outside + g2p.nonFinite > 0) rep.clamped += enforceDomain(rep.removed, rep.nonFinite);
   ++substeps_;
   ++stepsSinceSolve_;
-  if (settings_.reorderInterval > 0 && substeps_ % settings_.reorderInterval == 0 && rep.removed == removedBefore &&
-      grid_.binnedOrder().size() == particles_.size())
-  {
-    reuse_.permute(grid_.binnedOrder());
-    particles_.permute(grid_.binnedOrder());
-  }
+  if (rep.removed == removedBefore && particleReorderDue(settings_.reorderInterval, substeps_))
+    reorderParticles(grid_.binnedOrder(), particles_, reuse_);
   rep.secondsG2P = secondsSince(t);
 
   time_ += dt;

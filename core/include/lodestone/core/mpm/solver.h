@@ -16,7 +16,8 @@
 //      and the domain walls' boundary conditions;
 //   5-7. G2P (APIC), MLS update of F or J, advection (mpm_grid.h); advected
 //      particles leaving the domain are clamped or removed, non-finite ones
-//      removed, and counted in the report.
+//      removed, and counted in the report. Every `reorderInterval` substeps
+//      the particles are then sorted by cell (mpm/particle_order.h).
 //
 // Coupling to the magnetic stage. When the stage grid equals the MPM grid
 // (the default), the stage's nodal force f_i (N) is first moved onto the
