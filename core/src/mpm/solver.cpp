@@ -624,21 +624,65 @@ MpmStepReport MpmSolver::step(double dt) {
   MpmStepReport rep;
   rep.dt = dt;
 
-  // 0. Keep every particle where its stencil fits (G2P does it after
-  // advection; here only when the particles were handed out since).
+  // 0. Particles handed out (particles(), emit()) since the last substep are
+  // put back where their stencil fits; G2P keeps the others there.
   auto t = Clock::now();
-  if (particlesDirty_) {
-    if (settings_.checkFinite) checkFiniteParticles("at the start of the substep");
-    rep.clamped += enforceDomain(rep.removed, rep.nonFinite);
-    particlesDirty_ = false;
-  }
+  enforceDomainOfHandedOut(rep);
   const double secondsDomain = secondsSince(t);
 
-  // 2-3. Field solve and magnetic force on the solver's interval.
+  // 2-3. The magnetic force: n_p -> n_i, the field solve and the
+  // Einstein-Laub force (MagneticForceStage::run; nodal f_i, or f_p per
+  // particle on a stage grid of its own) when a solve is due and the last one
+  // does not still hold (mpm/field_reuse.h). It comes before P2G in the code
+  // because it reads the positions P2G sees and P2G deposits the f_p.
+  updateMagneticForce(rep);
+
+  // 1. P2G (mpm/grid.h): m_i = sum_p w_ip m_p and the APIC momentum with the
+  // MLS stress impulse, mv_i = sum_p w_ip (m_p v_p + A_p d_ip + dt f_p),
+  // A_p = m_p C_p - dt (4/dx^2) V_p^0 tau_p; f_p is the per-particle magnetic
+  // force when the stage has its own grid.
+  t = Clock::now();
+  particleToGrid(dt, rep);
+  rep.secondsP2G = secondsDomain + secondsSince(t);
+
+  // 4. Grid update: v_i = ((m v)_i + dt f_i) / m_i + dt g, then the
+  // colliders' and the walls' boundary conditions.
+  t = Clock::now();
+  gridUpdate(dt, rep);
+  if (settings_.checkFinite) checkFiniteGrid("after the grid update");
+  rep.secondsGridUpdate = secondsSince(t);
+
+  // 5-7. G2P (APIC): v_p = sum_i w_ip v_i, C_p = (4/dx^2) sum_i w_ip v_i
+  // d_ip^T; the F update F_p <- (I + dt C_p) F_p (fluids: J_p <- (1 + dt
+  // tr C_p) J_p); advection x_p <- x_p + dt v_p, keeping the particles in the
+  // domain. Then, on the reorder interval, the particles are sorted by cell
+  // (mpm/particle_order.h).
+  t = Clock::now();
+  const bool removedAfterP2G = gridToParticle(dt, rep);
+  ++substeps_;
+  ++stepsSinceSolve_;
+  if (!removedAfterP2G && particleReorderDue(settings_.reorderInterval, substeps_))
+    reorderParticles(grid_.binnedOrder(), particles_, reuse_);
+  rep.secondsG2P = secondsSince(t);
+
+  time_ += dt;
+  rep.time = time_;
+  rep.particles = particles_.size();
+  rep.secondsTotal = secondsSince(tStart);
+  return rep;
+}
+
+void MpmSolver::enforceDomainOfHandedOut(MpmStepReport& rep) {
+  if (!particlesDirty_) return;
+  if (settings_.checkFinite) checkFiniteParticles("at the start of the substep");
+  rep.clamped += enforceDomain(rep.removed, rep.nonFinite);
+  particlesDirty_ = false;
+}
+
+void MpmSolver::updateMagneticForce(MpmStepReport& rep) {
   const bool magneticScene = !scene_->empty() && anyMagneticParticles();
   if (magneticScene) {
-    bool due =
-        settings_.magneticSolveInterval > 0 ? stepsSinceSolve_ >= settings_.magneticSolveInterval : frameStart_;
+    bool due = settings_.magneticSolveInterval > 0 ? stepsSinceSolve_ >= settings_.magneticSolveInterval : frameStart_;
     if (due && lastSolveHolds()) {
       due = false;  // nothing moved or changed enough: the last solve still holds
       rep.magneticReused = true;
@@ -649,26 +693,19 @@ MpmStepReport MpmSolver::step(double dt) {
     solveMagnetic(rep);  // clears the cached force
   }
   frameStart_ = false;
+}
 
-  // 1. P2G.
-  t = Clock::now();
+void MpmSolver::particleToGrid(double dt, MpmStepReport& rep) {
   const bool particleForces = !sameGrid_ && haveMagneticForce_;
   grid_.particleToGrid(particles_, materials_, dt, particleForces ? particles_.magneticForce.data() : nullptr);
   if (particleForces) {
     rep.magneticImpulse =
         deterministicSum<Vec3d>(particles_.size(), [&](std::size_t p) { return dt * particles_.magneticForce[p]; });
   }
-  rep.secondsP2G = secondsDomain + secondsSince(t);
   rep.secondsBinning = grid_.lastBinningSeconds();
+}
 
-  // 4. Grid update.
-  t = Clock::now();
-  gridUpdate(dt, rep);
-  if (settings_.checkFinite) checkFiniteGrid("after the grid update");
-  rep.secondsGridUpdate = secondsSince(t);
-
-  // 5-7. G2P, F/J update, advection.
-  t = Clock::now();
+bool MpmSolver::gridToParticle(double dt, MpmStepReport& rep) {
   const ParticleBounds bounds = domainBounds();
   const GridToParticleReport g2p = grid_.gridToParticle(particles_, materials_, dt, &bounds);
   if (settings_.checkFinite) checkFiniteParticles("after G2P and advection");
@@ -676,17 +713,7 @@ MpmStepReport MpmSolver::step(double dt) {
   rep.clamped += g2p.clamped;
   const std::size_t removedBefore = rep.removed;
   if (g2p.outside + g2p.nonFinite > 0) rep.clamped += enforceDomain(rep.removed, rep.nonFinite);
-  ++substeps_;
-  ++stepsSinceSolve_;
-  if (rep.removed == removedBefore && particleReorderDue(settings_.reorderInterval, substeps_))
-    reorderParticles(grid_.binnedOrder(), particles_, reuse_);
-  rep.secondsG2P = secondsSince(t);
-
-  time_ += dt;
-  rep.time = time_;
-  rep.particles = particles_.size();
-  rep.secondsTotal = secondsSince(tStart);
-  return rep;
+  return rep.removed != removedBefore;
 }
 
 MpmFrameReport MpmSolver::advanceFrame(double frameDuration, const MpmProgressCallback& progress) {
