@@ -218,12 +218,13 @@ struct MpmCheckpointAccess {
       for (std::size_t i = 0; i < nphi; ++i) w.put(phi.data[i]);
     }
     // The planner's reuse test (positions and sampled applied field at the last solve).
-    w.put(std::uint64_t(s.lastSolveX_.size()));
-    for (const Vec3d& x : s.lastSolveX_) w.putVec(x);
-    w.put(std::uint64_t(s.lastSolveH_.size()));
-    for (const Vec3d& H : s.lastSolveH_) w.putVec(H);
-    w.put(std::uint64_t(s.lastSolveSample_.size()));
-    for (const std::uint32_t q : s.lastSolveSample_) w.put(q);
+    const FieldReuse& reuse = s.reuse_;
+    w.put(std::uint64_t(reuse.positions().size()));
+    for (const Vec3d& x : reuse.positions()) w.putVec(x);
+    w.put(std::uint64_t(reuse.fields().size()));
+    for (const Vec3d& H : reuse.fields()) w.putVec(H);
+    w.put(std::uint64_t(reuse.samples().size()));
+    for (const std::uint32_t q : reuse.samples()) w.put(q);
 
     std::vector<std::uint8_t> out(kHeaderSize + w.bytes.size());
     std::memcpy(out.data(), kMagic, 8);
@@ -380,9 +381,7 @@ struct MpmCheckpointAccess {
     } else if (!s.magneticForce_.empty()) {
       s.magneticForce_.fill(Vec3d{});
     }
-    s.lastSolveX_ = std::move(lastX);
-    s.lastSolveH_ = std::move(lastH);
-    s.lastSolveSample_ = std::move(lastSample);
+    s.reuse_.restore(std::move(lastX), std::move(lastSample), std::move(lastH));
     // The stage on its saved grid with phi = 0: what the saving run has after
     // MpmSolver::resetMagneticWarmStart (see the header).
     s.stage_.reset();

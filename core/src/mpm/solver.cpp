@@ -17,6 +17,7 @@
 #include "lodestone/core/base/error.h"
 #include "lodestone/core/stage/magnetic_force.h"
 #include "lodestone/core/mpm/constitutive.h"
+#include "lodestone/core/mpm/particle_order.h"
 #include "lodestone/core/base/parallel.h"
 #include "lodestone/core/sources/sphere_magnet.h"
 
@@ -363,18 +364,15 @@ void MpmSolver::poseMagnetsAt(double t) const {
     magnets_[m]->setPose(colliders_[magnetCollider_[m]].motion().poseAt(t));
 }
 
-bool MpmSolver::magneticStateChanged() {
-  // Moved: any magnetic point farther than the reuse distance from where it
-  // was at the last solve (a changed particle set counts as moved).
-  if (lastSolveX_.size() != particles_.size() || lastSolveSample_.empty()) return true;
-  const double d2 = lastPlan_.reuseDistance * lastPlan_.reuseDistance;
-  for (std::size_t p = 0; p < particles_.size(); ++p)
-    if (isMagneticPoint(p) && norm2(particles_.x[p] - lastSolveX_[p]) > d2) return true;
-  // Applied field changed (magnets moved, time profiles) at the sampled points.
+bool MpmSolver::lastSolveHolds() {
+  // The planner's reuse (field_reuse.h): only with a force to keep and a
+  // plan that allows it; the applied field is compared only when no magnetic
+  // point moved too far, with the magnets where they are now.
+  if (!haveMagneticForce_ || !settings_.planner.enabled || !(lastPlan_.reuseDistance > 0)) return false;
+  const auto magnetic = [this](std::size_t p) { return isMagneticPoint(p); };
+  if (!reuse_.pointsWithin(particles_.x, magnetic, lastPlan_.reuseDistance)) return false;
   poseMagnetsAt(time_);
-  std::vector<Vec3d> H(lastSolveSample_.size());
-  for (std::size_t q = 0; q < H.size(); ++q) H[q] = scene_->field(lastSolveX_[lastSolveSample_[q]], time_);
-  return relativeFieldChange(H, lastSolveH_) > lastPlan_.reuseFieldChange;
+  return reuse_.fieldWithin(*scene_, time_, lastPlan_.reuseFieldChange);
 }
 
 MagneticPlan MpmSolver::planMagneticNow() const {
@@ -465,13 +463,7 @@ void MpmSolver::solveMagnetic(MpmStepReport& rep) {
     sameGrid_ = solveGrid == settings_.grid;
     if (sameGrid_ && !(magneticForce_.spec() == settings_.grid)) magneticForce_.reset(settings_.grid, Vec3d{});
     // What the reuse test compares against.
-    lastSolveX_ = particles_.x;
-    lastSolveSample_.clear();
-    const std::size_t stride = std::max<std::size_t>(1, index.size() / 256);
-    for (std::size_t q = 0; q < index.size(); q += stride) lastSolveSample_.push_back(index[q]);
-    lastSolveH_.resize(lastSolveSample_.size());
-    for (std::size_t q = 0; q < lastSolveSample_.size(); ++q)
-      lastSolveH_[q] = scene_->field(particles_.x[lastSolveSample_[q]], time_);
+    reuse_.record(particles_.x, index, *scene_, time_);
   }
   if (!stage_) stage_ = std::make_unique<MagneticForceStage>(magneticGrid_, *law, settings_.magnetic);
   const ParticleView view{positions.data(), counts.data(), positions.size()};
@@ -632,23 +624,66 @@ MpmStepReport MpmSolver::step(double dt) {
   MpmStepReport rep;
   rep.dt = dt;
 
-  // 0. Keep every particle where its stencil fits (G2P does it after
-  // advection; here only when the particles were handed out since).
+  // 0. Particles handed out (particles(), emit()) since the last substep are
+  // put back where their stencil fits; G2P keeps the others there.
   auto t = Clock::now();
-  if (particlesDirty_) {
-    if (settings_.checkFinite) checkFiniteParticles("at the start of the substep");
-    rep.clamped += enforceDomain(rep.removed, rep.nonFinite);
-    particlesDirty_ = false;
-  }
+  enforceDomainOfHandedOut(rep);
   const double secondsDomain = secondsSince(t);
 
-  // 2-3. Field solve and magnetic force on the solver's interval.
+  // 2-3. The magnetic force: n_p -> n_i, the field solve and the
+  // Einstein-Laub force (MagneticForceStage::run; nodal f_i, or f_p per
+  // particle on a stage grid of its own) when a solve is due and the last one
+  // does not still hold (mpm/field_reuse.h). It comes before P2G in the code
+  // because it reads the positions P2G sees and P2G deposits the f_p.
+  updateMagneticForce(rep);
+
+  // 1. P2G (mpm/grid.h): m_i = sum_p w_ip m_p and the APIC momentum with the
+  // MLS stress impulse, mv_i = sum_p w_ip (m_p v_p + A_p d_ip + dt f_p),
+  // A_p = m_p C_p - dt (4/dx^2) V_p^0 tau_p; f_p is the per-particle magnetic
+  // force when the stage has its own grid.
+  t = Clock::now();
+  particleToGrid(dt, rep);
+  rep.secondsP2G = secondsDomain + secondsSince(t);
+
+  // 4. Grid update: v_i = ((m v)_i + dt f_i) / m_i + dt g, then the
+  // colliders' and the walls' boundary conditions.
+  t = Clock::now();
+  gridUpdate(dt, rep);
+  if (settings_.checkFinite) checkFiniteGrid("after the grid update");
+  rep.secondsGridUpdate = secondsSince(t);
+
+  // 5-7. G2P (APIC): v_p = sum_i w_ip v_i, C_p = (4/dx^2) sum_i w_ip v_i
+  // d_ip^T; the F update F_p <- (I + dt C_p) F_p (fluids: J_p <- (1 + dt
+  // tr C_p) J_p); advection x_p <- x_p + dt v_p, keeping the particles in the
+  // domain. Then, on the reorder interval, the particles are sorted by cell
+  // (mpm/particle_order.h).
+  t = Clock::now();
+  const bool removedAfterP2G = gridToParticle(dt, rep);
+  ++substeps_;
+  ++stepsSinceSolve_;
+  if (!removedAfterP2G && particleReorderDue(settings_.reorderInterval, substeps_))
+    reorderParticles(grid_.binnedOrder(), particles_, reuse_);
+  rep.secondsG2P = secondsSince(t);
+
+  time_ += dt;
+  rep.time = time_;
+  rep.particles = particles_.size();
+  rep.secondsTotal = secondsSince(tStart);
+  return rep;
+}
+
+void MpmSolver::enforceDomainOfHandedOut(MpmStepReport& rep) {
+  if (!particlesDirty_) return;
+  if (settings_.checkFinite) checkFiniteParticles("at the start of the substep");
+  rep.clamped += enforceDomain(rep.removed, rep.nonFinite);
+  particlesDirty_ = false;
+}
+
+void MpmSolver::updateMagneticForce(MpmStepReport& rep) {
   const bool magneticScene = !scene_->empty() && anyMagneticParticles();
   if (magneticScene) {
-    bool due =
-        settings_.magneticSolveInterval > 0 ? stepsSinceSolve_ >= settings_.magneticSolveInterval : frameStart_;
-    if (due && haveMagneticForce_ && settings_.planner.enabled && lastPlan_.reuseDistance > 0 &&
-        !magneticStateChanged()) {
+    bool due = settings_.magneticSolveInterval > 0 ? stepsSinceSolve_ >= settings_.magneticSolveInterval : frameStart_;
+    if (due && lastSolveHolds()) {
       due = false;  // nothing moved or changed enough: the last solve still holds
       rep.magneticReused = true;
       stepsSinceSolve_ = 0;
@@ -658,26 +693,19 @@ MpmStepReport MpmSolver::step(double dt) {
     solveMagnetic(rep);  // clears the cached force
   }
   frameStart_ = false;
+}
 
-  // 1. P2G.
-  t = Clock::now();
+void MpmSolver::particleToGrid(double dt, MpmStepReport& rep) {
   const bool particleForces = !sameGrid_ && haveMagneticForce_;
   grid_.particleToGrid(particles_, materials_, dt, particleForces ? particles_.magneticForce.data() : nullptr);
   if (particleForces) {
     rep.magneticImpulse =
         deterministicSum<Vec3d>(particles_.size(), [&](std::size_t p) { return dt * particles_.magneticForce[p]; });
   }
-  rep.secondsP2G = secondsDomain + secondsSince(t);
   rep.secondsBinning = grid_.lastBinningSeconds();
+}
 
-  // 4. Grid update.
-  t = Clock::now();
-  gridUpdate(dt, rep);
-  if (settings_.checkFinite) checkFiniteGrid("after the grid update");
-  rep.secondsGridUpdate = secondsSince(t);
-
-  // 5-7. G2P, F/J update, advection.
-  t = Clock::now();
+bool MpmSolver::gridToParticle(double dt, MpmStepReport& rep) {
   const ParticleBounds bounds = domainBounds();
   const GridToParticleReport g2p = grid_.gridToParticle(particles_, materials_, dt, &bounds);
   if (settings_.checkFinite) checkFiniteParticles("after G2P and advection");
@@ -685,31 +713,7 @@ MpmStepReport MpmSolver::step(double dt) {
   rep.clamped += g2p.clamped;
   const std::size_t removedBefore = rep.removed;
   if (g2p.outside + g2p.nonFinite > 0) rep.clamped += enforceDomain(rep.removed, rep.nonFinite);
-  ++substeps_;
-  ++stepsSinceSolve_;
-  if (settings_.reorderInterval > 0 && substeps_ % settings_.reorderInterval == 0 && rep.removed == removedBefore &&
-      grid_.binnedOrder().size() == particles_.size())
-  {
-    if (lastSolveX_.size() == particles_.size()) {
-      std::vector<Vec3d> moved(lastSolveX_.size());
-      const std::vector<std::uint32_t>& order = grid_.binnedOrder();
-      std::vector<std::uint32_t> newIndex(order.size());
-      for (std::size_t p = 0; p < order.size(); ++p) {
-        moved[p] = lastSolveX_[order[p]];
-        newIndex[order[p]] = std::uint32_t(p);
-      }
-      lastSolveX_.swap(moved);
-      for (std::uint32_t& q : lastSolveSample_) q = newIndex[q];
-    }
-    particles_.permute(grid_.binnedOrder());
-  }
-  rep.secondsG2P = secondsSince(t);
-
-  time_ += dt;
-  rep.time = time_;
-  rep.particles = particles_.size();
-  rep.secondsTotal = secondsSince(tStart);
-  return rep;
+  return rep.removed != removedBefore;
 }
 
 MpmFrameReport MpmSolver::advanceFrame(double frameDuration, const MpmProgressCallback& progress) {

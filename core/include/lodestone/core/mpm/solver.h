@@ -5,17 +5,20 @@
 //   0. particles handed out through particles() or added by emit() since the
 //      last substep are checked: outside the domain they are clamped back or
 //      removed, non-finite ones removed (all counted);
-//   1. P2G: mass and APIC momentum with the MLS stress impulse (mpm_grid.h);
+//   1. P2G: mass and APIC momentum with the MLS stress impulse (mpm/grid.h);
 //   2-3. the magnetic force: every `magneticSolveInterval` substeps (or once
 //      per frame) the magnetic points (their positions at the start of the
 //      substep, as P2G sees them) are handed to MagneticForceStage::run
 //      exactly as an external host would, and its nodal force is kept and
-//      reused until the next solve;
+//      reused until the next solve; with the planner on, a due solve is
+//      skipped while the last one still holds (mpm/field_reuse.h). It is
+//      computed before P2G, which deposits the per-particle forces;
 //   4. grid update: v_i = (m v_i + dt f_i) / m_i + dt g, then the colliders'
 //      and the domain walls' boundary conditions;
-//   5-7. G2P (APIC), MLS update of F or J, advection (mpm_grid.h); advected
+//   5-7. G2P (APIC), MLS update of F or J, advection (mpm/grid.h); advected
 //      particles leaving the domain are clamped or removed, non-finite ones
-//      removed, and counted in the report.
+//      removed, and counted in the report. Every `reorderInterval` substeps
+//      the particles are then sorted by cell (mpm/particle_order.h).
 //
 // Coupling to the magnetic stage. When the stage grid equals the MPM grid
 // (the default), the stage's nodal force f_i (N) is first moved onto the
@@ -68,6 +71,7 @@
 #include "lodestone/core/stage/magnetic_stage.h"
 #include "lodestone/core/mpm/collider.h"
 #include "lodestone/core/mpm/emitter.h"
+#include "lodestone/core/mpm/field_reuse.h"
 #include "lodestone/core/mpm/grid.h"
 #include "lodestone/core/mpm/material.h"
 #include "lodestone/core/mpm/particles.h"
@@ -281,13 +285,18 @@ class MpmSolver {
   std::size_t enforceDomain(std::size_t& removedOut, std::size_t& nonFiniteOut);
   ParticleBounds domainBounds() const;
   bool anyMagneticParticles() const;
+  // The substep's phases (step reads as their sequence).
+  void enforceDomainOfHandedOut(MpmStepReport& rep);   // 0.
+  void updateMagneticForce(MpmStepReport& rep);        // 2-3.: solve when due, unless the last one holds
+  void particleToGrid(double dt, MpmStepReport& rep);  // 1.
+  void gridUpdate(double dt, MpmStepReport& rep);      // 4.
+  bool gridToParticle(double dt, MpmStepReport& rep);  // 5-7.; true when particles were removed after it
   void solveMagnetic(MpmStepReport& rep);
-  bool magneticStateChanged();
+  bool lastSolveHolds();  // the planner's reuse test (field_reuse.h); poses the magnets when it samples the field
   bool isMagneticPoint(std::size_t p) const;    // a particle with n_p > 0 of a magnetic material
   const MagneticMaterial* magneticLaw() const;  // the (shared) law of the magnetic materials, or null
   void poseMagnetsAt(double t) const;           // move the magnets to their motion's pose at t (s)
   PlannerInputs plannerInputs(const std::vector<Vec3d>& positions, const MagneticMaterial& law) const;
-  void gridUpdate(double dt, MpmStepReport& rep);
 
   MpmSettings settings_;
   GridSpec magneticGrid_;
@@ -308,9 +317,7 @@ class MpmSolver {
   bool particlesDirty_ = true;
   int stepsSinceSolve_ = 0;
   MagneticPlan lastPlan_;
-  std::vector<Vec3d> lastSolveX_;   // particle positions at the last solve (planner reuse), permuted with the particles
-  std::vector<Vec3d> lastSolveH_;   // applied field at sampled magnetic points at the last solve, A/m
-  std::vector<std::uint32_t> lastSolveSample_;  // particle indices of those samples
+  FieldReuse reuse_;  // the last solve's record for the planner's reuse test, permuted with the particles
   long long substeps_ = 0;
   double time_ = 0;
 };
