@@ -11,6 +11,7 @@
 #include "lodestone/core/base/bspline.h"
 #include "lodestone/core/base/hostdev.h"
 #include "lodestone/core/base/mat3.h"
+#include "lodestone/core/mpm/apic_gather.h"
 #include "lodestone/core/mpm/collider.h"
 #include "lodestone/core/mpm/constitutive.h"
 #include "lodestone/core/base/vec3.h"
@@ -149,26 +150,10 @@ LODESTONE_HOSTDEV inline G2POutcome g2pParticle(const MpmDims& g, const MpmMater
   const QuadraticWeights<double> wy = quadraticWeightsAt(uy, bj);
   const QuadraticWeights<double> wz = quadraticWeightsAt(uz, bk);
   const double f[3] = {ux - bi, uy - bj, uz - bk};
-  Vec3d vp{}, S0{}, S1{}, S2{};
-  for (int c = 0; c < 3; ++c)
-    for (int b = 0; b < 3; ++b) {
-      const double wbc = wy.w[b] * wz.w[c];
-      const Vec3d* line = vel + g.index(bi, bj + b, bk + c);
-      const Vec3d l1 = wx.w[1] * line[1], l2 = wx.w[2] * line[2];
-      const Vec3d s0 = wx.w[0] * line[0] + l1 + l2;
-      const Vec3d s1 = l1 + 2.0 * l2;
-      vp += wbc * s0;
-      S0 += wbc * s1;
-      S1 += (double(b) * wbc) * s0;
-      S2 += (double(c) * wbc) * s0;
-    }
+  Vec3d vp;
   Mat3d C;
-  const Vec3d col[3] = {cScale * (S0 - f[0] * vp), cScale * (S1 - f[1] * vp), cScale * (S2 - f[2] * vp)};
-  for (int a = 0; a < 3; ++a) {
-    C(0, a) = col[a].x;
-    C(1, a) = col[a].y;
-    C(2, a) = col[a].z;
-  }
+  gatherApic(vel + g.index(bi, bj, bk), std::size_t(g.nx), std::size_t(g.nx) * std::size_t(g.ny), wx, wy, wz, f, cScale,
+             vp, C);
   if (materials[P.material[p]].fluid) {
     P.J[p] *= 1.0 + dt * trace(C);
   } else {

@@ -2,6 +2,8 @@
 // argument are in mpm_grid.h.
 #include "lodestone/core/mpm/grid.h"
 
+#include "lodestone/core/mpm/apic_gather.h"
+
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>
@@ -422,30 +424,9 @@ GridToParticleReport MpmGrid::gridToParticle(MpmParticles& particles, const std:
           const QuadraticWeights<double> wz = quadraticWeightsAt(uz, bk);
           const double f[3] = {ux - bi, uy - bj, uz - bk};
 
-          // v_p = sum w v_i; S_a = sum w v_i (node offset index along a).
-          Vec3d vp{}, S0{}, S1{}, S2{};
-          const Vec3d* corner = vel + spec_.index(bi, bj, bk);
-          for (int c = 0; c < 3; ++c) {
-            for (int b = 0; b < 3; ++b) {
-              const double wbc = wy.w[b] * wz.w[c];
-              const Vec3d* line = corner + std::size_t(b) * sj + std::size_t(c) * sk;
-              const Vec3d l1 = wx.w[1] * line[1], l2 = wx.w[2] * line[2];
-              const Vec3d s0 = wx.w[0] * line[0] + l1 + l2;
-              const Vec3d s1 = l1 + 2.0 * l2;
-              vp += wbc * s0;
-              S0 += wbc * s1;
-              S1 += (double(b) * wbc) * s0;
-              S2 += (double(c) * wbc) * s0;
-            }
-          }
-          // C = D^-1 sum w v_i d_i^T, d_i = (index - f) dx: column a is (4/dx)(S_a - v_p f_a).
+          Vec3d vp;
           Mat3d C;
-          const Vec3d col[3] = {cScale * (S0 - f[0] * vp), cScale * (S1 - f[1] * vp), cScale * (S2 - f[2] * vp)};
-          for (int a = 0; a < 3; ++a) {
-            C(0, a) = col[a].x;
-            C(1, a) = col[a].y;
-            C(2, a) = col[a].z;
-          }
+          gatherApic(vel + spec_.index(bi, bj, bk), sj, sk, wx, wy, wz, f, cScale, vp, C);
           // Step 6: MLS update of the deformation (F <- (I + dt C) F, or J alone for fluids).
           if (params[mat[p]].fluid) {
             Jp[p] *= 1.0 + dt * trace(C);

@@ -1,0 +1,51 @@
+#pragma once
+// Grid-to-particle gather of MLS-MPM with APIC (Hu et al. 2018, eq. 8-10;
+// Section 4.3 of Sun et al. 2021): the particle's velocity
+//   v_p = sum_i w_ip v_i
+// and affine velocity
+//   C_p = D_p^-1 sum_i w_ip v_i (x_i - x_p)^T,  D_p = dx^2 / 4 I
+// (quadratic B-splines), over the 3x3x3 nodes from the stencil's base node.
+// Host and device: the reference MPM and the CUDA backend call it alike.
+#include <cstddef>
+
+#include "lodestone/core/base/bspline.h"
+#include "lodestone/core/base/hostdev.h"
+#include "lodestone/core/base/mat3.h"
+#include "lodestone/core/base/vec3.h"
+
+namespace lodestone {
+
+/// `corner`: the nodal velocities (m/s) at the stencil's base node, rows of
+/// nodes `sj` and planes `sk` apart; wx, wy, wz: the particle's weights from
+/// that base; f: the particle's offset from the base in cells; cScale = 4/dx
+/// (1/m). Sets vp (m/s) and C (1/s).
+LODESTONE_HOSTDEV inline void gatherApic(const Vec3d* corner, std::size_t sj, std::size_t sk,
+                                         const QuadraticWeights<double>& wx, const QuadraticWeights<double>& wy,
+                                         const QuadraticWeights<double>& wz, const double f[3], double cScale,
+                                         Vec3d& vp, Mat3d& C) {
+  // v_p = sum w v_i; S_a = sum w v_i (node offset index along a).
+  Vec3d S0{}, S1{}, S2{};
+  vp = Vec3d{};
+  for (int c = 0; c < 3; ++c) {
+    for (int b = 0; b < 3; ++b) {
+      const double wbc = wy.w[b] * wz.w[c];
+      const Vec3d* line = corner + std::size_t(b) * sj + std::size_t(c) * sk;
+      const Vec3d l1 = wx.w[1] * line[1], l2 = wx.w[2] * line[2];
+      const Vec3d s0 = wx.w[0] * line[0] + l1 + l2;
+      const Vec3d s1 = l1 + 2.0 * l2;
+      vp += wbc * s0;
+      S0 += wbc * s1;
+      S1 += (double(b) * wbc) * s0;
+      S2 += (double(c) * wbc) * s0;
+    }
+  }
+  // d_i = (index - f) dx: column a of C is (4/dx)(S_a - v_p f_a).
+  const Vec3d col[3] = {cScale * (S0 - f[0] * vp), cScale * (S1 - f[1] * vp), cScale * (S2 - f[2] * vp)};
+  for (int a = 0; a < 3; ++a) {
+    C(0, a) = col[a].x;
+    C(1, a) = col[a].y;
+    C(2, a) = col[a].z;
+  }
+}
+
+}  // namespace lodestone
