@@ -112,17 +112,7 @@ LODESTONE_HOSTDEV inline Vec3d gridUpdateNode(const MpmDims& g, std::size_t n, d
     const int idx[3] = {int(n % std::size_t(g.nx)), int((n / std::size_t(g.nx)) % std::size_t(g.ny)),
                         int(n / (std::size_t(g.nx) * std::size_t(g.ny)))};
     const int dims[3] = {g.nx, g.ny, g.nz};
-    for (int a = 0; a < 3; ++a) {
-      Vec3d nrm{};
-      if (idx[a] < wallNodes) {
-        nrm[a] = 1;
-      } else if (idx[a] > dims[a] - 1 - wallNodes) {
-        nrm[a] = -1;
-      } else {
-        continue;
-      }
-      v = applyBoundaryCondition(v, Vec3d{}, nrm, walls);
-    }
+    v = applyDomainWalls(v, idx, dims, wallNodes, walls);
   }
   return v;
 }
@@ -146,14 +136,11 @@ LODESTONE_HOSTDEV inline G2POutcome g2pParticle(const MpmDims& g, const MpmMater
     out.badStencil = true;
     return out;
   }
-  const QuadraticWeights<double> wx = quadraticWeightsAt(ux, bi);
-  const QuadraticWeights<double> wy = quadraticWeightsAt(uy, bj);
-  const QuadraticWeights<double> wz = quadraticWeightsAt(uz, bk);
-  const double f[3] = {ux - bi, uy - bj, uz - bk};
+  const double u[3] = {ux, uy, uz};
+  const int b3[3] = {bi, bj, bk};
   Vec3d vp;
   Mat3d C;
-  gatherApic(vel + g.index(bi, bj, bk), std::size_t(g.nx), std::size_t(g.nx) * std::size_t(g.ny), wx, wy, wz, f, cScale,
-             vp, C);
+  gatherApic(vel, std::size_t(g.nx), std::size_t(g.ny), u, b3, cScale, vp, C);
   if (materials[P.material[p]].fluid) {
     P.J[p] *= 1.0 + dt * trace(C);
   } else {

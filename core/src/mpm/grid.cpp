@@ -395,7 +395,6 @@ GridToParticleReport MpmGrid::gridToParticle(MpmParticles& particles, const std:
   const double cScale = 4.0 * invDx;  // D^-1 dx, 1/m
   const Vec3d o = spec_.origin;
   const std::size_t sj = std::size_t(spec_.dims.i);
-  const std::size_t sk = sj * std::size_t(spec_.dims.j);
   const Vec3d* vel = velocity_.data();
 
   Vec3d* X = particles.x.data();
@@ -419,14 +418,11 @@ GridToParticleReport MpmGrid::gridToParticle(MpmParticles& particles, const std:
           const int bi = int(quadraticBaseFloor(ux));
           const int bj = int(quadraticBaseFloor(uy));
           const int bk = int(quadraticBaseFloor(uz));
-          const QuadraticWeights<double> wx = quadraticWeightsAt(ux, bi);
-          const QuadraticWeights<double> wy = quadraticWeightsAt(uy, bj);
-          const QuadraticWeights<double> wz = quadraticWeightsAt(uz, bk);
-          const double f[3] = {ux - bi, uy - bj, uz - bk};
-
+          const double u[3] = {ux, uy, uz};
+          const int b3[3] = {bi, bj, bk};
           Vec3d vp;
           Mat3d C;
-          gatherApic(vel + spec_.index(bi, bj, bk), sj, sk, wx, wy, wz, f, cScale, vp, C);
+          gatherApic(vel, sj, std::size_t(spec_.dims.j), u, b3, cScale, vp, C);
           // Step 6: MLS update of the deformation (F <- (I + dt C) F, or J alone for fluids).
           if (params[mat[p]].fluid) {
             Jp[p] *= 1.0 + dt * trace(C);

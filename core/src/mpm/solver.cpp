@@ -539,17 +539,7 @@ void MpmSolver::gridUpdate(double dt, MpmStepReport& rep) {
         if (W > 0) {
           const int idx[3] = {i, j, k};
           const int dims[3] = {g.dims.i, g.dims.j, g.dims.k};
-          for (int a = 0; a < 3; ++a) {
-            Vec3d nrm{};
-            if (idx[a] < W) {
-              nrm[a] = 1;
-            } else if (idx[a] > dims[a] - 1 - W) {
-              nrm[a] = -1;
-            } else {
-              continue;
-            }
-            v = applyBoundaryCondition(v, Vec3d{}, nrm, walls);
-          }
+          v = applyDomainWalls(v, idx, dims, W, walls);
         }
         vel[n] = v;
       }

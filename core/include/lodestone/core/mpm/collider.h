@@ -67,6 +67,26 @@ LODESTONE_HOSTDEV inline Vec3d applyBoundaryCondition(const Vec3d& v, const Vec3
   return wallVelocity + vt;
 }
 
+/// The domain walls: node (idx[0], idx[1], idx[2]) of a grid of dims[]
+/// nodes lies in the wall layer of an axis when it is within `wallNodes`
+/// nodes of either end; the wall's condition `bc` (walls at rest, inward
+/// normal) is applied for each such axis in turn.
+LODESTONE_HOSTDEV inline Vec3d applyDomainWalls(Vec3d v, const int idx[3], const int dims[3], int wallNodes,
+                                                const BoundaryCondition& bc) {
+  for (int a = 0; a < 3; ++a) {
+    Vec3d nrm{};
+    if (idx[a] < wallNodes) {
+      nrm[a] = 1;
+    } else if (idx[a] > dims[a] - 1 - wallNodes) {
+      nrm[a] = -1;
+    } else {
+      continue;
+    }
+    v = applyBoundaryCondition(v, Vec3d{}, nrm, bc);
+  }
+  return v;
+}
+
 enum class ColliderShapeKind : int { Plane = 0, Box = 1, Sphere = 2, Cylinder = 3, LevelSet = 4 };
 const char* toString(ColliderShapeKind kind);
 
