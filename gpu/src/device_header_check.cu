@@ -8,6 +8,8 @@
 #include "lodestone/core/field/langevin.h"
 #include "lodestone/core/field/magnetization_law.h"
 #include "lodestone/core/base/mat3.h"
+#include "lodestone/core/field/q1_axis_weights.h"
+#include "lodestone/core/mpm/apic_gather.h"
 #include "lodestone/core/mpm/collider.h"
 #include "lodestone/core/mpm/constitutive.h"
 #include "lodestone/core/field/q1_element.h"
@@ -46,6 +48,20 @@ __global__ void headerCheckKernel(double* out, float* outf, MagnetizationLaw<dou
            neoHookeanEnergyDensity(F, 1.0, 2.0) + viscousFluidKirchhoff(F, 1.0, 0.1, 1e5)(2, 2) +
            viscousFluidCauchy(F, 1.0, 0.1, 1e5)(0, 1) + fluidEnergyDensity(0.9, 1e5) + determinant(F) + trace(F);
   out[4] = applyBoundaryCondition(H, Vec3d{}, Vec3d{0, 0, 1}, bc).z;
+  const int idx[3] = {int(threadIdx.x), 1, 2}, dims[3] = {8, 8, 8};
+  out[5] = applyDomainWalls(H, idx, dims, 2, bc).x;
+  double s[6];
+  q1::gradientProducts(t, 1, int(threadIdx.x & 7u), s);
+  out[6] = s[0] + s[5] + q1::laplacianDiagonal(8, 8, 8, 0.1, 1, 2, int(threadIdx.x & 7u)) +
+           q1::laplacianRow(8, 8, 8, 0.1, 1, 2, 3, v) + q1::laplacianRow(8, 8, 8, 0.1, 0, 0, 0, outf);
+  Vec3d vel[64];
+  for (int m = 0; m < 64; ++m) vel[m] = H * double(m);
+  const double u[3] = {1.3, 1.6, 1.2};
+  const int b3[3] = {0, 0, 0};
+  Vec3d vp;
+  Mat3d C;
+  gatherApic(vel, 4, 4, u, b3, 40.0, vp, C);
+  out[7] = vp.x + C(1, 2);
 }
 
 }  // namespace detail
