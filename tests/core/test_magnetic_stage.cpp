@@ -94,7 +94,7 @@ TEST(MagneticStage, ParticlesInFieldsAndForcesOut) {
               "relative error %.3g\n",
               rep.totalForce.z, Fz, -smallSphere, rep.totalForce.z / Fz - 1);
   // The discrete force converges to the closed form at first order in dx:
-  // measured +11.7%, +9.0%, +6.6%, +4.2%, +3.2% at 2.6, 3.8, 6.4, 9.6 and 12.8
+  // measured +11.7%, +9.0%, +6.6%, +4.2%, +3.2% at 3.2, 4.8, 6.4, 9.6 and 12.8
   // cells per radius (grids of 17 to 65 nodes; the particles' micro-particle
   // total within 0.2% of n0 V from 25 nodes on). Here, at 6.4 cells, the
   // bound is 8%; the small-sphere term alone lies 19% from the discrete
