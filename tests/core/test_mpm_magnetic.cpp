@@ -280,8 +280,10 @@ TEST(MpmMagnetic, MovingMagnetMovesItsFieldAndItsCollider) {
   const Vec3d velocity{0.5, 0, 0};  // m/s
   const std::size_t ci = solver.addMagnet(magnet, ColliderMotion::constantVelocity(magnet.pose(), velocity, {}));
   solver.emit(EmitterShape::box(Pose::at({c, c, 0.1}), {kHalf, kHalf, kHalf}), mag, {});
+  Vec3d impulse{};  // N*s, of the magnetic force on the cube
   for (int f = 0; f < 3; ++f) {
     const MpmFrameReport r = solver.advanceFrame(0.002);
+    impulse += r.magneticImpulse;
     // A moving magnet's field is evaluated again at every solve.
     EXPECT_EQ(r.magneticReports.size(), 1u);
     for (const MagneticStageReport& m : r.magneticReports) EXPECT_FALSE(m.appliedFieldReused) << f;
@@ -291,6 +293,12 @@ TEST(MpmMagnetic, MovingMagnetMovesItsFieldAndItsCollider) {
   EXPECT_LT(norm(solver.magnet(0).pose().position - expect), 1e-12);
   EXPECT_LT(norm(solver.collider(ci).stateAt(0.004).pose.position - expect), 1e-12);
   EXPECT_LT(norm(solver.collider(ci).velocity(expect + Vec3d{0, 0, 0.015}, 0.004) - velocity), 1e-12);
-  // The cube follows the magnet sideways (pulled toward +x).
-  EXPECT_GT(solver.particles().linearMomentum().x, 0.0);
+  // The cube follows the magnet sideways (pulled toward +x), and, at rest
+  // at first, without gravity and away from the walls and the magnet, it
+  // carries exactly the magnetic impulse (APIC conserves momentum).
+  const Vec3d P = solver.particles().linearMomentum();
+  EXPECT_GT(P.x, 0.0);
+  EXPECT_LT(norm(P - impulse), 1e-9 * norm(impulse)) << "P = (" << P.x << ", " << P.y << ", " << P.z
+                                                     << "), impulse = (" << impulse.x << ", " << impulse.y << ", "
+                                                     << impulse.z << ") N*s";
 }

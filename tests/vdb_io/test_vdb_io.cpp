@@ -1,7 +1,6 @@
 // lodestone::vdb_io: grid conversion, field files, VdbFieldSource.
 #include <gtest/gtest.h>
 
-#include <chrono>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -395,43 +394,6 @@ TEST(VdbFieldFile, PythonOpenVdbReadsTheFile) {
   EXPECT_EQ(v, asFloat(stage.density()(ci, cj, ck))) << out;
 }
 
-TEST(VdbFieldFile, FieldSetWriteTiming) {
-  const char* env = std::getenv("LODESTONE_VDB_BENCH_N");
-  const int N = env ? std::atoi(env) : 48;
-  const GridSpec g = test::cubeGrid(N, 0.5);
-  const DenseGrid<double> n = test::rasterize(g, 1e24, test::ball({}, 0.2));
-  DenseGrid<Vec3d> v(g);
-  for (int k = 0; k < N; ++k)
-    for (int j = 0; j < N; ++j)
-      for (int i = 0; i < N; ++i) {
-        const Vec3d x = g.nodePosition(i, j, k);
-        v(i, j, k) = Vec3d{x.y, -x.x, 1.0} * 1e4;
-      }
-  const fs::path dir = tempDir();
-  for (const bool dbl : {false, true}) {
-    const auto t0 = std::chrono::steady_clock::now();
-    const auto xf = nodeCentredTransform(g);
-    VdbConversionOptions o;
-    o.transform = xf;
-    openvdb::GridPtrVec grids;
-    if (dbl) {
-      grids = {toVdbDoubleGrid(n.view(), "n", o), toVdbDoubleGrid(n.view(), "phi", o)};
-      for (const char* name : {"H", "M", "B", "force"}) grids.push_back(toVdbVec3dGrid(v.view(), name, o));
-    } else {
-      grids = {toVdbFloatGrid(n.view(), "n", o), toVdbFloatGrid(n.view(), "phi", o)};
-      for (const char* name : {"H", "M", "B", "force"}) grids.push_back(toVdbVec3fGrid(v.view(), name, o));
-    }
-    const auto t1 = std::chrono::steady_clock::now();
-    const fs::path file = dir / (dbl ? "set_double.vdb" : "set_float.vdb");
-    openvdb::io::File(file.string()).write(grids);
-    const auto t2 = std::chrono::steady_clock::now();
-    std::printf("%d^3 field set (%s, 2 scalar + 4 vector, dense fields + sparse ball n): convert %.3f s, "
-                "write %.3f s, %.2f MB\n",
-                N, dbl ? "double" : "float", std::chrono::duration<double>(t1 - t0).count(),
-                std::chrono::duration<double>(t2 - t1).count(), double(fs::file_size(file)) / 1e6);
-  }
-}
-
 // ---------------------------------------------------------------- particle files
 
 MpmParticles randomParticles(std::size_t n, unsigned seed) {
@@ -592,29 +554,6 @@ TEST(VdbPointFile, PythonOpenVdbSeesThePointGrid) {
   const std::string particlesLine = out.substr(line, out.find('\n', line) - line);
   EXPECT_NE(particlesLine.find("ptdataidx32"), std::string::npos) << out;  // a PointDataGrid's tree
   EXPECT_NE(out.find("grid nope KeyError"), std::string::npos) << out;
-}
-
-TEST(VdbPointFile, WriteTiming) {
-  const char* env = std::getenv("LODESTONE_VDB_BENCH_PARTICLES");
-  const std::size_t n = env ? std::size_t(std::atoll(env)) : 100000;
-  const MpmParticles p = randomParticles(n, 9);
-  const fs::path dir = tempDir();
-  for (const bool withF : {false, true}) {
-    PointFileOptions o;
-    o.voxelSize = 0.005;
-    o.deformationGradient = withF;
-    const std::string file = (dir / (withF ? "with_F.vdb" : "plain.vdb")).string();
-    const auto t0 = std::chrono::steady_clock::now();
-    writeParticlesVdb(file, p, o);
-    const auto t1 = std::chrono::steady_clock::now();
-    const ParticleVdbData r = readParticlesVdb(file);
-    const auto t2 = std::chrono::steady_clock::now();
-    EXPECT_EQ(r.size(), n);
-    std::printf("%zu particles (%s): write %.3f s, read %.3f s, %.2f MB (%.1f bytes/particle)\n", n,
-                withF ? "with F" : "without F", std::chrono::duration<double>(t1 - t0).count(),
-                std::chrono::duration<double>(t2 - t1).count(), double(fs::file_size(file)) / 1e6,
-                double(fs::file_size(file)) / double(std::max<std::size_t>(n, 1)));
-  }
 }
 
 }  // namespace

@@ -308,33 +308,6 @@ TEST(VdbLevelSet, VdbBoxColliderStopsAFallingBlockLikeTheAnalyticBox) {
   EXPECT_GT(zl, 0.08);
 }
 
-TEST(VdbLevelSet, ConversionTiming) {
-  // LODESTONE_VDB_BENCH_LS_RES=R (default 20) sets the resolution: a sphere of
-  // radius R voxels, and a torus mesh of 8R x 4R quads whose tube radius is
-  // R/2 voxels. Prints mesh -> level set, level set -> core grid and emitter
-  // fill times (figures in docs/vdb.md come from R = 100).
-  const char* env = std::getenv("LODESTONE_VDB_BENCH_LS_RES");
-  const int res = env ? std::atoi(env) : 20;
-  const double R = 0.05, voxel = R / res;
-  auto sphere = openvdb::tools::createLevelSetSphere<openvdb::FloatGrid>(float(R), openvdb::Vec3f(0.f), float(voxel));
-  auto t0 = std::chrono::steady_clock::now();
-  const auto sdf = std::make_shared<const SampledSdf>(toSampledSdf(*sphere, "sphere"));
-  std::printf("sphere R/h = %d: level set (%llu active voxels) -> core grid %d x %d x %d in %.4f s\n", res,
-              static_cast<unsigned long long>(sphere->activeVoxelCount()), sdf->spec().dims.i, sdf->spec().dims.j,
-              sdf->spec().dims.k, seconds(t0));
-  const double exactV = 4.0 / 3.0 * kPi * R * R * R;
-  EXPECT_NEAR(sdf->volume(), exactV, 0.01 * exactV);
-  fill(EmitterShape::levelSetShape(Pose{}, sdf), R / 10, "sphere fill at dx = R/10, ppc 8");
-  const TriangleMesh mesh = torus({}, 0.04, 0.015, 8 * res, 4 * res);
-  MeshLevelSetOptions o;
-  o.voxelSize = 0.03 / res;
-  t0 = std::chrono::steady_clock::now();
-  const SampledSdf t = meshToSampledSdf(mesh, o, "torus");
-  std::printf("torus mesh %zu triangles -> level set -> core grid %d x %d x %d at %.3g mm: %.4f s\n",
-              mesh.triangles.size(), t.spec().dims.i, t.spec().dims.j, t.spec().dims.k, o.voxelSize * 1e3, seconds(t0));
-  EXPECT_NEAR(t.volume(), mesh.volume(), 0.02 * mesh.volume());
-}
-
 // ------------------------------------------------------------ density input
 
 TEST(VdbDensityInput, ParticlePathFieldIsReproducedFromItsDensityFile) {
@@ -510,33 +483,5 @@ TEST(VdbLevelSet, SceneShapesFromFiles) {
   expectMessageNames([&] { examples::parseScene(text, source, {}); }, {"bodies[0]", "OpenVDB"});
 }
 #endif
-
-// ------------------------------------------------------------ measurements
-
-TEST(VdbFieldFile, SolvedFieldsWriteTiming) {
-  // LODESTONE_VDB_BENCH_SOLVE_N=128 gives the figures in docs/vdb.md: a ball
-  // of paper material in a uniform field, solved on N^3, written as the six
-  // fields in float and double.
-  const char* env = std::getenv("LODESTONE_VDB_BENCH_SOLVE_N");
-  const int N = env ? std::atoi(env) : 24;
-  const GridSpec g = test::cubeGrid(N, 0.1);
-  const MagneticMaterial mat = linearMaterial(0.8, 1e24);
-  MagneticForceStage stage(g, mat);
-  const auto t0 = std::chrono::steady_clock::now();
-  const MagneticStageReport r =
-      stage.runOnDensity(test::rasterize(g, 1e24, test::ball({}, 0.04), 2).view(), UniformField({0, 0, 1e4}), 0.0);
-  ASSERT_TRUE(r.converged());
-  std::printf("%d^3 solve: %.2f s\n", N, seconds(t0));
-  for (const bool dbl : {false, true}) {
-    VdbWriteOptions o;
-    o.doublePrecision = dbl;
-    const fs::path file = tempDir() / (dbl ? "solve_double.vdb" : "solve_float.vdb");
-    const auto t1 = std::chrono::steady_clock::now();
-    writeFieldsVdb(file.string(), stage, {}, o);
-    std::printf("%d^3 solved fields n, phi, H, M, B, force (%s): write %.3f s, %.2f MB\n", N, dbl ? "double" : "float",
-                seconds(t1), double(fs::file_size(file)) / 1e6);
-    EXPECT_GT(fs::file_size(file), 0u);
-  }
-}
 
 }  // namespace lodestone

@@ -1,0 +1,306 @@
+// Sizes and times of the VDB files (lodestone::vdb_io), the figures of
+// docs/vdb.md:
+//   fields     a synthetic field set on N^3 nodes (2 scalar + 4 vector grids,
+//              the vectors nonzero everywhere, the density a sparse ball):
+//              conversion to VDB grids and the write, float and double;
+//   solved     the six fields of an actual N^3 solve (a ball of linear
+//              material, chi = 0.8, in a uniform field, open boundary):
+//              the solve, then writeFieldsVdb (conversion and write);
+//   particles  P particles written and read back, without and with F;
+//   level set  an OpenVDB sphere of radius R voxels to a SampledSdf, the
+//              emitter fill of it at ppc 8 (dx = R/10), and a torus mesh of
+//              8R x 4R quads (tube radius R/2 voxels) through meshToLevelSet.
+//
+//   lodestone-bench-vdb-io [--nodes 128] [--solve-nodes 128]
+//                          [--particles 100000] [--level-set-res 100]
+//                          [--dir DIR] [--csv FILE]
+// Files go to DIR (default: a fresh folder under the system temp directory,
+// removed at the end).
+#include <unistd.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <memory>
+#include <random>
+#include <string>
+
+#include <openvdb/openvdb.h>
+#include <openvdb/tools/LevelSetSphere.h>
+#include <tbb/info.h>
+
+#include "bench_args.h"
+#include "lodestone/core/base/constants.h"
+#include "lodestone/core/base/error.h"
+#include "lodestone/core/field/material.h"
+#include "lodestone/core/mpm/emitter.h"
+#include "lodestone/core/mpm/particles.h"
+#include "lodestone/core/sources/uniform_field.h"
+#include "lodestone/core/stage/magnetic_stage.h"
+#include "lodestone/vdb_io/field_file.h"
+#include "lodestone/vdb_io/grid_conversion.h"
+#include "lodestone/vdb_io/level_set_file.h"
+#include "lodestone/vdb_io/point_file.h"
+#include "lodestone_test/scenes.h"
+
+using namespace lodestone;
+using lodestone::bench::parseList;
+namespace fs = std::filesystem;
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double secondsSince(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+double megabytes(const fs::path& f) { return double(fs::file_size(f)) / 1e6; }
+
+/// One CSV row: case, what was measured, item count (nodes, particles,
+/// triangles or voxels), seconds of the stages (negative: not applicable), MB.
+struct Row {
+  std::string kase, what;
+  double items = 0, convertS = -1, writeS = -1, readS = -1, mb = -1;
+};
+
+class Table {
+ public:
+  explicit Table(const std::string& path) : csv_(path) {
+    require(bool(csv_), "cannot write ", path);
+    csv_ << "case,what,items,convert_s,write_s,read_s,megabytes,threads\n";
+  }
+  void add(const Row& r) {
+    std::printf("%-10s %-58s %10.4g %9.4f %9.4f %9.4f %9.2f\n", r.kase.c_str(), r.what.c_str(), r.items, r.convertS,
+                r.writeS, r.readS, r.mb);
+    std::fflush(stdout);
+    csv_ << r.kase << ",\"" << r.what << "\"," << r.items << ',' << r.convertS << ',' << r.writeS << ',' << r.readS << ','
+         << r.mb << ',' << tbb::info::default_concurrency() << '\n';
+  }
+
+ private:
+  std::ofstream csv_;
+};
+
+void fieldSet(Table& table, const fs::path& dir, int N) {
+  const GridSpec g = test::cubeGrid(N, 0.5);
+  const DenseGrid<double> n = test::rasterize(g, 1e24, test::ball({}, 0.2));
+  DenseGrid<Vec3d> v(g);
+  for (int k = 0; k < N; ++k)
+    for (int j = 0; j < N; ++j)
+      for (int i = 0; i < N; ++i) {
+        const Vec3d x = g.nodePosition(i, j, k);
+        v(i, j, k) = Vec3d{x.y, -x.x, 1.0} * 1e4;
+      }
+  for (const bool dbl : {false, true}) {
+    const auto t0 = Clock::now();
+    VdbConversionOptions o;
+    o.transform = nodeCentredTransform(g);
+    openvdb::GridPtrVec grids;
+    if (dbl) {
+      grids = {toVdbDoubleGrid(n.view(), "n", o), toVdbDoubleGrid(n.view(), "phi", o)};
+      for (const char* name : {"H", "M", "B", "force"}) grids.push_back(toVdbVec3dGrid(v.view(), name, o));
+    } else {
+      grids = {toVdbFloatGrid(n.view(), "n", o), toVdbFloatGrid(n.view(), "phi", o)};
+      for (const char* name : {"H", "M", "B", "force"}) grids.push_back(toVdbVec3fGrid(v.view(), name, o));
+    }
+    Row r{"fields", concat(N, "^3 synthetic, 2 scalar + 4 vector, ", dbl ? "double" : "float"), double(g.nodeCount())};
+    r.convertS = secondsSince(t0);
+    const fs::path file = dir / (dbl ? "set_double.vdb" : "set_float.vdb");
+    const auto t1 = Clock::now();
+    openvdb::io::File(file.string()).write(grids);
+    r.writeS = secondsSince(t1);
+    r.mb = megabytes(file);
+    table.add(r);
+  }
+  // A sparse ball against a grid that varies everywhere (96^3, float).
+  const GridSpec h = test::cubeGrid(96, 0.5);
+  const DenseGrid<double> sparse = test::rasterize(h, 1.0, test::ball({0.1, -0.05, 0.2}, 0.03));
+  DenseGrid<double> dense = sparse;
+  for (std::size_t m = 0; m < dense.size(); ++m) dense[m] += 0.5 + 1e-3 * double(m % 97);
+  for (const bool isDense : {false, true}) {
+    const fs::path file = dir / (isDense ? "dense.vdb" : "sparse.vdb");
+    const auto t0 = Clock::now();
+    openvdb::io::File(file.string()).write({toVdbFloatGrid((isDense ? dense : sparse).view(), "n")});
+    Row r{"fields", isDense ? "96^3 float, varying everywhere" : "96^3 float, sparse ball (r = 3 cells)",
+          double(h.nodeCount())};
+    r.writeS = secondsSince(t0);
+    r.mb = megabytes(file);
+    table.add(r);
+  }
+}
+
+void solvedFields(Table& table, const fs::path& dir, int N) {
+  const GridSpec g = test::cubeGrid(N, 0.1);
+  const MagneticMaterial mat = linearMaterial(0.8, 1e24);
+  MagneticForceStage stage(g, mat);
+  const auto t0 = Clock::now();
+  const MagneticStageReport rep =
+      stage.runOnDensity(test::rasterize(g, 1e24, test::ball({}, 0.04), 2).view(), UniformField({0, 0, 1e4}), 0.0);
+  require(rep.converged(), "the ", N, "^3 solve did not converge: ", rep.solve.message);
+  Row solve{"solved", concat(N, "^3 solve, linear ball chi 0.8 (convert_s: the solve)"), double(g.nodeCount())};
+  solve.convertS = secondsSince(t0);
+  table.add(solve);
+  for (const bool dbl : {false, true}) {
+    VdbWriteOptions o;
+    o.doublePrecision = dbl;
+    const fs::path file = dir / (dbl ? "solve_double.vdb" : "solve_float.vdb");
+    const auto t1 = Clock::now();
+    writeFieldsVdb(file.string(), stage, {}, o);
+    Row r{"solved", concat(N, "^3 writeFieldsVdb n phi H M B force, ", dbl ? "double" : "float"),
+          double(g.nodeCount())};
+    r.writeS = secondsSince(t1);
+    r.mb = megabytes(file);
+    table.add(r);
+  }
+}
+
+MpmParticles randomParticles(std::size_t n, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(-1, 1);
+  MpmParticles p;
+  p.reserve(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    p.add({0.3 + 0.25 * u(rng), -0.1 + 0.2 * u(rng), 0.05 * u(rng)}, {u(rng), 3 * u(rng), -2e-3 * u(rng)},
+          1e-3 * (1.5 + u(rng)), 1e-6, i % 3 == 0 ? 0.0 : 1e9 * (1.5 + u(rng)), std::uint32_t(rng() % 5));
+    p.J[i] = 1 + 0.1 * u(rng);
+    for (int a = 0; a < 3; ++a)
+      for (int b = 0; b < 3; ++b) p.F[i](a, b) = (a == b ? 1.0 : 0.0) + 0.05 * u(rng);
+  }
+  return p;
+}
+
+void particles(Table& table, const fs::path& dir, std::size_t n) {
+  const MpmParticles p = randomParticles(n, 9);
+  for (const bool withF : {false, true}) {
+    PointFileOptions o;
+    o.voxelSize = 0.005;
+    o.deformationGradient = withF;
+    const fs::path file = dir / (withF ? "with_F.vdb" : "plain.vdb");
+    const auto t0 = Clock::now();
+    writeParticlesVdb(file.string(), p, o);
+    Row r{"particles", withF ? "voxel 5 mm, with F" : "voxel 5 mm, without F", double(n)};
+    r.writeS = secondsSince(t0);
+    const auto t1 = Clock::now();
+    const ParticleVdbData back = readParticlesVdb(file.string());
+    r.readS = secondsSince(t1);
+    require(back.size() == n, "read ", back.size(), " particles of ", n);
+    r.mb = megabytes(file);
+    table.add(r);
+  }
+}
+
+/// A closed torus about the z axis (major radius R, minor r, m) as quads split in two.
+TriangleMesh torus(double R, double r, int nu, int nv) {
+  TriangleMesh m;
+  for (int i = 0; i < nu; ++i)
+    for (int j = 0; j < nv; ++j) {
+      const double u = 2 * kPi * i / nu, v = 2 * kPi * j / nv;
+      m.vertices.push_back({(R + r * std::cos(v)) * std::cos(u), (R + r * std::cos(v)) * std::sin(u), r * std::sin(v)});
+    }
+  const auto id = [&](int i, int j) { return std::uint32_t((i % nu) * nv + (j % nv)); };
+  for (int i = 0; i < nu; ++i)
+    for (int j = 0; j < nv; ++j) {
+      m.triangles.push_back({id(i, j), id(i + 1, j), id(i + 1, j + 1)});
+      m.triangles.push_back({id(i, j), id(i + 1, j + 1), id(i, j + 1)});
+    }
+  if (m.volume() < 0)
+    for (auto& t : m.triangles) std::swap(t[1], t[2]);
+  return m;
+}
+
+void levelSets(Table& table, int res) {
+  const double R = 0.05, voxel = R / res;
+  auto sphere = openvdb::tools::createLevelSetSphere<openvdb::FloatGrid>(float(R), openvdb::Vec3f(0.f), float(voxel));
+  auto t0 = Clock::now();
+  const auto sdf = std::make_shared<const SampledSdf>(toSampledSdf(*sphere, "sphere"));
+  Row conv{"level set",
+           concat("sphere R/h = ", res, " -> SampledSdf ", sdf->spec().dims.i, "^3 (items: active voxels)"),
+           double(sphere->activeVoxelCount())};
+  conv.convertS = secondsSince(t0);
+  table.add(conv);
+  MpmParticles p;
+  EmitterSettings e;
+  e.cellSize = R / 10;
+  t0 = Clock::now();
+  const EmitReport filled = emitParticles(p, EmitterShape::levelSetShape(Pose{}, sdf), neoHookeanSolid(1e5, 0.3, 1000),
+                                          0, e);
+  Row fill{"level set", "emitter fill of the sphere, dx = R/10, ppc 8 (items: particles)", double(filled.particles)};
+  fill.convertS = secondsSince(t0);
+  table.add(fill);
+  const TriangleMesh mesh = torus(0.04, 0.015, 8 * res, 4 * res);
+  MeshLevelSetOptions o;
+  o.voxelSize = 0.03 / res;
+  t0 = Clock::now();
+  const SampledSdf t = meshToSampledSdf(mesh, o, "torus");
+  Row tor{"level set",
+          concat("torus mesh -> level set -> SampledSdf ", t.spec().dims.i, "x", t.spec().dims.j, "x",
+                 t.spec().dims.k, " (items: triangles)"),
+          double(mesh.triangles.size())};
+  tor.convertS = secondsSince(t0);
+  table.add(tor);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  try {
+    int nodes = 128, solveNodes = 128, res = 100;
+    double particleCount = 1e5;
+    std::string csvPath = "bench_vdb_io.csv", dirArg;
+    for (int a = 1; a < argc; ++a) {
+      const std::string arg = argv[a];
+      const auto next = [&]() -> std::string {
+        if (a + 1 >= argc) throw InvalidArgument(concat(arg, " needs a value"));
+        return argv[++a];
+      };
+      if (arg == "--nodes")
+        nodes = int(parseList(next(), "--nodes").at(0));
+      else if (arg == "--solve-nodes")
+        solveNodes = int(parseList(next(), "--solve-nodes").at(0));
+      else if (arg == "--particles")
+        particleCount = parseList(next(), "--particles").at(0);
+      else if (arg == "--level-set-res")
+        res = int(parseList(next(), "--level-set-res").at(0));
+      else if (arg == "--dir")
+        dirArg = next();
+      else if (arg == "--csv")
+        csvPath = next();
+      else if (arg == "--help" || arg == "-h") {
+        std::printf(
+            "lodestone-bench-vdb-io: sizes and times of the VDB field, particle and level-set files\n"
+            "  --nodes N          nodes per axis of the synthetic field set (default 128; 0 skips it)\n"
+            "  --solve-nodes N    nodes per axis of the solved field set (default 128; 0 skips it)\n"
+            "  --particles P      particles written and read (default 1e5; 0 skips them)\n"
+            "  --level-set-res R  sphere radius in voxels (default 100; 0 skips the level sets)\n"
+            "  --dir DIR          where the files go (default: a temporary folder, removed at the end)\n"
+            "  --csv FILE         CSV output (default bench_vdb_io.csv)\n");
+        return 0;
+      } else {
+        throw InvalidArgument(concat("unknown option '", arg, "' (see --help)"));
+      }
+    }
+    require(nodes == 0 || (nodes >= 8 && nodes <= 1024), "--nodes: ", nodes, " is not 0 or in 8..1024");
+    require(solveNodes == 0 || (solveNodes >= 8 && solveNodes <= 1024), "--solve-nodes: ", solveNodes,
+            " is not 0 or in 8..1024");
+    require(particleCount >= 0 && particleCount <= 1e9, "--particles: ", particleCount, " is not in 0..1e9");
+    require(res >= 0 && res <= 1000, "--level-set-res: ", res, " is not in 0..1000");
+    const bool tempDir = dirArg.empty();
+    const fs::path dir =
+        tempDir ? fs::temp_directory_path() / ("lodestone_bench_vdb_" + std::to_string(::getpid())) : fs::path(dirArg);
+    fs::create_directories(dir);
+    initializeVdb();
+    Table table(csvPath);
+    std::printf("Lodestone VDB file benchmark (%d threads; times in s, sizes in MB; -1: not measured)\n",
+                tbb::info::default_concurrency());
+    std::printf("%-10s %-58s %10s %9s %9s %9s %9s\n", "case", "what", "items", "convert", "write", "read", "MB");
+    if (nodes > 0) fieldSet(table, dir, nodes);
+    if (solveNodes > 0) solvedFields(table, dir, solveNodes);
+    if (particleCount > 0) particles(table, dir, std::size_t(particleCount));
+    if (res > 0) levelSets(table, res);
+    if (tempDir) fs::remove_all(dir);
+    std::printf("CSV written to %s\n", csvPath.c_str());
+    return 0;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "lodestone-bench-vdb-io: %s\n", e.what());
+    return 1;
+  }
+}
