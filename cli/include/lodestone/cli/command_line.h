@@ -1,0 +1,172 @@
+#pragma once
+// Command-line parsing for Lodestone's programs, on CLI11: each option is
+// declared once (name, value rule, default, help line) and the usage text is
+// generated from the declarations, so help and options cannot drift. What this
+// adds to CLI11: value rules whose errors name the option and the bad value in
+// the programs' words ("--dx: must be > 0 m, got -1"), and one ending for
+// --help, --version and bad arguments (parse()).
+#include <CLI/CLI.hpp>
+
+#include <climits>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <functional>
+#include <iostream>
+#include <limits>
+#include <optional>
+#include <sstream>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace lodestone::cli {
+
+/// The whole of `text` as a finite number (strtod syntax); nullopt otherwise.
+inline std::optional<double> toNumber(const std::string& text) {
+  char* end = nullptr;
+  const double v = std::strtod(text.c_str(), &end);
+  if (text.empty() || *end != '\0' || !std::isfinite(v)) return std::nullopt;
+  return v;
+}
+
+/// The shortest text that reads back as `v` ("0.5", "1e-06", "300").
+inline std::string formatNumber(double v) {
+  std::ostringstream s;
+  for (int digits = 1; digits <= std::numeric_limits<double>::max_digits10; ++digits) {
+    s.str("");
+    s.precision(digits);
+    s << v;
+    if (std::strtod(s.str().c_str(), nullptr) == v) break;
+  }
+  return s.str();
+}
+
+/// A value rule: `check` returns the error for a bad text ("" for a good one);
+/// the option's name is put in front of it. `description` is shown in the help
+/// beside the value's name (empty: nothing).
+inline CLI::Validator rule(std::string description, std::function<std::string(const std::string&)> check) {
+  return CLI::Validator([check = std::move(check)](std::string& text) { return check(text); }, std::move(description));
+}
+
+/// A finite number: "'abc' is not a number".
+inline CLI::Validator number() {
+  return rule(
+      "", [](const std::string& text) { return toNumber(text) ? std::string() : "'" + text + "' is not a number"; });
+}
+
+/// A finite number > `lo` (`unit` after the bound in the error: "must be > 0 m, got -1").
+inline CLI::Validator numberAbove(double lo, const std::string& unit = "") {
+  return rule("", [lo, unit](const std::string& text) -> std::string {
+    const std::optional<double> v = toNumber(text);
+    if (!v) return "'" + text + "' is not a number";
+    if (!(*v > lo)) return "must be > " + formatNumber(lo) + (unit.empty() ? "" : " " + unit) + ", got " + text;
+    return "";
+  });
+}
+
+/// A whole number in lo..hi (hi = LLONG_MAX: no upper bound); `what` names
+/// what is counted in the error ("must be a whole number of frames in 0..1000000, got 2.5").
+inline CLI::Validator wholeNumber(long long lo, long long hi = LLONG_MAX, const std::string& what = "") {
+  return rule("", [lo, hi, what](const std::string& text) -> std::string {
+    const std::optional<double> v = toNumber(text);
+    if (!v) return "'" + text + "' is not a number";
+    if (!(*v == std::floor(*v) && *v >= double(lo) && *v <= double(hi)))
+      return "must be a whole number" + (what.empty() ? "" : " of " + what) +
+             (hi == LLONG_MAX ? " >= " + std::to_string(lo) : " in " + std::to_string(lo) + ".." + std::to_string(hi)) +
+             ", got " + text;
+    return "";
+  });
+}
+
+/// An option whose text is read as a number into `target` (by strtod, the
+/// reading the rules check; an integer target gets the whole number). Give it
+/// a rule with ->check(); ->default_str(formatNumber(target)) shows the default.
+template <class T>
+CLI::Option* addNumber(CLI::App& app, const std::string& name, T& target, const std::string& help) {
+  return app.add_option_function<std::string>(
+      name, [&target](const std::string& text) { target = static_cast<T>(toNumber(text).value_or(0)); }, help);
+}
+
+/// Help lines are wrapped to this many characters (by parse()).
+constexpr std::size_t kHelpWidth = 100;
+
+/// The help layout: option names in a column `column` characters wide,
+/// "-h,--help". Call it before adding subcommands, which take the layout from
+/// their parent.
+inline void helpLayout(CLI::App& app, std::size_t column = 30) {
+  app.get_formatter()->column_width(column);
+  app.set_help_flag("-h,--help", "print this help and exit");
+}
+
+/// `text` with its lines broken at spaces to at most `width` characters
+/// (a longer word stays whole); its own line breaks are kept.
+inline std::string wrap(const std::string& text, std::size_t width) {
+  std::string out, line, word;
+  std::stringstream lines(text);
+  bool firstLine = true;
+  while (std::getline(lines, line)) {
+    if (!firstLine) out += '\n';
+    firstLine = false;
+    std::stringstream words(line);
+    std::size_t used = 0;
+    while (words >> word) {
+      if (used > 0 && used + 1 + word.size() > width) {
+        out += '\n';
+        used = 0;
+      } else if (used > 0) {
+        out += ' ';
+        ++used;
+      }
+      out += word;
+      used += word.size();
+    }
+  }
+  return out;
+}
+
+/// Wraps the help lines of `app`'s options and subcommands (and theirs) to
+/// `width` characters in all.
+inline void wrapHelp(CLI::App& app, std::size_t width = kHelpWidth) {
+  const std::size_t column = app.get_formatter()->get_column_width();
+  const std::size_t room = width > column + 20 ? width - column : 20;
+  for (CLI::Option* o : app.get_options({})) o->description(wrap(o->get_description(), room));
+  for (CLI::App* sub : app.get_subcommands(std::function<bool(CLI::App*)>{})) {
+    sub->description(wrap(sub->get_description(), room));
+    wrapHelp(*sub, width);
+  }
+}
+
+/// The command line of the deepest (sub)command `app` parsed: "lodestone run".
+inline std::string commandPath(const CLI::App& app) {
+  std::string path = app.get_name();
+  const CLI::App* at = &app;
+  while (!at->get_subcommands().empty()) {
+    at = at->get_subcommands().front();
+    path += " " + at->get_name();
+  }
+  return path;
+}
+
+/// Parses the command line. Returns nullopt to go on, or the code to exit
+/// with: 0 after --help or --version (printed on stdout), `errorCode` after a
+/// bad argument, with "NAME: MESSAGE (see NAME [COMMAND] --help)" on stderr.
+inline std::optional<int> parse(CLI::App& app, int argc, const char* const* argv, int errorCode = 1) {
+  wrapHelp(app);
+  try {
+    app.parse(argc, argv);
+    return std::nullopt;
+  } catch (const CLI::CallForHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::CallForAllHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::CallForVersion& e) {
+    return app.exit(e);
+  } catch (const CLI::ParseError& e) {
+    std::cout.flush();
+    std::cerr << app.get_name() << ": " << e.what() << " (see " << commandPath(app) << " --help)" << std::endl;
+    return errorCode;
+  }
+}
+
+}  // namespace lodestone::cli
