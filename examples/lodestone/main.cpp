@@ -103,7 +103,7 @@ std::optional<int> parseArgs(int argc, char** argv, Args& a) {
   };
   const auto addResolution = [&](CLI::App& c) {
     c.add_flag("--full", a.options.full, "paper resolution: use the scene's domain.full_dx");
-    cli::addNumber(c, "--dx", a.options.dx, "override the grid spacing, m (> 0)")
+    cli::addNumber(c, "--dx", a.options.dx, "override the grid spacing, m")
         ->type_name("M")
         ->check(cli::numberAbove(0, "m"));
   };

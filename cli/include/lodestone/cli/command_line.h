@@ -43,8 +43,9 @@ inline std::string formatNumber(double v) {
 }
 
 /// A value rule: `check` returns the error for a bad text ("" for a good one);
-/// the option's name is put in front of it. `description` is shown in the help
-/// beside the value's name (empty: nothing).
+/// the option's name is put in front of it. `description` says what the rule
+/// accepts; HelpFormatter puts it at the end of the option's help line
+/// (empty: nothing).
 inline CLI::Validator rule(std::string description, std::function<std::string(const std::string&)> check) {
   return CLI::Validator([check = std::move(check)](std::string& text) { return check(text); }, std::move(description));
 }
@@ -57,25 +58,54 @@ inline CLI::Validator number() {
 
 /// A finite number > `lo` (`unit` after the bound in the error: "must be > 0 m, got -1").
 inline CLI::Validator numberAbove(double lo, const std::string& unit = "") {
-  return rule("", [lo, unit](const std::string& text) -> std::string {
-    const std::optional<double> v = toNumber(text);
-    if (!v) return "'" + text + "' is not a number";
-    if (!(*v > lo)) return "must be > " + formatNumber(lo) + (unit.empty() ? "" : " " + unit) + ", got " + text;
-    return "";
-  });
+  return rule("> " + formatNumber(lo) + (unit.empty() ? "" : " " + unit),
+              [lo, unit](const std::string& text) -> std::string {
+                const std::optional<double> v = toNumber(text);
+                if (!v) return "'" + text + "' is not a number";
+                if (!(*v > lo))
+                  return "must be > " + formatNumber(lo) + (unit.empty() ? "" : " " + unit) + ", got " + text;
+                return "";
+              });
+}
+
+/// A finite number in [lo, hi] (`unit` after the bounds in the error).
+inline CLI::Validator numberIn(double lo, double hi, const std::string& unit = "") {
+  return rule("in [" + formatNumber(lo) + ", " + formatNumber(hi) + "]" + (unit.empty() ? "" : " " + unit),
+              [lo, hi, unit](const std::string& text) -> std::string {
+                const std::optional<double> v = toNumber(text);
+                if (!v) return "'" + text + "' is not a number";
+                if (!(*v >= lo && *v <= hi))
+                  return "must be in [" + formatNumber(lo) + ", " + formatNumber(hi) + "]" +
+                         (unit.empty() ? "" : " " + unit) + ", got " + text;
+                return "";
+              });
 }
 
 /// A whole number in lo..hi (hi = LLONG_MAX: no upper bound); `what` names
 /// what is counted in the error ("must be a whole number of frames in 0..1000000, got 2.5").
 inline CLI::Validator wholeNumber(long long lo, long long hi = LLONG_MAX, const std::string& what = "") {
-  return rule("", [lo, hi, what](const std::string& text) -> std::string {
-    const std::optional<double> v = toNumber(text);
-    if (!v) return "'" + text + "' is not a number";
-    if (!(*v == std::floor(*v) && *v >= double(lo) && *v <= double(hi)))
-      return "must be a whole number" + (what.empty() ? "" : " of " + what) +
-             (hi == LLONG_MAX ? " >= " + std::to_string(lo) : " in " + std::to_string(lo) + ".." + std::to_string(hi)) +
-             ", got " + text;
-    return "";
+  return rule("a whole number" + (hi == LLONG_MAX ? " >= " + std::to_string(lo)
+                                                  : " in " + std::to_string(lo) + ".." + std::to_string(hi)),
+              [lo, hi, what](const std::string& text) -> std::string {
+                const std::optional<double> v = toNumber(text);
+                if (!v) return "'" + text + "' is not a number";
+                if (!(*v == std::floor(*v) && *v >= double(lo) && *v <= double(hi)))
+                  return "must be a whole number" + (what.empty() ? "" : " of " + what) +
+                         (hi == LLONG_MAX ? " >= " + std::to_string(lo)
+                                          : " in " + std::to_string(lo) + ".." + std::to_string(hi)) +
+                         ", got " + text;
+                return "";
+              });
+}
+
+/// One of `choices`: "'x' is not one of a, b".
+inline CLI::Validator oneOf(std::vector<std::string> choices) {
+  std::string list;
+  for (const std::string& c : choices) list += (list.empty() ? "" : ", ") + c;
+  return rule("one of " + list, [choices = std::move(choices), list](const std::string& text) -> std::string {
+    for (const std::string& c : choices)
+      if (text == c) return "";
+    return "'" + text + "' is not one of " + list;
   });
 }
 
@@ -86,17 +116,6 @@ template <class T>
 CLI::Option* addNumber(CLI::App& app, const std::string& name, T& target, const std::string& help) {
   return app.add_option_function<std::string>(
       name, [&target](const std::string& text) { target = static_cast<T>(toNumber(text).value_or(0)); }, help);
-}
-
-/// Help lines are wrapped to this many characters (by parse()).
-constexpr std::size_t kHelpWidth = 100;
-
-/// The help layout: option names in a column `column` characters wide,
-/// "-h,--help". Call it before adding subcommands, which take the layout from
-/// their parent.
-inline void helpLayout(CLI::App& app, std::size_t column = 30) {
-  app.get_formatter()->column_width(column);
-  app.set_help_flag("-h,--help", "print this help and exit");
 }
 
 /// `text` with its lines broken at spaces to at most `width` characters
@@ -125,16 +144,75 @@ inline std::string wrap(const std::string& text, std::size_t width) {
   return out;
 }
 
-/// Wraps the help lines of `app`'s options and subcommands (and theirs) to
-/// `width` characters in all.
-inline void wrapHelp(CLI::App& app, std::size_t width = kHelpWidth) {
-  const std::size_t column = app.get_formatter()->get_column_width();
-  const std::size_t room = width > column + 20 ? width - column : 20;
-  for (CLI::Option* o : app.get_options({})) o->description(wrap(o->get_description(), room));
-  for (CLI::App* sub : app.get_subcommands(std::function<bool(CLI::App*)>{})) {
-    sub->description(wrap(sub->get_description(), room));
-    wrapHelp(*sub, width);
+/// CLI11's help layout with the value rules said in the help line: an
+/// option's name column shows "--threads N=0" (value name, default,
+/// REQUIRED) and its help line ends with what its rules accept ("a whole
+/// number in 0..1024"), taken from the rules' descriptions, so the help says
+/// what the parser checks. Help lines are wrapped to `width` characters.
+class HelpFormatter : public CLI::Formatter {
+ public:
+  HelpFormatter(std::size_t column, std::size_t width) : width_(width) { column_width(column); }
+
+  std::string make_option_opts(const CLI::Option* opt) const override {
+    std::string out;
+    if (opt->get_type_size() != 0) {
+      const std::string type = typeParts(opt).first;
+      if (!type.empty()) out += " " + type;
+      if (!opt->get_default_str().empty()) out += "=" + opt->get_default_str();
+      if (opt->get_required()) out += " " + get_label("REQUIRED");
+    }
+    return out;
   }
+
+  std::string make_option_desc(const CLI::Option* opt) const override {
+    std::string text = opt->get_description();
+    const std::string rules = typeParts(opt).second;
+    if (!rules.empty()) text += (text.empty() ? "" : "; ") + rules;
+    return wrap(text, room());
+  }
+
+  std::string make_subcommand(const CLI::App* sub) const override {
+    std::stringstream out;
+    CLI::detail::format_help(out, sub->get_display_name(true), wrap(sub->get_description(), room()),
+                             get_column_width());
+    return out.str();
+  }
+
+ private:
+  std::size_t room() const { return width_ > get_column_width() + 20 ? width_ - get_column_width() : 20; }
+
+  // The value name and the rules' descriptions ("; "-separated), which
+  // CLI11's get_type_name() joins with ':'. (get_validator() is not const
+  // but only reads.)
+  static std::pair<std::string, std::string> typeParts(const CLI::Option* opt) {
+    std::string suffix, rules;
+    auto* o = const_cast<CLI::Option*>(opt);
+    for (int i = 0;; ++i) {
+      std::string description;
+      try {
+        description = o->get_validator(i)->get_description();
+      } catch (const CLI::OptionNotFound&) {
+        break;
+      }
+      if (description.empty()) continue;
+      suffix += ":" + description;
+      rules += (rules.empty() ? "" : "; ") + description;
+    }
+    std::string type = opt->get_type_name();
+    if (type.size() >= suffix.size() && type.compare(type.size() - suffix.size(), suffix.size(), suffix) == 0)
+      type.resize(type.size() - suffix.size());
+    return {type, rules};
+  }
+
+  std::size_t width_;
+};
+
+/// The help layout (HelpFormatter: option names in a column `column`
+/// characters wide, lines wrapped to `width`) and "-h,--help". Call it before
+/// adding subcommands, which take the layout from their parent.
+inline void helpLayout(CLI::App& app, std::size_t column = 30, std::size_t width = 100) {
+  app.formatter(std::make_shared<HelpFormatter>(column, width));
+  app.set_help_flag("-h,--help", "print this help and exit");
 }
 
 /// The command line of the deepest (sub)command `app` parsed: "lodestone run".
@@ -152,7 +230,6 @@ inline std::string commandPath(const CLI::App& app) {
 /// with: 0 after --help or --version (printed on stdout), `errorCode` after a
 /// bad argument, with "NAME: MESSAGE (see NAME [COMMAND] --help)" on stderr.
 inline std::optional<int> parse(CLI::App& app, int argc, const char* const* argv, int errorCode = 1) {
-  wrapHelp(app);
   try {
     app.parse(argc, argv);
     return std::nullopt;
@@ -163,8 +240,15 @@ inline std::optional<int> parse(CLI::App& app, int argc, const char* const* argv
   } catch (const CLI::CallForVersion& e) {
     return app.exit(e);
   } catch (const CLI::ParseError& e) {
+    std::string message = e.what();
+    // "--dx: 1 required M:> 0 m missing" (CLI11's words, with the rules in
+    // the value's name) says: no value after the option.
+    const std::size_t colon = message.find(": 1 required ");
+    if (dynamic_cast<const CLI::ArgumentMismatch*>(&e) && colon != std::string::npos &&
+        message.compare(message.size() - 8, 8, " missing") == 0)
+      message = message.substr(0, colon) + " needs a value";
     std::cout.flush();
-    std::cerr << app.get_name() << ": " << e.what() << " (see " << commandPath(app) << " --help)" << std::endl;
+    std::cerr << app.get_name() << ": " << message << " (see " << commandPath(app) << " --help)" << std::endl;
     return errorCode;
   }
 }
