@@ -30,7 +30,8 @@ inline std::optional<double> toNumber(const std::string& text) {
   return v;
 }
 
-/// The shortest text that reads back as `v` ("0.5", "1e-06", "300").
+/// The shortest text that reads back as `v` ("0.5", "1e-6", "300", "1e4"; a
+/// whole number as digits unless the exponent form is shorter).
 inline std::string formatNumber(double v) {
   std::ostringstream s;
   for (int digits = 1; digits <= std::numeric_limits<double>::max_digits10; ++digits) {
@@ -39,7 +40,22 @@ inline std::string formatNumber(double v) {
     s << v;
     if (std::strtod(s.str().c_str(), nullptr) == v) break;
   }
-  return s.str();
+  // The exponent without '+' and leading zeros: "1e+04" -> "1e4", "1e-08" -> "1e-8".
+  std::string text = s.str();
+  const std::size_t e = text.find('e');
+  if (e != std::string::npos) {
+    std::size_t digits = e + 1;
+    if (digits < text.size() && text[digits] == '+')
+      text.erase(digits, 1);
+    else if (digits < text.size() && text[digits] == '-')
+      ++digits;
+    while (digits + 1 < text.size() && text[digits] == '0') text.erase(digits, 1);
+  }
+  if (v == std::floor(v) && std::fabs(v) < 1e15) {
+    const std::string whole = std::to_string(static_cast<long long>(v));
+    if (whole.size() <= text.size()) return whole;
+  }
+  return text;
 }
 
 /// A value rule: `check` returns the error for a bad text ("" for a good one);
@@ -116,6 +132,52 @@ template <class T>
 CLI::Option* addNumber(CLI::App& app, const std::string& name, T& target, const std::string& help) {
   return app.add_option_function<std::string>(
       name, [&target](const std::string& text) { target = static_cast<T>(toNumber(text).value_or(0)); }, help);
+}
+
+/// Comma-separated finite numbers ("64,128"); nullopt when an item is not one
+/// (numberList() says which).
+inline std::optional<std::vector<double>> toNumberList(const std::string& text) {
+  std::vector<double> values;
+  std::stringstream items(text);
+  std::string item;
+  while (std::getline(items, item, ',')) {
+    const std::optional<double> v = toNumber(item);
+    if (!v) return std::nullopt;
+    values.push_back(*v);
+  }
+  return values;
+}
+
+/// Comma-separated finite numbers: "bad value 'x'" names the first bad item.
+inline CLI::Validator numberList() {
+  return rule("comma-separated numbers", [](const std::string& text) -> std::string {
+    std::stringstream items(text);
+    std::string item;
+    while (std::getline(items, item, ','))
+      if (!toNumber(item)) return "bad value '" + item + "'";
+    return "";
+  });
+}
+
+/// "64,128" for {64, 128}.
+inline std::string formatNumberList(const std::vector<double>& values) {
+  std::string text;
+  for (double v : values) text += (text.empty() ? "" : ",") + formatNumber(v);
+  return text;
+}
+
+/// An option of comma-separated numbers read into `target`, shown with
+/// `target`'s values as the default.
+inline CLI::Option* addNumberList(CLI::App& app, const std::string& name, std::vector<double>& target,
+                                  const std::string& help) {
+  const std::string shown = formatNumberList(target);
+  return app
+      .add_option_function<std::string>(
+          name, [&target](const std::string& text) { target = toNumberList(text).value_or(std::vector<double>{}); },
+          help)
+      ->type_name("LIST")
+      ->check(numberList())
+      ->default_str(shown);
 }
 
 /// `text` with its lines broken at spaces to at most `width` characters
