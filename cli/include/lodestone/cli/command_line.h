@@ -3,13 +3,14 @@
 // declared once (name, value rule, default, help line) and the usage text is
 // generated from the declarations, so help and options cannot drift. What this
 // adds to CLI11: value rules whose errors name the option and the bad value in
-// the programs' words ("--dx: must be > 0 m, got -1"), and one ending for
-// --help, --version and bad arguments (parse()).
+// the programs' words ("--dx: must be > 0 m, got -1") and whose descriptions
+// end the option's help line (HelpFormatter); options read with strtod
+// (addNumber, addNumberList); and one ending for --help, --version and bad
+// arguments (parse()).
 #include <CLI/CLI.hpp>
 
 #include <climits>
 #include <cmath>
-#include <cstdio>
 #include <cstdlib>
 #include <functional>
 #include <iostream>
