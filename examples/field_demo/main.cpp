@@ -14,7 +14,6 @@
 //   slice_force.png   |t| force density on the same plane (log scale, inferno)
 //   profile.csv       |H|, H_z, M_z, n, ... along the vertical centre line
 #include <algorithm>
-#include <cerrno>
 #include <chrono>
 #include <cmath>
 #include <cstdint>
@@ -34,6 +33,8 @@
 
 #include <tbb/global_control.h>
 #include <tbb/info.h>
+
+#include "lodestone/cli/command_line.h"
 
 #include "colormap.h"
 #include "lodestone/core/base/stopwatch.h"
@@ -78,110 +79,58 @@ struct Options {
   std::string out = "./demo_out";
 };
 
-class UsageError : public std::runtime_error {
- public:
-  using std::runtime_error::runtime_error;
-};
-
-void printHelp(std::ostream& os) {
-  const Options d;
-  os << "lodestone-field-demo: nonlinear magnetostatics of a ferrofluid ball above a permanent magnet\n"
-        "\n"
-        "Scene: a ball (radius " << kBallRadius << " m, centre z = " << kBallCentreZ
-     << " m) of the paper's material (Sun et al. 2021, Table 2),\n"
-        "8 material points per cell, above an axially magnetized cylinder magnet (radius "
-     << kMagnetRadius << " m, length " << 2 * kMagnetHalfLength << " m,\n"
-        "remanence " << kRemanence << " T, centre z = " << kMagnetCentreZ << " m) in a cubic grid of side "
-     << kBoxSide << " m centred on the origin.\n"
-        "\n"
-        "Usage: lodestone-field-demo [options]\n"
-        "\n"
-        "Options (also accepted as --name=value):\n"
-        "  --resolution N   grid nodes per axis; integer in 16..256 (default " << d.resolution << ")\n"
-        "  --field H0       extra uniform field along +z, A/m; |H0| <= 1e7 (default " << d.field << ")\n"
-        "  --law L          magnetization law: langevin (the paper's, saturating) or linear\n"
-        "                   (its low-field linearization, chi0 ~ 0.91) (default " << d.law << ")\n"
-        "  --boundary B     grid boundary: open (far-field multipole potential) or shield\n"
-        "                   (the paper's wall, H.n = H_ext.n) (default " << d.boundary << ")\n"
-        "  --tolerance T    Newton stop: relative residual, dimensionless; in [1e-14, 1e-2]\n"
-        "                   (default " << d.tolerance << ")\n"
-        "  --threads N      worker threads; 0 = all hardware threads; integer in 0..1024 (default 0)\n"
-        "  --out DIR        output directory, created if missing (default " << d.out << ")\n"
-        "  -h, --help       print this help and exit\n"
-        "\n"
-        "Writes DIR/field_solve.json, DIR/slice_H.png, DIR/slice_B_ratio.png, DIR/slice_force.png and\n"
-        "DIR/profile.csv.\n"
-        "Exit status: 0 on success, 1 on bad options, errors or a field solve that did not converge.\n";
-}
-
-double parseDouble(const std::string& name, const std::string& text) {
-  errno = 0;
-  char* end = nullptr;
-  const double v = std::strtod(text.c_str(), &end);
-  if (text.empty() || end != text.c_str() + text.size() || errno == ERANGE || !std::isfinite(v))
-    throw UsageError("option " + name + ": '" + text + "' is not a finite number");
-  return v;
-}
-
-int parseInt(const std::string& name, const std::string& text) {
-  errno = 0;
-  char* end = nullptr;
-  const long v = std::strtol(text.c_str(), &end, 10);
-  if (text.empty() || end != text.c_str() + text.size() || errno == ERANGE || v < -1000000 || v > 1000000)
-    throw UsageError("option " + name + ": '" + text + "' is not an integer");
-  return int(v);
-}
-
-// Returns nullopt when --help was given.
-std::optional<Options> parseOptions(int argc, char** argv) {
-  Options o;
-  for (int a = 1; a < argc; ++a) {
-    std::string arg = argv[a];
-    if (arg == "-h" || arg == "--help") return std::nullopt;
-    if (arg.rfind("--", 0) != 0) throw UsageError("unexpected argument '" + arg + "' (options start with --)");
-    std::string value;
-    bool haveValue = false;
-    if (const auto eq = arg.find('='); eq != std::string::npos) {
-      value = arg.substr(eq + 1);
-      arg = arg.substr(0, eq);
-      haveValue = true;
-    }
-    const bool known = arg == "--resolution" || arg == "--field" || arg == "--law" || arg == "--boundary" ||
-                       arg == "--tolerance" || arg == "--threads" || arg == "--out";
-    if (!known) throw UsageError("unknown option '" + arg + "'");
-    if (!haveValue) {
-      if (a + 1 >= argc) throw UsageError("option " + arg + " needs a value");
-      value = argv[++a];
-    }
-
-    if (arg == "--resolution") {
-      o.resolution = parseInt(arg, value);
-      if (o.resolution < 16 || o.resolution > 256)
-        throw UsageError("option --resolution: " + value + " is outside 16..256 nodes per axis");
-    } else if (arg == "--field") {
-      o.field = parseDouble(arg, value);
-      if (std::fabs(o.field) > 1e7) throw UsageError("option --field: " + value + " A/m exceeds |H0| <= 1e7 A/m");
-    } else if (arg == "--law") {
-      if (value != "langevin" && value != "linear")
-        throw UsageError("option --law: '" + value + "' is not one of langevin, linear");
-      o.law = value;
-    } else if (arg == "--boundary") {
-      if (value != "open" && value != "shield")
-        throw UsageError("option --boundary: '" + value + "' is not one of open, shield");
-      o.boundary = value;
-    } else if (arg == "--tolerance") {
-      o.tolerance = parseDouble(arg, value);
-      if (!(o.tolerance >= 1e-14 && o.tolerance <= 1e-2))
-        throw UsageError("option --tolerance: " + value + " is outside [1e-14, 1e-2]");
-    } else if (arg == "--threads") {
-      o.threads = parseInt(arg, value);
-      if (o.threads < 0 || o.threads > 1024) throw UsageError("option --threads: " + value + " is outside 0..1024");
-    } else {  // --out
-      if (value.empty()) throw UsageError("option --out: the directory name is empty");
-      o.out = value;
-    }
-  }
-  return o;
+// Declared once; the help text is generated from these declarations. Returns
+// the code to exit with after --help or a bad option, nullopt to go on.
+std::optional<int> parseOptions(int argc, char** argv, Options& o) {
+  std::ostringstream about;
+  about << "lodestone-field-demo: nonlinear magnetostatics of a ferrofluid ball above a permanent magnet\n"
+           "\n"
+           "Scene: a ball (radius " << kBallRadius << " m, centre z = " << kBallCentreZ
+        << " m) of the paper's material (Sun et al. 2021, Table 2),\n"
+           "8 material points per cell, above an axially magnetized cylinder magnet (radius "
+        << kMagnetRadius << " m, length " << 2 * kMagnetHalfLength << " m,\n"
+           "remanence " << kRemanence << " T, centre z = " << kMagnetCentreZ << " m) in a cubic grid of side "
+        << kBoxSide << " m centred on the origin.";
+  CLI::App app(about.str(), "lodestone-field-demo");
+  cli::helpLayout(app, 24);
+  cli::addNumber(app, "--resolution", o.resolution, "grid nodes per axis")
+      ->type_name("N")
+      ->check(cli::wholeNumber(16, 256, "nodes per axis"))
+      ->default_str(cli::formatNumber(o.resolution));
+  cli::addNumber(app, "--field", o.field, "extra uniform field along +z, A/m")
+      ->type_name("H0")
+      ->check(cli::numberIn(-1e7, 1e7, "A/m"))
+      ->default_str(cli::formatNumber(o.field));
+  app.add_option("--law", o.law,
+                 "magnetization law: langevin (the paper's, saturating) or linear (its low-field linearization, "
+                 "chi0 ~ 0.91)")
+      ->type_name("L")
+      ->check(cli::oneOf({"langevin", "linear"}))
+      ->capture_default_str();
+  app.add_option("--boundary", o.boundary,
+                 "grid boundary: open (far-field multipole potential) or shield (the paper's wall, H.n = H_ext.n)")
+      ->type_name("B")
+      ->check(cli::oneOf({"open", "shield"}))
+      ->capture_default_str();
+  cli::addNumber(app, "--tolerance", o.tolerance, "Newton stop: relative residual, dimensionless")
+      ->type_name("T")
+      ->check(cli::numberIn(1e-14, 1e-2))
+      ->default_str(cli::formatNumber(o.tolerance));
+  cli::addNumber(app, "--threads", o.threads, "worker threads; 0 = all hardware threads")
+      ->type_name("N")
+      ->check(cli::wholeNumber(0, 1024))
+      ->default_str(cli::formatNumber(o.threads));
+  app.add_option("--out", o.out, "output directory, created if missing")
+      ->type_name("DIR")
+      ->check(cli::rule("", [](const std::string& dir) {
+        return dir.empty() ? std::string("the directory name is empty") : std::string();
+      }))
+      ->capture_default_str();
+  app.footer(
+      "Writes DIR/field_solve.json, DIR/slice_H.png, DIR/slice_B_ratio.png, DIR/slice_force.png and\n"
+      "DIR/profile.csv.\n"
+      "Exit status: 0 on success, 1 on bad options, errors or a field solve that did not converge.");
+  return cli::parse(app, argc, argv);
 }
 
 // ---------------------------------------------------------------------------
@@ -549,14 +498,9 @@ int run(const Options& o) {
 
 int main(int argc, char** argv) {
   try {
-    const std::optional<Options> options = parseOptions(argc, argv);
-    if (!options) {
-      printHelp(std::cout);
-      return 0;
-    }
-    return run(*options);
-  } catch (const UsageError& e) {
-    std::cerr << "lodestone-field-demo: " << e.what() << "\n(run with --help for the options)\n";
+    Options options;
+    if (const std::optional<int> code = parseOptions(argc, argv, options)) return *code;
+    return run(options);
   } catch (const lodestone::Error& e) {
     std::cerr << "lodestone-field-demo: error: " << e.what() << "\n";
   } catch (const std::exception& e) {

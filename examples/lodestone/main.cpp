@@ -1,11 +1,7 @@
 // lodestone: the command-line host. Runs scene files with the reference
 // MLS-MPM and the magnetic-force stage, writes per-frame particles (PLY),
-// previews (PNG) and stats.json.
-//
-//   lodestone run scene.json --out DIR [--frames a:b] [--full] [--dx m] [--threads n]
-//                 [--checkpoint-every n] [--resume] [--check-finite]
-//   lodestone validate scene.json [--full] [--dx m]
-//   lodestone --help | --version
+// previews (PNG) and stats.json. Its commands and options are declared in
+// parseArgs(); `lodestone --help` and `lodestone COMMAND --help` print them.
 #include <chrono>
 #include <cmath>
 #include <csignal>
@@ -15,11 +11,14 @@
 #include <filesystem>
 #include <iostream>
 #include <memory>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
 
 #include <tbb/global_control.h>
+
+#include "lodestone/cli/command_line.h"
 
 #include "atomic_file.h"
 #include "lodestone/core/base/error.h"
@@ -43,53 +42,6 @@ using namespace lodestone::examples;
 
 namespace {
 
-const char* kUsage =
-    "lodestone " LODESTONE_VERSION_STRING ": nonlinear magnetism for material point method simulation\n"
-    "\n"
-    "Usage:\n"
-    "  lodestone run SCENE.json --out DIR [options]   simulate a scene, write frames and stats.json\n"
-    "  lodestone validate SCENE.json [options]        check a scene file and print what it builds\n"
-    "  lodestone plan SCENE.json [options]            print which stages would run, why, at what predicted\n"
-    "                                                 error and cost (the effects planner), without running\n"
-    "  lodestone export-fields SCENE.json --out FILE.vdb [--frame N] [--density N.vdb [--density-grid G]]\n"
-    "                                                 field solve of the state at frame N (default 0),\n"
-    "                                                 written as OpenVDB grids n, phi, H, M, B, force;\n"
-    "                                                 with --density, of the density grid G (default n,\n"
-    "                                                 1/m^3) of N.vdb instead of the scene's particles\n"
-    "  lodestone nodes [--markdown]                   list the node library (--markdown: docs/nodes.md)\n"
-    "  lodestone --help | --version\n"
-    "\n"
-    "Run `lodestone run --help` for the options. Scene files are documented in docs/scenes.md.\n";
-
-const char* kRunUsage =
-    "lodestone run SCENE.json --out DIR [options]\n"
-    "\n"
-    "Simulates the scene's frames and writes, in DIR:\n"
-    "  frame_NNNN.ply   particles (x y z in m, vx vy vz in m/s, n_p, material, J)\n"
-    "  frame_NNNN.png   a preview render (magnetic materials dark, magnets red)\n"
-    "  fields_NNNN.vdb  the grids listed in the scene's output.vdb (n, phi, H, M, B, force)\n"
-    "  particles_NNNN.vdb  the particles as OpenVDB points (when output.vdb_points is true)\n"
-    "  stats.json       per-frame time split by stage, field-solve reports, particle\n"
-    "                   count and energies (rewritten after every frame)\n"
-    "\n"
-    "Options:\n"
-    "  --out DIR        output directory (created; required)\n"
-    "  --frames A:B     write frames A..B (1-based, inclusive; earlier frames are still\n"
-    "                   simulated); default all frames of the scene\n"
-    "  --full           paper resolution: use the scene's domain.full_dx\n"
-    "  --dx M           override the grid spacing, m (> 0)\n"
-    "  --threads N      worker threads (0 = all cores; default 0)\n"
-    "  --no-png         skip previews;  --no-ply  skip particle files\n"
-    "  --checkpoint-every N  write DIR/checkpoint_NNNN.lsck every N frames (overrides the\n"
-    "                   scene's output.checkpoint_every; 0 = none)\n"
-    "  --resume         continue from the last valid checkpoint in DIR; the frames it\n"
-    "                   writes equal those of an uninterrupted run, bit for bit\n"
-    "  --check-finite   stop with an error naming the quantity, substep and particle or\n"
-    "                   node at the first NaN/Inf (one extra scan per substep)\n"
-    "\n"
-    "Ctrl-C stops after the current substep, keeps every complete frame and says how\n"
-    "to resume; a second Ctrl-C exits at once.\n";
-
 struct Args {
   std::string command, scene, out;
   int first = 1, last = -1;
@@ -100,17 +52,11 @@ struct Args {
   bool png = true, ply = true;
   int checkpointEvery = -1;  // -1: the scene's output.checkpoint_every
   bool resume = false, checkFinite = false;
+  bool markdown = false;  // nodes
 };
 
 [[noreturn]] void usageError(const std::string& message) {
   throw InvalidArgument(message + " (see lodestone --help)");
-}
-
-double parseNumber(const std::string& option, const std::string& text) {
-  char* end = nullptr;
-  const double v = std::strtod(text.c_str(), &end);
-  if (text.empty() || *end != '\0' || !std::isfinite(v)) usageError(concat(option, ": '", text, "' is not a number"));
-  return v;
 }
 
 /// Readers for the scene's "level_set" and "mesh" shapes (none without OpenVDB).
@@ -127,69 +73,123 @@ void installShapeLoaders(SceneOptions& options) {
 #endif
 }
 
-Args parseArgs(int argc, char** argv) {
-  Args a;
-  if (argc < 2) usageError("no command given");
-  a.command = argv[1];
-  for (int i = 2; i < argc; ++i) {
-    const std::string s = argv[i];
-    const auto value = [&]() -> std::string {
-      if (i + 1 >= argc) usageError(concat(s, " needs a value"));
-      return argv[++i];
-    };
-    if (s == "--help" || s == "-h") {
-      std::cout << (a.command == "run" ? kRunUsage : kUsage);
-      std::exit(0);
-    } else if (s == "--out") {
-      a.out = value();
-    } else if (s == "--frames") {
-      const std::string f = value();
-      const auto colon = f.find(':');
-      if (colon == std::string::npos) usageError(concat("--frames: expected A:B, got '", f, "'"));
-      a.first = int(parseNumber("--frames", f.substr(0, colon)));
-      a.last = int(parseNumber("--frames", f.substr(colon + 1)));
-      if (a.first < 1 || a.last < a.first) usageError(concat("--frames: need 1 <= A <= B, got ", f));
-    } else if (s == "--frame") {
-      a.frame = int(parseNumber("--frame", value()));
-      if (a.frame < 0) usageError(concat("--frame: must be >= 0, got ", a.frame));
-    } else if (s == "--density") {
-      a.density = value();
-    } else if (s == "--density-grid") {
-      a.densityGrid = value();
-    } else if (s == "--full") {
-      a.options.full = true;
-    } else if (s == "--dx") {
-      a.options.dx = parseNumber("--dx", value());
-      if (!(a.options.dx > 0)) usageError(concat("--dx: must be > 0 m, got ", a.options.dx));
-    } else if (s == "--threads") {
-      a.threads = int(parseNumber("--threads", value()));
-      if (a.threads < 0 || a.threads > 1024) usageError(concat("--threads: must be 0..1024, got ", a.threads));
-    } else if (s == "--no-png") {
-      a.png = false;
-    } else if (s == "--no-ply") {
-      a.ply = false;
-    } else if (s == "--checkpoint-every") {
-      const double every = parseNumber("--checkpoint-every", value());
-      if (!(every >= 0 && every <= 1e6 && every == std::floor(every)))
-        usageError(concat("--checkpoint-every: must be a whole number of frames in 0..1000000, got ", every));
-      a.checkpointEvery = int(every);
-    } else if (s == "--resume") {
-      a.resume = true;
-    } else if (s == "--check-finite") {
-      a.checkFinite = true;
-    } else if (!s.empty() && s[0] == '-') {
-      usageError(concat("unknown option '", s, "'"));
-    } else if (a.scene.empty()) {
-      a.scene = s;
-    } else {
-      usageError(concat("unexpected argument '", s, "'"));
-    }
+// "A:B", 1 <= A <= B, into first and last; returns the error ("" when good).
+std::string readFrameRange(const std::string& text, int& first, int& last) {
+  const auto colon = text.find(':');
+  if (colon == std::string::npos) return concat("expected A:B, got '", text, "'");
+  for (const std::string& part : {text.substr(0, colon), text.substr(colon + 1)}) {
+    const std::optional<double> v = cli::toNumber(part);
+    if (!v) return concat("'", part, "' is not a number");
+    if (*v != std::floor(*v) || std::fabs(*v) > 1e9) return concat("'", part, "' is not a whole number of frames");
   }
-  if (a.scene.empty()) usageError(concat("'", a.command, "' needs a scene file"));
-  installShapeLoaders(a.options);
-  return a;
+  first = int(*cli::toNumber(text.substr(0, colon)));
+  last = int(*cli::toNumber(text.substr(colon + 1)));
+  if (first < 1 || last < first) return concat("need 1 <= A <= B, got ", text);
+  return "";
 }
 
+/// The commands and their options, declared once: the help text is generated
+/// from these declarations. Fills `a`; returns the code to exit with after
+/// --help, --version or a bad argument (message on stderr), nullopt to go on.
+std::optional<int> parseArgs(int argc, char** argv, Args& a) {
+  CLI::App app("lodestone " LODESTONE_VERSION_STRING ": nonlinear magnetism for material point method simulation",
+               "lodestone");
+  cli::helpLayout(app);
+  app.set_version_flag("--version", "lodestone " LODESTONE_VERSION_STRING, "print the version and exit");
+  app.require_subcommand(0, 1);
+
+  const auto addScene = [&](CLI::App& c) {
+    c.add_option("SCENE", a.scene, "scene file (JSON, docs/scenes.md)")->required()->type_name("");
+  };
+  const auto addResolution = [&](CLI::App& c) {
+    c.add_flag("--full", a.options.full, "paper resolution: use the scene's domain.full_dx");
+    cli::addNumber(c, "--dx", a.options.dx, "override the grid spacing, m")
+        ->type_name("M")
+        ->check(cli::numberAbove(0, "m"));
+  };
+
+  CLI::App& run = *app.add_subcommand("run", "simulate a scene, write frames and stats.json");
+  addScene(run);
+  run.add_option("--out", a.out, "output directory (created)")->required()->type_name("DIR");
+  run.add_option_function<std::string>(
+         "--frames", [&](const std::string& f) { readFrameRange(f, a.first, a.last); },
+         "write frames A..B (1-based, inclusive; earlier frames are still simulated); default all frames of the scene")
+      ->type_name("A:B")
+      ->check(cli::rule("", [](const std::string& f) {
+        int first = 0, last = 0;
+        return readFrameRange(f, first, last);
+      }));
+  addResolution(run);
+  cli::addNumber(run, "--threads", a.threads, "worker threads (0 = all cores)")
+      ->type_name("N")
+      ->check(cli::wholeNumber(0, 1024))
+      ->default_str(cli::formatNumber(a.threads));
+  run.add_flag_callback("--no-png", [&] { a.png = false; }, "skip previews");
+  run.add_flag_callback("--no-ply", [&] { a.ply = false; }, "skip particle files");
+  cli::addNumber(run, "--checkpoint-every", a.checkpointEvery,
+                 "write DIR/checkpoint_NNNN.lsck every N frames (overrides the scene's output.checkpoint_every; "
+                 "0 = none)")
+      ->type_name("N")
+      ->check(cli::wholeNumber(0, 1000000, "frames"));
+  run.add_flag("--resume", a.resume,
+               "continue from the last valid checkpoint in DIR; the frames it writes equal those of an "
+               "uninterrupted run, bit for bit");
+  run.add_flag("--check-finite", a.checkFinite,
+               "stop with an error naming the quantity, substep and particle or node at the first NaN/Inf "
+               "(one extra scan per substep)");
+  run.footer(
+      "Writes, in DIR:\n"
+      "  frame_NNNN.ply      particles (x y z in m, vx vy vz in m/s, n_p, material, J)\n"
+      "  frame_NNNN.png      a preview render (magnetic materials dark, magnets red)\n"
+      "  fields_NNNN.vdb     the grids listed in the scene's output.vdb (n, phi, H, M, B, force)\n"
+      "  particles_NNNN.vdb  the particles as OpenVDB points (when output.vdb_points is true)\n"
+      "  stats.json          per-frame time split by stage, field-solve reports, particle\n"
+      "                      count and energies (rewritten after every frame)\n"
+      "\n"
+      "Ctrl-C stops after the current substep, keeps every complete frame and says how\n"
+      "to resume; a second Ctrl-C exits at once.");
+
+  CLI::App& validate = *app.add_subcommand("validate", "check a scene file and print what it builds");
+  addScene(validate);
+  addResolution(validate);
+
+  CLI::App& plan = *app.add_subcommand(
+      "plan", "print which stages would run, why, at what predicted error and cost (the effects planner), "
+              "without running");
+  addScene(plan);
+  addResolution(plan);
+
+  CLI::App& exportFields = *app.add_subcommand(
+      "export-fields", "field solve of the state at frame N, written as OpenVDB grids n, phi, H, M, B, force");
+  addScene(exportFields);
+  exportFields.add_option("--out", a.out, "the .vdb file to write")->required()->type_name("FILE.vdb");
+  cli::addNumber(exportFields, "--frame", a.frame, "the state after N frames of the scene")
+      ->type_name("N")
+      ->check(cli::wholeNumber(0))
+      ->default_str(cli::formatNumber(a.frame));
+  exportFields
+      .add_option("--density", a.density,
+                  "solve for the density grid of this file (n, 1/m^3) instead of the scene's particles")
+      ->type_name("N.vdb");
+  exportFields.add_option("--density-grid", a.densityGrid, "the grid of --density to read")
+      ->type_name("G")
+      ->capture_default_str();
+  addResolution(exportFields);
+
+  CLI::App& nodes = *app.add_subcommand("nodes", "list the node library");
+  nodes.add_flag("--markdown", a.markdown, "as Markdown (docs/nodes.md is this output)");
+
+  // After the subcommands, which would take it over.
+  app.footer("Run `lodestone COMMAND --help` for a command's options. Scene files are documented in docs/scenes.md.");
+  if (const std::optional<int> code = cli::parse(app, argc, argv)) return code;
+  if (app.get_subcommands().empty()) {
+    std::cerr << "lodestone: no command given (see lodestone --help)\n";
+    return 1;
+  }
+  a.command = app.get_subcommands().front()->get_name();
+  installShapeLoaders(a.options);
+  return std::nullopt;
+}
 void printSceneSummary(const Scene& scene, const MpmSolver& solver) {
   const GridSpec& g = scene.settings.grid;
   std::printf("scene '%s' (%s)\n", scene.name.c_str(), scene.file.c_str());
@@ -580,22 +580,13 @@ int validate(const Args& a) {
 
 int main(int argc, char** argv) {
   try {
-    if (argc >= 2 && (std::string(argv[1]) == "--help" || std::string(argv[1]) == "-h")) {
-      std::cout << kUsage;
-      return 0;
-    }
-    if (argc >= 2 && std::string(argv[1]) == "--version") {
-      std::cout << "lodestone " << LODESTONE_VERSION_STRING << "\n";
-      return 0;
-    }
-    if (argc >= 2 && std::string(argv[1]) == "nodes") {
+    Args a;
+    if (const std::optional<int> code = parseArgs(argc, argv, a)) return *code;
+    if (a.command == "nodes") {
       // The node library, generated from the node declarations.
-      if (argc > 3 || (argc == 3 && std::string(argv[2]) != "--markdown"))
-        usageError("usage: lodestone nodes [--markdown]");
-      std::cout << (argc == 3 ? plugin::nodesMarkdown() : plugin::nodesText());
+      std::cout << (a.markdown ? plugin::nodesMarkdown() : plugin::nodesText());
       return 0;
     }
-    const Args a = parseArgs(argc, argv);
     if (a.command == "run") return run(a);
     if (a.command == "validate") return validate(a);
     if (a.command == "plan") return plan(a);

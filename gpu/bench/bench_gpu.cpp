@@ -1,18 +1,18 @@
 // lodestone-bench-gpu: nonlinear field solves on 128^3 and 256^3 node grids
 // and MLS-MPM steps with 1e6 particles on the chosen backend (default: the
 // CUDA device). Prints a table and writes CSV; asserts nothing.
-//
-//   lodestone-bench-gpu [--backend cuda|cpu|auto] [--sizes 128,256]
-//                       [--particles 1000000] [--steps 10] [--csv bench_gpu.csv]
+// `lodestone-bench-gpu --help` lists the options.
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <exception>
+#include <optional>
 #include <sstream>
 #include <string>
 #include <vector>
 
+#include "lodestone/cli/command_line.h"
 #include "lodestone/core/field/langevin.h"
 #include "lodestone/core/field/magnetization_law.h"
 #include "lodestone/gpu/backend.h"
@@ -35,31 +35,37 @@ struct Args {
   std::string csv = "bench_gpu.csv";
 };
 
-Args parse(int argc, char** argv) {
-  Args a;
-  for (int i = 1; i < argc; ++i) {
-    const std::string k = argv[i];
-    const auto value = [&]() -> std::string {
-      if (i + 1 >= argc) throw std::runtime_error("missing value after " + k);
-      return argv[++i];
-    };
-    if (k == "--backend") {
-      a.backend = parseBackend(value());
-    } else if (k == "--sizes") {
-      a.sizes.clear();
-      std::stringstream ss(value());
-      for (std::string t; std::getline(ss, t, ',');) a.sizes.push_back(std::stoi(t));
-    } else if (k == "--particles") {
-      a.particles = long(std::stod(value()));
-    } else if (k == "--steps") {
-      a.steps = std::stoi(value());
-    } else if (k == "--csv") {
-      a.csv = value();
-    } else {
-      throw std::runtime_error("unknown option " + k + " (see the comment at the top of bench_gpu.cpp)");
-    }
+// Fills `a`; returns the code to exit with after --help or a bad option
+// (2, as for any failure here), nullopt to go on.
+std::optional<int> parse(int argc, char** argv, Args& a) {
+  CLI::App app("lodestone-bench-gpu: nonlinear field solves and MLS-MPM steps on the chosen backend",
+               "lodestone-bench-gpu");
+  cli::helpLayout(app, 30);
+  std::string backend = toString(a.backend);
+  std::vector<double> sizes(a.sizes.begin(), a.sizes.end());
+  app.add_option("--backend", backend, "where to run (auto: CUDA when a device is found)")
+      ->type_name("B")
+      ->check(cli::oneOf({"cuda", "cpu", "auto"}))
+      ->capture_default_str();
+  cli::addNumberList(app, "--sizes", sizes, "field-solve grid nodes per axis");
+  cli::addNumber(app, "--particles", a.particles, "particles of the MPM steps")
+      ->type_name("N")
+      ->check(cli::wholeNumber(1))
+      ->default_str(cli::formatNumber(double(a.particles)));
+  cli::addNumber(app, "--steps", a.steps, "timed MPM steps")
+      ->type_name("N")
+      ->check(cli::wholeNumber(1))
+      ->default_str(cli::formatNumber(a.steps));
+  app.add_option("--csv", a.csv, "CSV output")->type_name("FILE")->capture_default_str();
+  if (const std::optional<int> code = cli::parse(app, argc, argv, 2)) return code;
+  a.backend = parseBackend(backend);
+  a.sizes.clear();
+  for (double n : sizes) {
+    if (!(n == std::floor(n) && n >= 2 && n <= 1e6))
+      throw std::runtime_error("--sizes: " + cli::formatNumber(n) + " is not a whole number >= 2");
+    a.sizes.push_back(int(n));
   }
-  return a;
+  return std::nullopt;
 }
 
 MagnetizationLaw<double> paperLaw() {
@@ -73,7 +79,8 @@ MagnetizationLaw<double> paperLaw() {
 }  // namespace
 
 int main(int argc, char** argv) try {
-  const Args args = parse(argc, argv);
+  Args args;
+  if (const std::optional<int> code = parse(argc, argv, args)) return *code;
   std::printf("lodestone-bench-gpu: backend status: %s\n", backendStatus().c_str());
   std::string why;
   const Backend backend = resolveBackend(args.backend, &why);

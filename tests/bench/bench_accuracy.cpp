@@ -18,8 +18,8 @@
 //             frequency and tolerance;
 //   table2    one frame (cold, then warm) of the paper's 128^3 cube scenes,
 //             Langevin and linear, at full resolution.
-// Writes DIR/accuracy_{field,laws,force,dynamics,table2,presets}.csv. The
-// figures are drawn by docs/accuracy_plots.py. Not a test: timings depend on
+// Writes DIR/accuracy_{field,laws,force,dynamics,table2,presets}.csv
+// (`--help` lists the options). The figures are drawn by docs/accuracy_plots.py. Not a test: timings depend on
 // the machine and are never asserted.
 #include <algorithm>
 #include <chrono>
@@ -29,6 +29,7 @@
 #include <functional>
 #include <limits>
 #include <map>
+#include <optional>
 #include <set>
 #include <sstream>
 #include <string>
@@ -37,8 +38,9 @@
 #include <tbb/info.h>
 #include <tbb/parallel_for.h>
 
-#include "bench_args.h"
+#include "lodestone/cli/command_line.h"
 #include "lodestone/core/base/stopwatch.h"
+
 #include "lodestone/core/base/constants.h"
 #include "lodestone/core/base/error.h"
 #include "lodestone/core/field/langevin.h"
@@ -48,7 +50,6 @@
 #include "scene.h"
 
 using namespace lodestone;
-using lodestone::bench::parseList;
 
 namespace {
 
@@ -601,54 +602,42 @@ int main(int argc, char** argv) {
   try {
     Options o;
     bool sizesGiven = false, probe = false;
-    for (int a = 1; a < argc; ++a) {
-      const std::string arg = argv[a];
-      const auto next = [&]() -> std::string {
-        if (a + 1 >= argc) throw InvalidArgument(concat(arg, " needs a value"));
-        return argv[++a];
-      };
-      if (arg == "--out-dir")
-        o.outDir = next();
-      else if (arg == "--scenes")
-        o.scenesDir = next();
-      else if (arg == "--quick")
-        o.quick = true;
-      else if (arg == "--dynamics-probe")
-        probe = true;
-      else if (arg == "--sizes") {
-        o.sizes = parseList(next(), "--sizes");
-        sizesGiven = true;
-      } else if (arg == "--dynamics-frames")
-        o.dynamicsFrames = int(parseList(next(), "--dynamics-frames").at(0));
-      else if (arg == "--dynamics-dx")
-        o.dynamicsDx = parseList(next(), "--dynamics-dx").at(0);
-      else if (arg == "--studies") {
-        o.studies.clear();
-        std::string s = next(), item;
-        std::stringstream ss(s);
-        while (std::getline(ss, item, ',')) {
-          if (item != "field" && item != "precision" && item != "laws" && item != "force" && item != "dynamics" &&
-              item != "table2")
-            throw InvalidArgument(concat("--studies: unknown study '", item,
-                                         "' (expected field, precision, laws, force, dynamics, table2)"));
-          o.studies.insert(item);
-        }
-      } else if (arg == "--help" || arg == "-h") {
-        std::printf(
-            "lodestone-bench-accuracy: error against wall time of the magnetic solve\n"
-            "  --studies LIST       field,precision,laws,force,dynamics,table2 (default: all)\n"
-            "  --quick              small sizes (development check, a minute)\n"
-            "  --sizes LIST         sphere grid nodes per axis (default 17,33,65,129,257)\n"
-            "  --dynamics-dx X      grid spacing of the dynamics scene, m (default 0.013)\n"
-            "  --dynamics-frames N  frames of the dynamics runs (default 25)\n"
-            "  --dynamics-probe     print the cubes' gap per frame of one cheap run and stop\n"
-            "  --scenes DIR         scene folder (default the source tree's examples/scenes)\n"
-            "  --out-dir DIR        CSV folder (default docs/data)\n");
-        return 0;
-      } else {
-        throw InvalidArgument(concat("unknown option '", arg, "' (see --help)"));
-      }
-    }
+    CLI::App app("lodestone-bench-accuracy: error against wall time of the magnetic solve", "lodestone-bench-accuracy");
+    cli::helpLayout(app, 28);
+    std::string allStudies;
+    for (const std::string& study : o.studies) allStudies += (allStudies.empty() ? "" : ",") + study;
+    app.add_option_function<std::string>(
+           "--studies",
+           [&](const std::string& list) {
+             o.studies.clear();
+             std::stringstream items(list);
+             for (std::string item; std::getline(items, item, ',');) o.studies.insert(item);
+           },
+           "comma-separated, of field, precision, laws, force, dynamics, table2")
+        ->type_name("LIST")
+        ->default_str(allStudies)
+        ->check(cli::rule("", [known = o.studies](const std::string& list) -> std::string {
+          std::stringstream items(list);
+          for (std::string item; std::getline(items, item, ',');)
+            if (!known.count(item))
+              return concat("unknown study '", item, "' (expected field, precision, laws, force, dynamics, table2)");
+          return "";
+        }));
+    app.add_flag("--quick", o.quick, "small sizes (development check, a minute)");
+    cli::addNumberList(app, "--sizes", o.sizes, "sphere grid nodes per axis (each 9..513)")
+        ->each([&](const std::string&) { sizesGiven = true; });
+    cli::addNumber(app, "--dynamics-dx", o.dynamicsDx, "grid spacing of the dynamics scene, m, in (0, 0.05)")
+        ->type_name("X")
+        ->check(cli::number())
+        ->default_str(cli::formatNumber(o.dynamicsDx));
+    cli::addNumber(app, "--dynamics-frames", o.dynamicsFrames, "frames of the dynamics runs")
+        ->type_name("N")
+        ->check(cli::wholeNumber(1))
+        ->default_str(cli::formatNumber(o.dynamicsFrames));
+    app.add_flag("--dynamics-probe", probe, "print the cubes' gap per frame of one cheap run and stop");
+    app.add_option("--scenes", o.scenesDir, "scene folder")->type_name("DIR")->capture_default_str();
+    app.add_option("--out-dir", o.outDir, "CSV folder")->type_name("DIR")->capture_default_str();
+    if (const std::optional<int> code = cli::parse(app, argc, argv)) return *code;
     if (o.quick) {
       if (!sizesGiven) o.sizes = {17, 33};
       o.forceCells = {3, 4, 6};
@@ -658,7 +647,6 @@ int main(int argc, char** argv) {
     }
     for (double s : o.sizes) require(s >= 9 && s <= 513 && s == std::floor(s), "--sizes: ", s, " is not in 9..513");
     require(o.dynamicsDx > 0 && o.dynamicsDx < 0.05, "--dynamics-dx: ", o.dynamicsDx, " m is not in (0, 0.05)");
-    require(o.dynamicsFrames >= 1, "--dynamics-frames: ", o.dynamicsFrames, " is not >= 1");
 
     std::printf("Lodestone accuracy-vs-time benchmark (%d threads)\n", tbb::info::default_concurrency());
     const auto t0 = Clock::now();

@@ -5,12 +5,7 @@
 // the previous frame's solution, with the applied field changed by 2%).
 // Prints a table and writes CSV. Not a test: timings are machine-dependent.
 //
-//   lodestone-bench-field-solve [--sizes 64,128] [--fields 1e4,1e5] [--csv FILE]
-//                               [--preconditioner multigrid|jacobi] [--tolerance 1e-8]
-//                               [--crop M] [--history] [--law langevin|linear]
-//                               [--wall-prediction on|off] [--wall-tolerance X]
-//
-// --crop M adds, per case, a cold solve on the material's bounding box plus
+// `lodestone-bench-field-solve --help` lists the options. --crop M adds, per case, a cold solve on the material's bounding box plus
 // M free cells (what the effects planner's active region does) and the
 // relative L2 difference of H over the material nodes from the full grid.
 #include <chrono>
@@ -18,20 +13,21 @@
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
+#include <optional>
 #include <sstream>
 #include <string>
 #include <vector>
 
 #include <tbb/info.h>
 
-#include "bench_args.h"
+#include "lodestone/cli/command_line.h"
+
 #include "lodestone/core/base/error.h"
 #include "lodestone/core/stage/magnetic_stage.h"
 #include "lodestone/core/field/material.h"
 #include "lodestone/core/sources/uniform_field.h"
 
 using namespace lodestone;
-using lodestone::bench::parseList;
 
 namespace {
 
@@ -68,61 +64,53 @@ int main(int argc, char** argv) {
     MagneticStageSettings settings;
     bool history = false, linear = false;
     int crop = 0;
-    for (int a = 1; a < argc; ++a) {
-      const std::string arg = argv[a];
-      const auto next = [&]() -> std::string {
-        if (a + 1 >= argc) throw InvalidArgument(concat(arg, " needs a value"));
-        return argv[++a];
-      };
-      if (arg == "--sizes") sizes = parseList(next(), "--sizes");
-      else if (arg == "--fields") fields = parseList(next(), "--fields");
-      else if (arg == "--csv") csvPath = next();
-      else if (arg == "--history") history = true;
-      else if (arg == "--law") {
-        const std::string l = next();
-        if (l == "linear") linear = true;
-        else if (l != "langevin") throw InvalidArgument(concat("--law: expected langevin or linear, got '", l, "'"));
-      }
-      else if (arg == "--crop") crop = int(parseList(next(), "--crop").at(0));
-      else if (arg == "--preconditioner") {
-        const std::string p = next();
-        if (p == "jacobi") settings.solve.preconditioner = PreconditionerKind::Jacobi;
-        else if (p == "multigrid") settings.solve.preconditioner = PreconditionerKind::Multigrid;
-        else throw InvalidArgument(concat("--preconditioner: expected jacobi or multigrid, got '", p, "'"));
-      } else if (arg == "--tolerance") settings.solve.tolerance = parseList(next(), "--tolerance").at(0);
-      else if (arg == "--wall-prediction") {
-        const std::string w = next();
-        if (w == "on") settings.solve.predictWall = true;
-        else if (w == "off") settings.solve.predictWall = false;
-        else throw InvalidArgument(concat("--wall-prediction: expected on or off, got '", w, "'"));
-      } else if (arg == "--wall-tolerance")
-        settings.solve.wallPredictionTolerance = parseList(next(), "--wall-tolerance").at(0);
-      else if (arg == "--smoothing") {
-        const std::vector<double> sm = parseList(next(), "--smoothing");
-        require(sm.size() == 2 && sm[0] == std::floor(sm[0]) && sm[1] == std::floor(sm[1]),
-                "--smoothing: expected PRE,POST sweep counts, e.g. 2,2");
-        settings.solve.multigrid.preSmoothing = int(sm[0]);
-        settings.solve.multigrid.postSmoothing = int(sm[1]);
-      }
-      else if (arg == "--help" || arg == "-h") {
-        std::printf(
-            "lodestone-bench-field-solve: times the nonlinear field solve\n"
-            "  --sizes LIST      grid nodes per axis (default 64,128; 16..512)\n"
-            "  --fields LIST     applied field H0 in A/m (default 1e4,1e5)\n"
-            "  --preconditioner P  multigrid (default) or jacobi\n"
-            "  --tolerance X     relative Newton residual (default 1e-8)\n"
-            "  --csv FILE        CSV output (default bench_field_solve.csv)\n"
-            "  --history         print every Newton iteration\n"
-            "  --law L           langevin (default) or linear (the paper's chi0 = 0.91 linearization)\n"
-            "  --crop M          also solve on the material box plus M cells and compare H\n"
-            "  --wall-prediction on|off  move the open wall with each Newton step (default on)\n"
-            "  --wall-tolerance X  relative CG tolerance of the wall-response solve (default 0.1)\n"
-            "  --smoothing PRE,POST  multigrid damped-Jacobi sweeps per level (default 2,2)\n");
-        return 0;
-      } else {
-        throw InvalidArgument(concat("unknown option '", arg, "' (see --help)"));
-      }
-    }
+    std::string law = "langevin";
+    std::string preconditioner = settings.solve.preconditioner == PreconditionerKind::Jacobi ? "jacobi" : "multigrid";
+    std::string wallPrediction = settings.solve.predictWall ? "on" : "off";
+    std::vector<double> smoothing{double(settings.solve.multigrid.preSmoothing),
+                                  double(settings.solve.multigrid.postSmoothing)};
+    CLI::App app("lodestone-bench-field-solve: times the nonlinear field solve", "lodestone-bench-field-solve");
+    cli::helpLayout(app, 32);
+    cli::addNumberList(app, "--sizes", sizes, "grid nodes per axis (each 16..512)");
+    cli::addNumberList(app, "--fields", fields, "applied field H0, A/m");
+    app.add_option("--preconditioner", preconditioner, "CG preconditioner")
+        ->type_name("P")
+        ->check(cli::oneOf({"multigrid", "jacobi"}))
+        ->capture_default_str();
+    cli::addNumber(app, "--tolerance", settings.solve.tolerance, "relative Newton residual")
+        ->type_name("X")
+        ->check(cli::number())
+        ->default_str(cli::formatNumber(settings.solve.tolerance));
+    app.add_option("--csv", csvPath, "CSV output")->type_name("FILE")->capture_default_str();
+    app.add_flag("--history", history, "print every Newton iteration");
+    app.add_option("--law", law, "magnetization law (linear: the paper's chi0 = 0.91 linearization)")
+        ->type_name("L")
+        ->check(cli::oneOf({"langevin", "linear"}))
+        ->capture_default_str();
+    cli::addNumber(app, "--crop", crop, "also solve on the material box plus M cells and compare H (0: not)")
+        ->type_name("M")
+        ->check(cli::wholeNumber(0))
+        ->default_str(cli::formatNumber(crop));
+    app.add_option("--wall-prediction", wallPrediction, "move the open wall with each Newton step")
+        ->type_name("on|off")
+        ->check(cli::oneOf({"on", "off"}))
+        ->capture_default_str();
+    cli::addNumber(app, "--wall-tolerance", settings.solve.wallPredictionTolerance,
+                   "relative CG tolerance of the wall-response solve")
+        ->type_name("X")
+        ->check(cli::number())
+        ->default_str(cli::formatNumber(settings.solve.wallPredictionTolerance));
+    cli::addNumberList(app, "--smoothing", smoothing, "multigrid damped-Jacobi sweeps per level, PRE,POST")
+        ->type_name("PRE,POST");
+    if (const std::optional<int> code = cli::parse(app, argc, argv)) return *code;
+    linear = law == "linear";
+    settings.solve.preconditioner =
+        preconditioner == "jacobi" ? PreconditionerKind::Jacobi : PreconditionerKind::Multigrid;
+    settings.solve.predictWall = wallPrediction == "on";
+    require(smoothing.size() == 2 && smoothing[0] == std::floor(smoothing[0]) && smoothing[1] == std::floor(smoothing[1]),
+            "--smoothing: expected PRE,POST sweep counts, e.g. 2,2");
+    settings.solve.multigrid.preSmoothing = int(smoothing[0]);
+    settings.solve.multigrid.postSmoothing = int(smoothing[1]);
     for (double s : sizes) require(s >= 16 && s <= 512 && s == std::floor(s), "--sizes: ", s, " is not in 16..512");
     settings.validate();
 

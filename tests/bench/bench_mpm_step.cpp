@@ -5,15 +5,14 @@
 // floor with a small spin, so the particles move and the grid update has
 // work to do. Prints a table and writes CSV. Not a test: timings are
 // machine-dependent.
-//
-//   lodestone-bench-mpm-step [--particles 1e5,1e6] [--steps 20] [--grid 128] [--threads N]
-//                            [--reorder N] [--age N] [--csv FILE]
+// `lodestone-bench-mpm-step --help` lists the options.
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
+#include <optional>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -21,12 +20,12 @@
 #include <tbb/global_control.h>
 #include <tbb/info.h>
 
-#include "bench_args.h"
+#include "lodestone/cli/command_line.h"
+
 #include "lodestone/core/base/error.h"
 #include "lodestone/core/mpm/solver.h"
 
 using namespace lodestone;
-using lodestone::bench::parseList;
 
 namespace {
 
@@ -84,51 +83,37 @@ int main(int argc, char** argv) {
     std::vector<double> counts{1e5, 1e6};
     int steps = 20, nodes = 128, threads = 0, reorder = MpmSettings{}.reorderInterval, age = 0;
     std::string csvPath = "bench_mpm_step.csv";
-    for (int a = 1; a < argc; ++a) {
-      const std::string arg = argv[a];
-      const auto next = [&]() -> std::string {
-        if (a + 1 >= argc) throw InvalidArgument(concat(arg, " needs a value"));
-        return argv[++a];
-      };
-      if (arg == "--particles")
-        counts = parseList(next(), "--particles");
-      else if (arg == "--steps")
-        steps = int(parseList(next(), "--steps").at(0));
-      else if (arg == "--grid")
-        nodes = int(parseList(next(), "--grid").at(0));
-      else if (arg == "--reorder")
-        reorder = int(parseList(next(), "--reorder").at(0));
-      else if (arg == "--age")
-        age = int(parseList(next(), "--age").at(0));
-      else if (arg == "--threads")
-        threads = int(parseList(next(), "--threads").at(0));
-      else if (arg == "--csv")
-        csvPath = next();
-      else if (arg == "--help" || arg == "-h") {
-        std::printf(
-            "lodestone-bench-mpm-step: times one MLS-MPM substep (no magnetism)\n"
-            "  --particles LIST  target particle counts (default 1e5,1e6; 8 per cell)\n"
-            "  --steps N         timed substeps per case (default 20: one reorder amortized)\n"
-            "  --grid N          nodes per axis (default 128, dx = 7.8 mm)\n"
-            "  --threads N       worker threads (default: all cores)\n"
-            "  --reorder N       MpmSettings::reorderInterval (default 20; 0: never sort particles by cell)\n"
-            "  --age N           untimed substeps before timing (default 0: particles in emission order)\n"
-            "  --csv FILE        CSV output (default bench_mpm_step.csv)\n");
-        return 0;
-      } else {
-        throw InvalidArgument(concat("unknown option '", arg, "' (see --help)"));
-      }
-    }
-    require(steps >= 1 && steps <= 100000, "--steps: ", steps, " is not in 1..100000");
-    require(nodes >= 16 && nodes <= 1024, "--grid: ", nodes, " is not in 16..1024");
-    require(reorder >= 0 && age >= 0, "--reorder and --age must be >= 0");
+    CLI::App app("lodestone-bench-mpm-step: times one MLS-MPM substep (no magnetism)", "lodestone-bench-mpm-step");
+    cli::helpLayout(app, 28);
+    cli::addNumberList(app, "--particles", counts, "target particle counts, 8 per cell (each 8..1e9)");
+    cli::addNumber(app, "--steps", steps, "timed substeps per case (the default amortizes one reorder)")
+        ->type_name("N")
+        ->check(cli::wholeNumber(1, 100000))
+        ->default_str(cli::formatNumber(steps));
+    cli::addNumber(app, "--grid", nodes, "nodes per axis (dx = 7.8 mm)")
+        ->type_name("N")
+        ->check(cli::wholeNumber(16, 1024))
+        ->default_str(cli::formatNumber(nodes));
+    cli::addNumber(app, "--threads", threads, "worker threads (0: all cores)")
+        ->type_name("N")
+        ->check(cli::wholeNumber(0, 1024))
+        ->default_str(cli::formatNumber(threads));
+    cli::addNumber(app, "--reorder", reorder, "MpmSettings::reorderInterval (0: never sort particles by cell)")
+        ->type_name("N")
+        ->check(cli::wholeNumber(0))
+        ->default_str(cli::formatNumber(reorder));
+    cli::addNumber(app, "--age", age, "untimed substeps before timing (0: particles in emission order)")
+        ->type_name("N")
+        ->check(cli::wholeNumber(0))
+        ->default_str(cli::formatNumber(age));
+    app.add_option("--csv", csvPath, "CSV output")->type_name("FILE")->capture_default_str();
+    if (const std::optional<int> code = cli::parse(app, argc, argv)) return *code;
     for (double c : counts) require(c >= 8 && c <= 1e9, "--particles: ", c, " is not in 8..1e9");
 
     std::ofstream csv(csvPath);
     require(bool(csv), "cannot write ", csvPath);
     csv << "material,particles,grid_nodes_per_axis,steps,age_steps,reorder_interval,dt_s,ms_per_step,ms_p2g,ms_binning,"
            "ms_grid_update,ms_g2p,ns_per_particle_step,threads\n";
-    require(threads >= 0 && threads <= 1024, "--threads: ", threads, " is not in 0..1024");
     if (threads == 0) threads = tbb::info::default_concurrency();
     tbb::global_control limit(tbb::global_control::max_allowed_parallelism, std::size_t(threads));
     std::printf(

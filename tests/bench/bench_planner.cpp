@@ -5,7 +5,7 @@
 // the planned run from the full one, and writes CSV. Not a test: timings are
 // machine-dependent; the ratios come from one run.
 //
-//   lodestone-bench-planner [--frames 4] [--budget 0.05] [--region auto|on|off] [--csv FILE] [SCENE.json ...]
+// `lodestone-bench-planner --help` lists the options.
 //
 // Deviation: the largest distance over frames between the centres of mass of
 // each material in the two runs, relative to how far that centre moved in
@@ -16,10 +16,11 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <optional>
 #include <string>
 #include <vector>
 
-#include "bench_args.h"
+#include "lodestone/cli/command_line.h"
 #include "lodestone/core/base/error.h"
 #include "scene.h"
 
@@ -74,22 +75,26 @@ int main(int argc, char** argv) {
     std::string csvPath = "bench_planner.csv";
     PlannerToggle region = PlannerToggle::Auto;
     std::vector<std::string> scenes;
-    for (int a = 1; a < argc; ++a) {
-      const std::string arg = argv[a];
-      const auto next = [&]() -> std::string {
-        if (a + 1 >= argc) throw InvalidArgument(concat(arg, " needs a value"));
-        return argv[++a];
-      };
-      if (arg == "--frames") frames = int(bench::parseList(next(), "--frames").at(0));
-      else if (arg == "--budget") budget = bench::parseList(next(), "--budget").at(0);
-      else if (arg == "--csv") csvPath = next();
-      else if (arg == "--region") region = parsePlannerToggle(next());
-      else if (arg == "--help" || arg == "-h") {
-        std::printf("lodestone-bench-planner [--frames N] [--budget B] [--region auto|on|off] [--csv FILE] [SCENE.json ...]\n");
-        return 0;
-      } else scenes.push_back(arg);
-    }
-    require(frames >= 1 && frames <= 1000, "--frames: ", frames, " is not in 1..1000");
+    std::string regionName = "auto";
+    CLI::App app("lodestone-bench-planner: every example scene with all stages on and with the effects planner",
+                 "lodestone-bench-planner");
+    cli::helpLayout(app, 24);
+    app.add_option("SCENE.json", scenes, "scenes to run (default: every scene in examples/scenes)")->type_name("");
+    cli::addNumber(app, "--frames", frames, "frames per run (fewer when the scene has fewer)")
+        ->type_name("N")
+        ->check(cli::wholeNumber(1, 1000))
+        ->default_str(cli::formatNumber(frames));
+    cli::addNumber(app, "--budget", budget, "the planner's accuracy budget (0: the scene's preset)")
+        ->type_name("B")
+        ->check(cli::number())
+        ->default_str(cli::formatNumber(budget));
+    app.add_option("--region", regionName, "the planner's active region")
+        ->type_name("R")
+        ->check(cli::oneOf({"auto", "on", "off"}))
+        ->capture_default_str();
+    app.add_option("--csv", csvPath, "CSV output")->type_name("FILE")->capture_default_str();
+    if (const std::optional<int> code = cli::parse(app, argc, argv)) return *code;
+    region = parsePlannerToggle(regionName);
     if (scenes.empty()) {
       for (const auto& e : std::filesystem::directory_iterator(LODESTONE_SCENES_DIR))
         if (e.path().extension() == ".json") scenes.push_back(e.path().string());

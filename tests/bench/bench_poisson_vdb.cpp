@@ -23,12 +23,12 @@
 // The OpenVDB problem is the linear solve inside one Newton step of ours for
 // a material with chi = 0 (no coupling, no boundary update), so it is a lower
 // bound on what any solve of the magnetized sphere costs on this grid.
-//
-//   lodestone-bench-poisson-vdb [--nodes 129] [--tolerance 1e-8] [--csv FILE]
+// `lodestone-bench-poisson-vdb --help` lists the options.
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -38,8 +38,9 @@
 #include <tbb/info.h>
 #include <tbb/parallel_for.h>
 
-#include "bench_args.h"
+#include "lodestone/cli/command_line.h"
 #include "lodestone/core/base/stopwatch.h"
+
 #include "lodestone/core/base/error.h"
 #include "lodestone/core/field/langevin.h"
 #include "lodestone/core/stage/magnetic_stage.h"
@@ -47,7 +48,6 @@
 #include "lodestone/core/sources/uniform_field.h"
 
 using namespace lodestone;
-using lodestone::bench::parseList;
 
 namespace {
 
@@ -202,30 +202,19 @@ int main(int argc, char** argv) {
     int N = 129;
     double tol = 1e-8;
     std::string csvPath = "docs/data/solve_vs_openvdb.csv";
-    for (int a = 1; a < argc; ++a) {
-      const std::string arg = argv[a];
-      const auto next = [&]() -> std::string {
-        if (a + 1 >= argc) throw InvalidArgument(concat(arg, " needs a value"));
-        return argv[++a];
-      };
-      if (arg == "--nodes")
-        N = int(parseList(next(), "--nodes").at(0));
-      else if (arg == "--tolerance")
-        tol = parseList(next(), "--tolerance").at(0);
-      else if (arg == "--csv")
-        csvPath = next();
-      else if (arg == "--help" || arg == "-h") {
-        std::printf(
-            "lodestone-bench-poisson-vdb: our field solve next to openvdb::tools::poisson on the same grid\n"
-            "  --nodes N       nodes per axis (default 129, i.e. 128 cells; 9..385)\n"
-            "  --tolerance X   relative residual of every solve (default 1e-8)\n"
-            "  --csv FILE      CSV output (default docs/data/solve_vs_openvdb.csv)\n");
-        return 0;
-      } else {
-        throw InvalidArgument(concat("unknown option '", arg, "' (see --help)"));
-      }
-    }
-    require(N >= 9 && N <= 385, "--nodes: ", N, " is not in 9..385");
+    CLI::App app("lodestone-bench-poisson-vdb: our field solve next to openvdb::tools::poisson on the same grid",
+                 "lodestone-bench-poisson-vdb");
+    cli::helpLayout(app, 36);
+    cli::addNumber(app, "--nodes", N, "nodes per axis (129: 128 cells)")
+        ->type_name("N")
+        ->check(cli::wholeNumber(9, 385))
+        ->default_str(cli::formatNumber(N));
+    cli::addNumber(app, "--tolerance", tol, "relative residual of every solve, in (0, 1)")
+        ->type_name("X")
+        ->check(cli::number())
+        ->default_str(cli::formatNumber(tol));
+    app.add_option("--csv", csvPath, "CSV output")->type_name("FILE")->capture_default_str();
+    if (const std::optional<int> code = cli::parse(app, argc, argv)) return *code;
     require(tol > 0 && tol < 1, "--tolerance: ", tol, " is not in (0, 1)");
     openvdb::initialize();
 
