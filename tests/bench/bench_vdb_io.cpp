@@ -31,9 +31,10 @@
 #include <openvdb/tools/LevelSetSphere.h>
 #include <tbb/info.h>
 
-#include "bench_args.h"
+#include "lodestone/cli/command_line.h"
 #include "lodestone/core/base/constants.h"
-#include "lodestone/core/base/error.h"
+include "lodestone/core/base/error.h"
+#include "lodestone/core/base/stopwatch.h"
 #include "lodestone/core/field/material.h"
 #include "lodestone/core/mpm/emitter.h"
 #include "lodestone/core/mpm/particles.h"
@@ -46,13 +47,12 @@
 #include "lodestone_test/scenes.h"
 
 using namespace lodestone;
-using lodestone::bench::parseList;
+namespace cli = lodestone::cli;
 namespace fs = std::filesystem;
 
 namespace {
 
 using Clock = std::chrono::steady_clock;
-double secondsSince(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 double megabytes(const fs::path& f) { return double(fs::file_size(f)) / 1e6; }
 
 /// One CSV row: case, what was measured, item count (nodes, particles,
@@ -246,43 +246,41 @@ int main(int argc, char** argv) {
     int nodes = 128, solveNodes = 128, res = 100;
     double particleCount = 1e5;
     std::string csvPath = "bench_vdb_io.csv", dirArg;
-    for (int a = 1; a < argc; ++a) {
-      const std::string arg = argv[a];
-      const auto next = [&]() -> std::string {
-        if (a + 1 >= argc) throw InvalidArgument(concat(arg, " needs a value"));
-        return argv[++a];
-      };
-      if (arg == "--nodes")
-        nodes = int(parseList(next(), "--nodes").at(0));
-      else if (arg == "--solve-nodes")
-        solveNodes = int(parseList(next(), "--solve-nodes").at(0));
-      else if (arg == "--particles")
-        particleCount = parseList(next(), "--particles").at(0);
-      else if (arg == "--level-set-res")
-        res = int(parseList(next(), "--level-set-res").at(0));
-      else if (arg == "--dir")
-        dirArg = next();
-      else if (arg == "--csv")
-        csvPath = next();
-      else if (arg == "--help" || arg == "-h") {
-        std::printf(
-            "lodestone-bench-vdb-io: sizes and times of the VDB field, particle and level-set files\n"
-            "  --nodes N          nodes per axis of the synthetic field set (default 128; 0 skips it)\n"
-            "  --solve-nodes N    nodes per axis of the solved field set (default 128; 0 skips it)\n"
-            "  --particles P      particles written and read (default 1e5; 0 skips them)\n"
-            "  --level-set-res R  sphere radius in voxels (default 100; 0 skips the level sets)\n"
-            "  --dir DIR          where the files go (default: a temporary folder, removed at the end)\n"
-            "  --csv FILE         CSV output (default bench_vdb_io.csv)\n");
-        return 0;
-      } else {
-        throw InvalidArgument(concat("unknown option '", arg, "' (see --help)"));
-      }
-    }
-    require(nodes == 0 || (nodes >= 8 && nodes <= 1024), "--nodes: ", nodes, " is not 0 or in 8..1024");
-    require(solveNodes == 0 || (solveNodes >= 8 && solveNodes <= 1024), "--solve-nodes: ", solveNodes,
-            " is not 0 or in 8..1024");
-    require(particleCount >= 0 && particleCount <= 1e9, "--particles: ", particleCount, " is not in 0..1e9");
-    require(res >= 0 && res <= 1000, "--level-set-res: ", res, " is not in 0..1000");
+    CLI::App app("lodestone-bench-vdb-io: sizes and times of the VDB field, particle and level-set files",
+                 "lodestone-bench-vdb-io");
+    cli::helpLayout(app, 28);
+    // 0 skips a case; otherwise the size must be in lo..hi.
+    const auto zeroOr = [](long long lo, long long hi) {
+      return cli::rule("0 or a whole number in " + std::to_string(lo) + ".." + std::to_string(hi),
+                       [lo, hi](const std::string& text) -> std::string {
+                         const std::optional<double> v = cli::toNumber(text);
+                         if (!v) return "'" + text + "' is not a number";
+                         if (*v != std::floor(*v) || !(*v == 0 || (*v >= double(lo) && *v <= double(hi))))
+                           return "must be 0 or a whole number in " + std::to_string(lo) + ".." + std::to_string(hi) +
+                                  ", got " + text;
+                         return "";
+                       });
+    };
+    cli::addNumber(app, "--nodes", nodes, "nodes per axis of the synthetic field set (0 skips it)")
+        ->type_name("N")
+        ->check(zeroOr(8, 1024))
+        ->default_str(cli::formatNumber(nodes));
+    cli::addNumber(app, "--solve-nodes", solveNodes, "nodes per axis of the solved field set (0 skips it)")
+        ->type_name("N")
+        ->check(zeroOr(8, 1024))
+        ->default_str(cli::formatNumber(solveNodes));
+    cli::addNumber(app, "--particles", particleCount, "particles written and read (0 skips them)")
+        ->type_name("P")
+        ->check(cli::numberIn(0, 1e9))
+        ->default_str(cli::formatNumber(particleCount));
+    cli::addNumber(app, "--level-set-res", res, "sphere radius in voxels (0 skips the level sets)")
+        ->type_name("R")
+        ->check(zeroOr(1, 1000))
+        ->default_str(cli::formatNumber(res));
+    app.add_option("--dir", dirArg, "where the files go (default: a temporary folder, removed at the end)")
+        ->type_name("DIR");
+    app.add_option("--csv", csvPath, "CSV output")->type_name("FILE")->default_str(csvPath);
+    if (const std::optional<int> code = cli::parse(app, argc, argv)) return *code;
     const bool tempDir = dirArg.empty();
     const fs::path dir =
         tempDir ? fs::temp_directory_path() / ("lodestone_bench_vdb_" + std::to_string(::getpid())) : fs::path(dirArg);
