@@ -21,10 +21,10 @@
 
 #include "bench_args.h"
 #include "lodestone/core/base/error.h"
-#include "scene.h"
+#include "lodestone/plugin/scene.h"
 
 using namespace lodestone;
-using namespace lodestone::examples;
+using namespace lodestone::plugin;
 
 namespace {
 

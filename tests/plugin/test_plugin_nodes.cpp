@@ -275,9 +275,28 @@ TEST(PluginNodes, ANetworkBuiltThroughTheCAbiGivesConservativeForces) {
   EXPECT_NE(std::string(a->context_last_error(ctx)).find("node 'ball' (particle_source): radius"), std::string::npos)
       << a->context_last_error(ctx);
   EXPECT_EQ(a->network_set_float(n, "ball", "radius_m", 1), LODESTONE_ERROR_NOT_FOUND);
-  EXPECT_EQ(a->network_set_json(n, "ferro", R"({"magnetic": {"lw": "paper"}})"), LODESTONE_ERROR_INVALID_ARGUMENT);
-  EXPECT_NE(std::string(a->context_last_error(ctx)).find("did you mean 'magnetic.law'"), std::string::npos)
-      << a->context_last_error(ctx);
+  // JSON is read as scene files are: the same messages, unknown keys with a
+  // suggestion, duplicate keys and syntax errors located.
+  const auto jsonError = [&](const char* node, const char* json) {
+    EXPECT_EQ(a->network_set_json(n, node, json), LODESTONE_ERROR_INVALID_ARGUMENT) << json;
+    return std::string(a->context_last_error(ctx));
+  };
+  EXPECT_NE(jsonError("ball", R"({"radius": -1})")
+                .find("node 'ball' (particle_source): radius: expected a number in m > 0, found number -1"),
+            std::string::npos);
+  EXPECT_NE(jsonError("ferro", R"({"magnetic": {"lw": "paper"}})")
+                .find("node 'ferro' (material): magnetic: unknown key 'lw'; did you mean 'law'?"),
+            std::string::npos);
+  EXPECT_NE(jsonError("ferro", R"({"densty": 1000})").find("unknown key 'densty'; did you mean 'density'?"),
+            std::string::npos);
+  EXPECT_NE(jsonError("ferro", R"({"density": 1000, "density": 2000})").find("duplicate key 'density'"),
+            std::string::npos);
+  EXPECT_NE(jsonError("ferro", "{\"density\": 1000,\n \"model\" \"solid\"}").find("node 'ferro' (material):2:"),
+            std::string::npos);
+  EXPECT_NE(jsonError("ferro", R"({"magnetic": {"law": "langevn"}})").find("did you mean 'langevin'?"),
+            std::string::npos);
+  EXPECT_NE(jsonError("ferro", R"({"density": 1200, "viscosity": "thick"})").find("viscosity: expected a number"),
+            std::string::npos);
   EXPECT_EQ(a->network_add_node(n, "nonsense", "x"), LODESTONE_ERROR_NOT_FOUND);
 
   ok(a->network_cook(n, "force"));
