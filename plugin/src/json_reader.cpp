@@ -17,7 +17,15 @@ namespace {
 
 using nlohmann::json;
 
-// Shortest "%g" text that reads back as the same double.
+std::string withUnit(const std::string& unit) { return unit.empty() || unit == "1" ? std::string() : " in " + unit; }
+
+std::string lowerCase(std::string s) {
+  for (char& c : s) c = char(std::tolower(static_cast<unsigned char>(c)));
+  return s;
+}
+
+}  // namespace
+
 std::string formatNumber(double v) {
   if (std::isnan(v)) return "nan";
   if (std::isinf(v)) return v > 0 ? "inf" : "-inf";
@@ -29,9 +37,6 @@ std::string formatNumber(double v) {
   return buf;
 }
 
-std::string withUnit(const std::string& unit) { return unit.empty() || unit == "1" ? std::string() : " in " + unit; }
-
-// "a number in kg/m^3 > 0"
 std::string numberExpectation(const std::string& what, const std::string& unit, const Range& range) {
   std::string s = what + withUnit(unit);
   const std::string r = range.describe();
@@ -39,8 +44,7 @@ std::string numberExpectation(const std::string& what, const std::string& unit, 
   return s;
 }
 
-// 'a', 'b' or 'c' (conjunction "or" / "and")
-std::string quoteList(const std::vector<std::string>& words, const char* conjunction = "or") {
+std::string quoteList(const std::vector<std::string>& words, const char* conjunction) {
   std::string s;
   for (std::size_t i = 0; i < words.size(); ++i) {
     if (i > 0) s += i + 1 == words.size() ? concat(" ", conjunction, " ") : std::string(", ");
@@ -49,12 +53,6 @@ std::string quoteList(const std::vector<std::string>& words, const char* conjunc
   return s;
 }
 
-std::string lowerCase(std::string s) {
-  for (char& c : s) c = char(std::tolower(static_cast<unsigned char>(c)));
-  return s;
-}
-
-// "an array of [at least N | N | N to M] <what>"
 std::string arrayOf(std::size_t minCount, std::size_t maxCount, const char* what) {
   std::string count;
   if (maxCount == std::numeric_limits<std::size_t>::max()) {
@@ -64,6 +62,8 @@ std::string arrayOf(std::size_t minCount, std::size_t maxCount, const char* what
   }
   return concat("an array of ", count, what);
 }
+
+namespace {
 
 // Tracks the path of the value being parsed, to name duplicate keys.
 class DuplicateKeyCheck {

@@ -133,19 +133,20 @@ TEST(PluginNodes, ValidationErrorsNameTheNodeAndTheParameter) {
   const std::vector<Case> cases = {
       {[&] { net.setParam("ferro", "density", -5.0); }, {"node 'ferro' (material)", "density", "kg/m^3", "> 0", "-5"}},
       {[&] { net.setParam("ferro", "densty", 1.0); }, {"node 'ferro' (material)", "densty", "did you mean 'density'"}},
-      {[&] { net.setParam("ferro", "model", std::string("gel")); }, {"ferro", "model", "one of solid, fluid"}},
+      {[&] { net.setParam("ferro", "model", std::string("gel")); },
+       {"ferro", "model", "one of 'solid' or 'fluid', found 'gel'"}},
       {[&] { net.setParam("ferro", "poisson_ratio", 0.6); }, {"ferro", "poisson_ratio", "in [0, 0.49]"}},
       {[&] { net.setParam("blob", "particles_per_cell", 2.5); },
        {"node 'blob' (particle_source)", "particles_per_cell", "integer"}},
       {[&] {
          net.setParam("blob", "half_size", Vec3d{0.1, -0.1, 0.1});
        },
-       {"blob", "half_size", "m"}},
+       {"node 'blob' (particle_source): half_size[1]: expected a number in m > 0, found number -0.1"}},
       {[&] {
          net.setParam("blob", "axis", Vec3d{0, 0, 0});
        },
        {"blob", "axis", "non-zero"}},
-      {[&] { net.setParam("blob", "center", 1.0); }, {"blob", "center", "3-vector"}},
+      {[&] { net.setParam("blob", "center", 1.0); }, {"blob", "center", "an array of 3 numbers [x, y, z] in m"}},
       {[&] { net.addNode("magnett", "m"); }, {"unknown node type 'magnett'"}},
       {[&] { net.connect("ferro", "material", "blob", "materal"); }, {"blob", "materal", "did you mean 'material'"}},
       {[&] { net.connect("blob", "particles", "ferro", "x"); }, {"ferro", "no input named 'x'"}},

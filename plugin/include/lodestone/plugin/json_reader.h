@@ -91,6 +91,18 @@ std::string closestMatch(const std::string& word, const std::vector<std::string>
 /// "; did you mean 'x'?" for closestMatch's answer, "" when there is none.
 std::string didYouMean(const std::string& word, const std::vector<std::string>& candidates);
 
+// The words of every "expected ..., found ..." message, shared by the reader
+// and ParamDecl::check (a value set on a network node).
+
+/// Shortest "%g" text that reads back as the same double ("nan", "inf").
+std::string formatNumber(double v);
+/// "a number in kg/m^3 > 0": `what`, the unit (none when "" or "1") and the range.
+std::string numberExpectation(const std::string& what, const std::string& unit, const Range& range);
+/// "'a', 'b' or 'c'" (`conjunction` "or" or "and").
+std::string quoteList(const std::vector<std::string>& words, const char* conjunction = "or");
+/// "an array of [at least N | N | N to M] <what>".
+std::string arrayOf(std::size_t minCount, std::size_t maxCount, const char* what);
+
 /// "object", "array", "string", "boolean", "number", "null"...
 std::string jsonTypeName(const nlohmann::json& value);
 /// A short description of a found value: `number -5`, `string "abc"`,
