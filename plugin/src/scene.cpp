@@ -7,6 +7,7 @@
 #include "lodestone/core/planner/accuracy_preset.h"
 #include "lodestone/plugin/json_reader.h"
 #include "lodestone/plugin/node_builders.h"
+#include "lodestone/plugin/node_registry.h"
 #include "lodestone/plugin/param_json.h"
 
 namespace lodestone::plugin {
@@ -169,7 +170,8 @@ Scene sceneFromJson(const nlohmann::json& doc, const std::string& sourceName, co
   for (JsonReader& m : optionalArray(root, "magnets")) {
     const ParamSet p = readNodeEntry(m, "magnet", {"motion."});
     if (p.given("remanence") && p.given("magnetization")) m.fail("give magnetization or remanence, not both");
-    if (!p.given("remanence")) m.number("magnetization", "A/m", Range::closed(-3e6, 3e6));  // required then
+    if (!p.given("remanence"))  // magnetization is required then (missing: named with its declared unit and range)
+      readParam(m, "magnetization", *requireNode("magnet").param("magnetization"));
     Pose pose;
     SceneMagnet sm = magnetFrom(p, &pose);
     sm.motion = readMotion(m, pose);
