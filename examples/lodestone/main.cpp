@@ -24,6 +24,7 @@
 #include "lodestone/core/base/error.h"
 #include "lodestone/core/mpm/checkpoint.h"
 #include "lodestone/plugin/node_registry.h"
+#include "lodestone/plugin/scene.h"
 #if LODESTONE_HAVE_VDB
 #include "lodestone/vdb_io/field_file.h"
 #include "lodestone/vdb_io/level_set_file.h"
@@ -33,12 +34,12 @@
 #include "png_writer.h"
 #include "preview.h"
 #include "progress.h"
-#include "scene.h"
 #include "plan_report.h"
 #include "stats_json.h"
 
 using namespace lodestone;
 using namespace lodestone::examples;
+using namespace lodestone::plugin;
 
 namespace {
 

@@ -6,7 +6,7 @@
 
 namespace lodestone::examples {
 
-std::vector<StageDecision> mechanicsDecisions(const Scene& scene, const MpmSolver& solver) {
+std::vector<StageDecision> mechanicsDecisions(const plugin::Scene& scene, const MpmSolver& solver) {
   std::vector<StageDecision> d;
   const bool gravity = norm(scene.settings.gravity) > 0;
   d.push_back({"gravity", gravity, gravity ? "on" : "idle", gravity ? "the scene sets g" : "g = 0 in the scene", 0, 0});
@@ -22,7 +22,7 @@ std::vector<StageDecision> mechanicsDecisions(const Scene& scene, const MpmSolve
   return d;
 }
 
-void printPlan(const Scene& scene, const MpmSolver& solver, std::FILE* out) {
+void printPlan(const plugin::Scene& scene, const MpmSolver& solver, std::FILE* out) {
   const PlannerSettings& ps = scene.settings.planner;
   std::fprintf(out, "plan (%s):\n",
                ps.enabled ? concat("effects planner on, accuracy budget ", 100 * ps.budget, "%").c_str()

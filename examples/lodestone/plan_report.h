@@ -9,17 +9,17 @@
 #include <nlohmann/json.hpp>
 
 #include "lodestone/core/planner/effects_planner.h"
-#include "scene.h"
+#include "lodestone/plugin/scene.h"
 
 namespace lodestone::examples {
 
 /// Mechanical stages with nothing to do in this scene (no gravity, no
 /// colliders, no fluid, no solid) and why; the MPM core is always on.
-std::vector<StageDecision> mechanicsDecisions(const Scene& scene, const MpmSolver& solver);
+std::vector<StageDecision> mechanicsDecisions(const plugin::Scene& scene, const MpmSolver& solver);
 
 /// Prints the plan of `solver` in its current state: every stage, on or
 /// off, the reason, the predicted error and the estimated cost per frame.
-void printPlan(const Scene& scene, const MpmSolver& solver, std::FILE* out);
+void printPlan(const plugin::Scene& scene, const MpmSolver& solver, std::FILE* out);
 
 /// The decisions as JSON (stage, on, choice, reason, predicted_error, estimated_s).
 nlohmann::json decisionsJson(const std::vector<StageDecision>& decisions);

@@ -24,7 +24,7 @@ Primitive magnetPrimitive(const MagnetSource& m) {
 }
 }  // namespace
 
-RgbImage renderPreview(const Scene& scene, const MpmSolver& solver) {
+RgbImage renderPreview(const plugin::Scene& scene, const MpmSolver& solver) {
   const MpmParticles& p = solver.particles();
   const GridSpec& g = scene.settings.grid;
   std::vector<Rgb> colours(p.size());

@@ -7,11 +7,11 @@
 
 #include "colormap.h"
 #include "lodestone/core/mpm/solver.h"
-#include "scene.h"
+#include "lodestone/plugin/scene.h"
 
 namespace lodestone::examples {
 
 /// Renders the solver's current state as the scene's output settings ask.
-RgbImage renderPreview(const Scene& scene, const MpmSolver& solver);
+RgbImage renderPreview(const plugin::Scene& scene, const MpmSolver& solver);
 
 }  // namespace lodestone::examples

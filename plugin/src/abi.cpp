@@ -26,6 +26,7 @@
 #include "lodestone/plugin/network.h"
 #include "lodestone/plugin/node_builders.h"
 #include "lodestone/plugin/node_registry.h"
+#include "lodestone/plugin/json_reader.h"
 #include "lodestone/plugin/param_json.h"
 
 using namespace lodestone;
@@ -910,13 +911,10 @@ lodestone_status networkSetJson(lodestone_network* n, const char* node, const ch
     Network& network = net(n);
     const std::string name = needName(node, "node"), text = needName(json, "json");
     checkNode(network, name);
-    nlohmann::json doc;
-    try {
-      doc = nlohmann::json::parse(text);
-    } catch (const nlohmann::json::exception& e) {
-      throw AbiError(LODESTONE_ERROR_INVALID_ARGUMENT, concat("not JSON: ", e.what()));
-    }
-    setParamsFromJson(network, name, doc, concat("node '", name, "'"));
+    // The scene files' strict reading: syntax errors at line:column,
+    // duplicate keys, unknown keys with a suggestion, types and ranges.
+    const std::string where = concat("node '", name, "' (", network.declOf(name).type, ")");
+    setParamsFromJson(network, name, parseJsonText(text, where), where);
   });
 }
 

@@ -1,39 +1,11 @@
 #include "lodestone/plugin/network.h"
 
-#include <algorithm>
-
 #include "lodestone/core/base/error.h"
 #include "lodestone/plugin/errors.h"
+#include "lodestone/plugin/json_reader.h"
 #include "lodestone/plugin/node_registry.h"
 
 namespace lodestone::plugin {
-
-namespace {
-std::string suggestion(const std::string& word, const std::vector<std::string>& candidates) {
-  // Nearest candidate by optimal-string-alignment distance, when close.
-  std::string best;
-  int bestDistance = 1 << 30;
-  for (const std::string& c : candidates) {
-    const std::size_t n = word.size(), m = c.size();
-    std::vector<std::vector<int>> d(n + 1, std::vector<int>(m + 1));
-    for (std::size_t i = 0; i <= n; ++i) d[i][0] = int(i);
-    for (std::size_t j = 0; j <= m; ++j) d[0][j] = int(j);
-    for (std::size_t i = 1; i <= n; ++i)
-      for (std::size_t j = 1; j <= m; ++j) {
-        d[i][j] = std::min({d[i - 1][j] + 1, d[i][j - 1] + 1, d[i - 1][j - 1] + (word[i - 1] == c[j - 1] ? 0 : 1)});
-        if (i > 1 && j > 1 && word[i - 1] == c[j - 2] && word[i - 2] == c[j - 1])
-          d[i][j] = std::min(d[i][j], d[i - 2][j - 2] + 1);
-      }
-    if (d[n][m] < bestDistance) {
-      bestDistance = d[n][m];
-      best = c;
-    }
-  }
-  const int limit = std::max(1, int(std::max(word.size(), best.size())) / 3);
-  if (best.empty() || bestDistance > limit) return "";
-  return concat("; did you mean '", best, "'?");
-}
-}  // namespace
 
 std::string Network::where(const std::string& name) const {
   const auto it = nodes_.find(name);
@@ -61,7 +33,7 @@ void Network::addNode(const NodeDecl& declIn, const std::string& name) {
 
 Network::Instance& Network::instance(const std::string& name) {
   const auto it = nodes_.find(name);
-  if (it == nodes_.end()) throw InvalidArgument(concat("no node named '", name, "'", suggestion(name, order_)));
+  if (it == nodes_.end()) throw InvalidArgument(concat("no node named '", name, "'", didYouMean(name, order_)));
   return it->second;
 }
 const Network::Instance& Network::instance(const std::string& name) const {
@@ -76,7 +48,7 @@ void Network::setParam(const std::string& node, const std::string& param, const 
   const ParamDecl* decl = inst.decl->param(param);
   if (!decl)
     throw InvalidArgument(
-        concat(where(node), ": unknown parameter '", param, "'", suggestion(param, inst.decl->paramNames())));
+        concat(where(node), ": unknown parameter '", param, "'", didYouMean(param, inst.decl->paramNames())));
   inst.params.set(param, decl->check(value, where(node)));
   inst.params.markGiven(param);
   markDirty(node);
@@ -108,12 +80,12 @@ void Network::connect(const std::string& from, const std::string& output, const 
   std::vector<std::string> names;
   if (!out) {
     for (const PortDecl& p : src.decl->outputs) names.push_back(p.name);
-    throw InvalidArgument(concat(where(from), ": no output named '", output, "'", suggestion(output, names)));
+    throw InvalidArgument(concat(where(from), ": no output named '", output, "'", didYouMean(output, names)));
   }
   const PortDecl* in = dst.decl->input(input);
   if (!in) {
     for (const PortDecl& p : dst.decl->inputs) names.push_back(p.name);
-    throw InvalidArgument(concat(where(to), ": no input named '", input, "'", suggestion(input, names)));
+    throw InvalidArgument(concat(where(to), ": no input named '", input, "'", didYouMean(input, names)));
   }
   require(out->type == in->type, where(to), ": input '", input, "' takes ", toString(in->type), ", but output '",
           output, "' of ", where(from), " gives ", toString(out->type));

@@ -1,12 +1,13 @@
 #include "lodestone/plugin/node_builders.h"
 
+#include <algorithm>
 #include <cmath>
 
 #include "lodestone/core/base/constants.h"
-#include "lodestone/core/sources/cuboid_magnet.h"
-#include "lodestone/core/sources/cylinder_magnet.h"
 #include "lodestone/core/base/error.h"
 #include "lodestone/core/field/material.h"
+#include "lodestone/core/sources/cuboid_magnet.h"
+#include "lodestone/core/sources/cylinder_magnet.h"
 #include "lodestone/core/sources/point_dipole.h"
 #include "lodestone/core/sources/sphere_magnet.h"
 #include "lodestone/core/sources/uniform_field.h"
@@ -55,6 +56,23 @@ EmitterShape shapeFrom(const ParamSet& p) {
   return EmitterShape::cylinder(pose, p.getFloat("radius"), p.getFloat("half_length"));
 }
 
+ColliderMotion motionFrom(const ParamSet& p, const Pose& rest) {
+  const Vec3d v = p.getVec3("motion.velocity"), w = p.getVec3("motion.angular_velocity");
+  if (norm2(v) == 0 && norm2(w) == 0) return ColliderMotion::fixed(rest);
+  return ColliderMotion::constantVelocity(rest, v, w);
+}
+
+SourcesData::Magnet magnetFrom(const ParamSet& p, Pose* restPose) {
+  SourcesData::Magnet m;
+  const Pose pose = poseAlong(p.getVec3("center"), p.getVec3("axis"));
+  m.magnet = makeMagnet(p, pose);
+  m.motion = motionFrom(p, pose);
+  m.collider = p.getBool("collider");
+  m.boundary = boundaryFrom(p);
+  if (restPose) *restPose = pose;
+  return m;
+}
+
 std::unique_ptr<MagnetSource> makeMagnet(const ParamSet& p, const Pose& pose) {
   const double M =
       p.given("remanence") ? magnetizationFromRemanence(p.getFloat("remanence")) : p.getFloat("magnetization");
@@ -63,6 +81,16 @@ std::unique_ptr<MagnetSource> makeMagnet(const ParamSet& p, const Pose& pose) {
   if (shape == "sphere") return std::make_unique<SphereMagnet>(pose, p.getFloat("radius"), body);
   if (shape == "box") return std::make_unique<CuboidMagnet>(pose, p.getVec3("half_size"), body);
   return std::make_unique<CylinderMagnet>(pose, p.getFloat("radius"), p.getFloat("half_length"), body);
+}
+
+EmitterSettings emitterSettingsFrom(const ParamSet& p) {
+  EmitterSettings e;
+  e.cellSize = p.getFloat("cell_size");
+  e.particlesPerCell = int(p.getInt("particles_per_cell"));
+  e.jitter = p.getFloat("jitter");
+  e.seed = std::uint64_t(p.getInt("seed"));
+  e.velocity = p.getVec3("velocity");
+  return e;
 }
 
 MpmMaterial materialFrom(const ParamSet& p) {
@@ -115,13 +143,33 @@ ColliderShape colliderShapeFrom(const ParamSet& p, Pose& pose) {
   return cs;
 }
 
-BoundaryCondition boundaryFrom(const ParamSet& p) {
-  const std::string& mode = p.getString("boundary");
+BoundaryCondition boundaryFrom(const ParamSet& p, const std::string& prefix) {
+  const std::string& mode = p.getString(prefix + "boundary");
   BoundaryCondition bc;
   bc.mode = mode == "sticky" ? BoundaryMode::Sticky : mode == "slip" ? BoundaryMode::Slip : BoundaryMode::Separate;
-  bc.friction = p.getFloat("friction");
+  bc.friction = p.getFloat(prefix + "friction");
   return bc;
 }
+
+MagneticStageSettings solveSettingsFrom(const ParamSet& p, const std::string& prefix) {
+  MagneticStageSettings s;
+  s.boundary = p.getString(prefix + "boundary") == "open" ? BoundaryKind::Open : BoundaryKind::Shield;
+  s.solve.tolerance = p.getFloat(prefix + "tolerance");
+  s.solve.preconditioner = p.getString(prefix + "preconditioner") == "multigrid" ? PreconditionerKind::Multigrid
+                                                                                 : PreconditionerKind::Jacobi;
+  s.solve.maxNewtonIterations = int(p.getInt(prefix + "max_newton_iterations"));
+  return s;
+}
+
+namespace {
+// Memory the simulation needs per grid node, bytes: the MPM grid (mass,
+// momentum, velocity, binning) and the magnetic stage's padded grid (n, phi,
+// H_ext, H, M, B, t, f, the solver's vectors and multigrid hierarchy), about
+// 600 B together; the estimate refuses grids that cannot fit before any
+// allocation.
+constexpr double kBytesPerNode = 600;
+constexpr double kMaxGridGiB = 25;
+}  // namespace
 
 MpmSettings mpmSettingsFrom(const ParamSet& p) {
   MpmSettings s;
@@ -130,29 +178,25 @@ MpmSettings mpmSettingsFrom(const ParamSet& p) {
     require(hi[a] > lo[a], "domain: max must exceed min on every axis; axis ", a, " has min ", lo[a], " m and max ",
             hi[a], " m");
   const double dx = p.getFloat("domain.dx");
+  // Node counts in double first: a tiny dx must be refused, not overflow an int.
+  double n[3];
+  for (int a = 0; a < 3; ++a) n[a] = std::ceil((hi[a] - lo[a]) / dx - 1e-9) + 1;
+  const double gib = n[0] * n[1] * n[2] * kBytesPerNode / (1024.0 * 1024.0 * 1024.0);
+  require(gib <= kMaxGridGiB && std::max(n[0], std::max(n[1], n[2])) <= 1 << 20, "domain: a grid of ", n[0], " x ",
+          n[1], " x ", n[2], " nodes at dx = ", dx, " m is too large (needs about ", gib, " GiB, limit ", kMaxGridGiB,
+          " GiB)");
   GridSpec g;
   g.origin = lo;
   g.dx = dx;
-  g.dims = {int(std::ceil((hi.x - lo.x) / dx - 1e-9)) + 1, int(std::ceil((hi.y - lo.y) / dx - 1e-9)) + 1,
-            int(std::ceil((hi.z - lo.z) / dx - 1e-9)) + 1};
-  const double nodes = double(g.dims.i) * g.dims.j * g.dims.k;
-  require(nodes <= 4.5e7, "domain: a grid of ", g.dims.i, " x ", g.dims.j, " x ", g.dims.k, " nodes at dx = ", dx,
-          " m is too large (needs about ", nodes * 600 / 1e9, " GB)");
+  g.dims = {int(n[0]), int(n[1]), int(n[2])};
   s.grid = g;
-  const std::string& mode = p.getString("domain.boundary");
-  s.walls.mode = mode == "sticky" ? BoundaryMode::Sticky : mode == "slip" ? BoundaryMode::Slip : BoundaryMode::Separate;
-  s.walls.friction = p.getFloat("domain.friction");
+  s.walls = boundaryFrom(p, "domain.");
   s.fixedDt = p.getFloat("time.dt");
   s.cfl = p.getFloat("time.cfl");
   s.dtMax = p.getFloat("time.dt_max");
   s.magneticSolveInterval = int(p.getInt("time.field_solve_every"));
   s.gravity = p.getVec3("gravity");
-  auto& m = s.magnetic;
-  m.boundary = p.getString("magnetic.boundary") == "open" ? BoundaryKind::Open : BoundaryKind::Shield;
-  m.solve.tolerance = p.getFloat("magnetic.tolerance");
-  m.solve.preconditioner = p.getString("magnetic.preconditioner") == "multigrid" ? PreconditionerKind::Multigrid
-                                                                                 : PreconditionerKind::Jacobi;
-  m.solve.maxNewtonIterations = int(p.getInt("magnetic.max_newton_iterations"));
+  s.magnetic = solveSettingsFrom(p, "magnetic.");
   const int padding = int(p.getInt("magnetic.padding"));
   if (padding > 0) {
     // The field solve sees free space beyond the MPM walls: material resting
@@ -164,6 +208,19 @@ MpmSettings mpmSettingsFrom(const ParamSet& p) {
   }
   s.validate();
   return s;
+}
+
+void addSourcesAndColliders(MpmSolver& solver, const FieldSourceSet& fields,
+                            const std::vector<SourcesData::Magnet>& magnets,
+                            const std::vector<MpmCollider>& colliders) {
+  solver.setSources(fields);
+  for (const SourcesData::Magnet& m : magnets) {
+    if (m.collider)
+      solver.addMagnet(*m.magnet, m.motion, m.boundary);
+    else
+      solver.sources().add(*m.magnet);
+  }
+  for (const MpmCollider& c : colliders) solver.addCollider(c);
 }
 
 bool vdbBuilt() { return LODESTONE_PLUGIN_HAVE_VDB != 0; }

@@ -4,6 +4,7 @@
 #include <sstream>
 
 #include "lodestone/core/base/error.h"
+#include "lodestone/plugin/json_reader.h"
 
 namespace lodestone::plugin {
 
@@ -83,8 +84,12 @@ const NodeDecl* findNode(const std::string& type) {
 const NodeDecl& requireNode(const std::string& type) {
   if (const NodeDecl* d = findNode(type)) return *d;
   std::string list;
-  for (const NodeDecl& d : nodeRegistry()) list += (list.empty() ? "" : ", ") + d.type;
-  throw InvalidArgument(concat("unknown node type '", type, "' (known: ", list, ")"));
+  std::vector<std::string> types;
+  for (const NodeDecl& d : nodeRegistry()) {
+    list += (list.empty() ? "" : ", ") + d.type;
+    types.push_back(d.type);
+  }
+  throw InvalidArgument(concat("unknown node type '", type, "'", didYouMean(type, types), " (known: ", list, ")"));
 }
 
 namespace {

@@ -36,12 +36,6 @@ void addMotionParams(std::vector<ParamDecl>& params) {
                              "Constant angular velocity about the body origin (world frame)."));
 }
 
-ColliderMotion motionFrom(const ParamSet& p, const Pose& rest) {
-  const Vec3d v = p.getVec3("motion.velocity"), w = p.getVec3("motion.angular_velocity");
-  if (norm2(v) == 0 && norm2(w) == 0) return ColliderMotion::fixed(rest);
-  return ColliderMotion::constantVelocity(rest, v, w);
-}
-
 template <typename T>
 NodeValue value(T&& data) {
   return std::shared_ptr<const std::decay_t<T>>(std::make_shared<std::decay_t<T>>(std::forward<T>(data)));
@@ -73,6 +67,15 @@ SourcesData mergeSources(const std::vector<NodeValue>& inputs) {
     const auto& in = *std::get<std::shared_ptr<const SourcesData>>(v);
     for (std::size_t k = 0; k < in.fields.size(); ++k) out.fields.add(in.fields.source(k));
     out.magnets.insert(out.magnets.end(), in.magnets.begin(), in.magnets.end());
+  }
+  return out;
+}
+
+CollidersData mergeColliders(const std::vector<NodeValue>& inputs) {
+  CollidersData out;
+  for (const NodeValue& v : inputs) {
+    const auto& in = *std::get<std::shared_ptr<const CollidersData>>(v);
+    out.colliders.insert(out.colliders.end(), in.colliders.begin(), in.colliders.end());
   }
   return out;
 }
@@ -203,11 +206,7 @@ NodeDecl particleSourceNode() {
     const auto material = c.input<MaterialData>("material");
     body.material = material ? *material : MaterialData{"default", neoHookeanSolid(1e5, 0.3, 1000.0)};
     body.shape = shapeFrom(p);
-    body.emit.cellSize = p.getFloat("cell_size");
-    body.emit.particlesPerCell = int(p.getInt("particles_per_cell"));
-    body.emit.jitter = p.getFloat("jitter");
-    body.emit.seed = std::uint64_t(p.getInt("seed"));
-    body.emit.velocity = p.getVec3("velocity");
+    body.emit = emitterSettingsFrom(p);
     emitParticles(out.particles, body.shape, body.material.material, 0, body.emit);
     out.materials.push_back(body.material.material);
     out.bodies.push_back(std::move(body));
@@ -248,13 +247,7 @@ NodeDecl magnetNode() {
   d.cook = [](const CookContext& c) {
     const ParamSet& p = c.params();
     SourcesData out = mergeSources(c.inputs("sources"));
-    SourcesData::Magnet m;
-    const Pose pose = poseAlong(p.getVec3("center"), p.getVec3("axis"));
-    m.magnet = makeMagnet(p, pose);
-    m.motion = motionFrom(p, pose);
-    m.collider = p.getBool("collider");
-    m.boundary = boundaryFrom(p);
-    out.magnets.push_back(std::move(m));
+    out.magnets.push_back(magnetFrom(p));
     return CookOutputs{{"sources", value(std::move(out))}};
   };
   return d;
@@ -322,11 +315,7 @@ NodeDecl colliderNode() {
   d.outputs = {{"colliders", PortType::Colliders, "The input colliders plus this one."}};
   d.cook = [](const CookContext& c) {
     const ParamSet& p = c.params();
-    CollidersData out;
-    for (const NodeValue& v : c.inputs("colliders")) {
-      const auto& in = *std::get<std::shared_ptr<const CollidersData>>(v);
-      out.colliders.insert(out.colliders.end(), in.colliders.begin(), in.colliders.end());
-    }
+    CollidersData out = mergeColliders(c.inputs("colliders"));
     Pose pose;
     const ColliderShape cs = colliderShapeFrom(p, pose);
     out.colliders.emplace_back(cs, motionFrom(p, pose), boundaryFrom(p));
@@ -388,16 +377,6 @@ void addSolveParams(std::vector<ParamDecl>& q, const std::string& prefix) {
   q.push_back(choiceParam(prefix + "preconditioner", "Preconditioner", {"multigrid", "jacobi"}, "multigrid",
                           "Preconditioner of the inner CG."));
   q.push_back(intParam(prefix + "max_newton_iterations", "Newton iterations", 40, 1, 1000, "Newton iteration cap."));
-}
-
-MagneticStageSettings solveSettingsFrom(const ParamSet& p, const std::string& prefix) {
-  MagneticStageSettings s;
-  s.boundary = p.getString(prefix + "boundary") == "open" ? BoundaryKind::Open : BoundaryKind::Shield;
-  s.solve.tolerance = p.getFloat(prefix + "tolerance");
-  s.solve.preconditioner = p.getString(prefix + "preconditioner") == "multigrid" ? PreconditionerKind::Multigrid
-                                                                                 : PreconditionerKind::Jacobi;
-  s.solve.maxNewtonIterations = int(p.getInt(prefix + "max_newton_iterations"));
-  return s;
 }
 
 NodeDecl fieldSolveNode() {
@@ -489,16 +468,7 @@ NodeDecl mpmSolverNode() {
     for (const MpmMaterial& m : all.materials) solver->addMaterial(m);
     solver->particles() = all.particles;
     const SourcesData sources = mergeSources(c.inputs("sources"));
-    solver->setSources(sources.fields);
-    for (const SourcesData::Magnet& m : sources.magnets) {
-      if (m.collider)
-        solver->addMagnet(*m.magnet, m.motion, m.boundary);
-      else
-        solver->sources().add(*m.magnet);
-    }
-    for (const NodeValue& v : c.inputs("colliders"))
-      for (const MpmCollider& col : std::get<std::shared_ptr<const CollidersData>>(v)->colliders)
-        solver->addCollider(col);
+    addSourcesAndColliders(*solver, sources.fields, sources.magnets, mergeColliders(c.inputs("colliders")).colliders);
     SimulationData out;
     const auto comMagnetic = [&]() {
       const MpmParticles& pts = solver->particles();

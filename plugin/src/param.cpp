@@ -4,6 +4,7 @@
 #include <sstream>
 
 #include "lodestone/core/base/error.h"
+#include "lodestone/plugin/json_reader.h"
 
 namespace lodestone::plugin {
 
@@ -38,22 +39,15 @@ std::string number(double v) {
   return os.str();
 }
 
+// A value as the JSON reader describes what it found: `number -5`,
+// `string "abc"`, `an array of 3 elements`...
 std::string describeValue(const ParamValue& v) {
-  if (const double* d = std::get_if<double>(&v)) return "number " + number(*d);
-  if (const std::int64_t* i = std::get_if<std::int64_t>(&v)) return "integer " + std::to_string(*i);
-  if (const bool* b = std::get_if<bool>(&v)) return std::string("boolean ") + (*b ? "true" : "false");
-  if (const std::string* s = std::get_if<std::string>(&v)) return "string \"" + *s + "\"";
-  if (const Vec3d* x = std::get_if<Vec3d>(&v))
-    return "vector [" + number(x->x) + ", " + number(x->y) + ", " + number(x->z) + "]";
-  const auto& list = std::get<std::vector<double>>(v);
-  return "a list of " + std::to_string(list.size()) + " numbers";
-}
-
-bool inRange(const ParamDecl& p, double v) {
-  if (!std::isfinite(v)) return false;
-  if (p.minOpen ? !(v > p.min) : !(v >= p.min)) return false;
-  if (p.maxOpen ? !(v < p.max) : !(v <= p.max)) return false;
-  return true;
+  if (const double* d = std::get_if<double>(&v)) return describeJsonValue(*d);
+  if (const std::int64_t* i = std::get_if<std::int64_t>(&v)) return describeJsonValue(*i);
+  if (const bool* b = std::get_if<bool>(&v)) return describeJsonValue(*b);
+  if (const std::string* t = std::get_if<std::string>(&v)) return describeJsonValue(*t);
+  if (const Vec3d* x = std::get_if<Vec3d>(&v)) return describeJsonValue(nlohmann::json{x->x, x->y, x->z});
+  return describeJsonValue(nlohmann::json(std::get<std::vector<double>>(v)));
 }
 
 }  // namespace
@@ -89,11 +83,19 @@ std::string ParamDecl::defaultText() const {
 }
 
 ParamValue ParamDecl::check(const ParamValue& value, const std::string& where) const {
-  const auto fail = [&](const std::string& expected) {
-    throw InvalidArgument(concat(where, ": ", name, ": expected ", expected, ", found ", describeValue(value)));
+  // The JSON reader's words (json_reader.h), so that a value set on a node
+  // and the same value in a scene file or network_set_json read alike.
+  const auto failAt = [&](const std::string& at, const std::string& expected, const std::string& found) {
+    throw InvalidArgument(concat(where, ": ", at, ": expected ", expected, ", found ", found));
   };
-  const std::string unitText = unit.empty() ? std::string() : " in " + unit;
-  const std::string rangeText = describeRange().empty() ? std::string() : " " + describeRange();
+  const auto fail = [&](const std::string& expected) { failAt(name, expected, describeValue(value)); };
+  const Range r{min, max, minOpen, maxOpen};
+  // One number of this parameter: finite and in range, else a message at `at`.
+  const auto checkNumber = [&](double v, const std::string& at) {
+    const std::string expected = numberExpectation("a number", unit, r);
+    if (!std::isfinite(v)) failAt(at, expected, concat("a non-finite number (", formatNumber(v), ")"));
+    if (!r.contains(v)) failAt(at, expected, describeJsonValue(v));
+  };
   switch (type) {
     case ParamType::Float: {
       double v = 0;
@@ -102,56 +104,58 @@ ParamValue ParamDecl::check(const ParamValue& value, const std::string& where) c
       else if (const std::int64_t* i = std::get_if<std::int64_t>(&value))
         v = double(*i);
       else
-        fail("a number" + unitText + rangeText);
-      if (!inRange(*this, v)) fail("a number" + unitText + rangeText);
+        fail(numberExpectation("a number", unit, r));
+      checkNumber(v, name);
       return v;
     }
     case ParamType::Int: {
+      const std::string expected = concat("an integer in [", std::int64_t(min), ", ", std::int64_t(max), "]");
       std::int64_t v = 0;
-      if (const std::int64_t* i = std::get_if<std::int64_t>(&value))
+      if (const std::int64_t* i = std::get_if<std::int64_t>(&value)) {
         v = *i;
-      else if (const double* d = std::get_if<double>(&value);
-               d && std::isfinite(*d) && std::floor(*d) == *d && std::fabs(*d) < 9e15)
+      } else if (const double* d = std::get_if<double>(&value)) {
+        if (!std::isfinite(*d)) failAt(name, expected, concat("a non-finite number (", formatNumber(*d), ")"));
+        if (std::floor(*d) != *d) failAt(name, expected, "the non-integer " + describeValue(value));
+        if (!(std::fabs(*d) < 9e15)) fail(expected);
         v = std::int64_t(*d);
-      else
-        fail("an integer" + rangeText);
-      if (!inRange(*this, double(v))) fail("an integer" + rangeText);
+      } else {
+        fail(expected);
+      }
+      if (!r.contains(double(v))) fail(expected);
       return v;
     }
     case ParamType::Bool:
-      if (!std::holds_alternative<bool>(value)) fail("a boolean");
+      if (!std::holds_alternative<bool>(value)) fail("true or false");
       return value;
     case ParamType::String:
       if (!std::holds_alternative<std::string>(value)) fail("a string");
       return value;
     case ParamType::Choice: {
+      const std::string expected = "one of " + quoteList(choices);
       const std::string* s = std::get_if<std::string>(&value);
-      if (!s) fail(describeRange());
+      if (!s) fail(expected);
       for (const std::string& c : choices)
         if (c == *s) return value;
-      fail(describeRange());
+      failAt(name, expected, concat("'", *s, "'", didYouMean(*s, choices)));
       break;
     }
     case ParamType::Vec3:
     case ParamType::Direction: {
       const Vec3d* x = std::get_if<Vec3d>(&value);
-      if (!x) fail(type == ParamType::Vec3 ? "a 3-vector" + unitText : std::string("a non-zero 3-vector"));
+      if (!x) fail(numberExpectation("an array of 3 numbers [x, y, z]", type == ParamType::Vec3 ? unit : "", r));
+      for (int a = 0; a < 3; ++a) checkNumber((*x)[a], concat(name, "[", a, "]"));
       if (type == ParamType::Direction) {
         const double n = norm(*x);
-        if (!isFinite(*x) || !(n > 0)) fail("a non-zero 3-vector");
+        if (!(n > 0) || !std::isfinite(n)) failAt(name, "a non-zero direction vector [x, y, z]", "[0, 0, 0]");
         return *x / n;
       }
-      for (int a = 0; a < 3; ++a)
-        if (!inRange(*this, (*x)[a])) fail("a 3-vector" + unitText + " with components" + rangeText);
       return value;
     }
     case ParamType::FloatList: {
       const auto* list = std::get_if<std::vector<double>>(&value);
       if (!list || list->size() < minCount || list->size() > maxCount)
-        fail(concat("a list of ", minCount == maxCount ? concat(minCount) : concat(minCount, " to ", maxCount),
-                    " numbers", unitText));
-      for (double v : *list)
-        if (!inRange(*this, v)) fail("numbers" + unitText + rangeText);
+        fail(numberExpectation(arrayOf(minCount, maxCount, "numbers"), unit, r));
+      for (std::size_t k = 0; k < list->size(); ++k) checkNumber((*list)[k], concat(name, "[", k, "]"));
       return value;
     }
   }

@@ -47,7 +47,7 @@
 #include "lodestone/core/stage/magnetic_stage.h"
 #include "lodestone/core/field/material.h"
 #include "lodestone/core/sources/uniform_field.h"
-#include "scene.h"
+#include "lodestone/plugin/scene.h"
 
 using namespace lodestone;
 
@@ -421,14 +421,14 @@ struct Trajectory {
 };
 
 Trajectory runAttraction(const Options& o, int interval, double tol, int frames) {
-  examples::SceneOptions so;
+  plugin::SceneOptions so;
   so.dx = o.dynamicsDx;
-  examples::Scene scene = examples::loadScene(o.scenesDir + "/induced_attraction.json", so);
+  plugin::Scene scene = plugin::loadScene(o.scenesDir + "/induced_attraction.json", so);
   scene.settings.magneticSolveInterval = interval;
   scene.settings.magnetic.solve.tolerance = tol;
   scene.settings.magnetic.solve.maxNewtonIterations = 60;
   scene.settings.reorderInterval = 20;
-  auto solver = examples::buildSolver(scene);
+  auto solver = plugin::buildSolver(scene);
   // Left and right cube by position at the start (persistent ids).
   std::set<std::uint64_t> leftIds;
   Trajectory t;
@@ -540,10 +540,10 @@ void table2Study(const Options& o) {
   std::printf("%-14s %6s %9s %9s %9s %7s %5s %9s %9s\n", "scene", "frame", "frame s", "magn. s", "solve s", "newton",
               "cg", "MPM s", "paper s");
   for (const char* name : {"cube_langevin", "cube_linear"}) {
-    examples::SceneOptions so;
+    plugin::SceneOptions so;
     so.full = !o.quick;
-    const examples::Scene scene = examples::loadScene(o.scenesDir + "/" + name + ".json", so);
-    auto solver = examples::buildSolver(scene);
+    const plugin::Scene scene = plugin::loadScene(o.scenesDir + "/" + name + ".json", so);
+    auto solver = plugin::buildSolver(scene);
     const double paper = std::string(name) == "cube_langevin" ? 48.6 : 45.3;
     for (int f = 1; f <= 2; ++f) {
       const MpmFrameReport r = solver->advanceFrame(scene.frameDuration());

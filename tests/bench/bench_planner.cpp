@@ -22,10 +22,10 @@
 
 #include "lodestone/cli/command_line.h"
 #include "lodestone/core/base/error.h"
-#include "scene.h"
+#include "lodestone/plugin/scene.h"
 
 using namespace lodestone;
-using namespace lodestone::examples;
+using namespace lodestone::plugin;
 
 namespace {
 

@@ -9,12 +9,13 @@
 #include <limits>
 #include <string>
 
-#include "json_schema.h"
 #include "lodestone/core/base/error.h"
+#include "lodestone/plugin/json_reader.h"
 #include "stats_json.h"
 
 using namespace lodestone;
 using namespace lodestone::examples;
+using lodestone::plugin::parseJsonFile;
 using nlohmann::json;
 
 TEST(StatsJson, UnitSuffixes) {

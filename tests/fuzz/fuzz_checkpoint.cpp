@@ -12,7 +12,7 @@
 
 #include "lodestone/core/base/error.h"
 #include "lodestone/core/mpm/checkpoint.h"
-#include "scene.h"
+#include "lodestone/plugin/scene.h"
 
 namespace {
 const char* kScene = R"({
@@ -59,8 +59,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* input, std::size_t inp
     data = wrapped.data();
     size = wrapped.size();
   }
-  static const lodestone::examples::Scene scene = lodestone::examples::parseScene(kScene, "tiny.json");
-  std::unique_ptr<lodestone::MpmSolver> solver = lodestone::examples::buildSolver(scene);
+  static const lodestone::plugin::Scene scene = lodestone::plugin::parseScene(kScene, "tiny.json");
+  std::unique_ptr<lodestone::MpmSolver> solver = lodestone::plugin::buildSolver(scene);
   const std::size_t before = solver->particles().size();
   try {
     (void)lodestone::readMpmCheckpointInfo(data, size);

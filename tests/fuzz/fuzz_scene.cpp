@@ -7,12 +7,12 @@
 #include <string>
 
 #include "lodestone/core/base/error.h"
-#include "scene.h"
+#include "lodestone/plugin/scene.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   const std::string text(reinterpret_cast<const char*>(data), size);
   try {
-    const lodestone::examples::Scene scene = lodestone::examples::parseScene(text, "fuzz.json");
+    const lodestone::plugin::Scene scene = lodestone::plugin::parseScene(text, "fuzz.json");
     (void)scene.frameDuration();
   } catch (const lodestone::Error&) {
     // A clear refusal is the expected outcome for most inputs.

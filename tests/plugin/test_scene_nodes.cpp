@@ -12,8 +12,9 @@
 
 #include "lodestone/core/base/error.h"
 #include "lodestone/plugin/network.h"
+#include "lodestone/plugin/node_builders.h"
 #include "lodestone/plugin/param_json.h"
-#include "scene.h"
+#include "lodestone/plugin/scene.h"
 
 using namespace lodestone;
 using namespace lodestone::plugin;
@@ -39,7 +40,7 @@ TEST(SceneNodes, EveryExampleSceneEntryIsANodeThatCooks) {
     SCOPED_TRACE(file.path().string());
     std::ifstream in(file.path());
     const nlohmann::json doc = nlohmann::json::parse(in);
-    const examples::Scene scene = examples::loadScene(file.path().string());
+    const plugin::Scene scene = plugin::loadScene(file.path().string());
     for (const Kind& kind : kKinds) {
       if (!doc.contains(kind.list)) continue;
       for (std::size_t k = 0; k < doc[kind.list].size(); ++k) {
@@ -79,7 +80,7 @@ TEST(SceneNodes, EveryExampleSceneEntryIsANodeThatCooks) {
 
 std::string errorOf(const std::string& text) {
   try {
-    examples::parseScene(text, "test.json");
+    plugin::parseScene(text, "test.json");
   } catch (const InvalidArgument& e) {
     return e.what();
   }
@@ -122,6 +123,71 @@ TEST(SceneNodes, SceneErrorsComeFromTheDeclarations) {
     text.replace(at, c.from.size(), c.to);
     const std::string e = errorOf(text);
     for (const std::string& s : c.expected) EXPECT_NE(e.find(s), std::string::npos) << "'" << s << "' not in: " << e;
+  }
+}
+
+}  // namespace
+
+namespace {
+
+// A scene's domain, time, gravity and magnetic objects are an mpm_solver
+// node's parameters: the scene reader and the node build the same settings
+// (one builder, one set of defaults), here from a scene that gives only the
+// required keys and from one that gives every key.
+TEST(SceneNodes, SceneSettingsAreTheMpmSolverNodesSettings) {
+  const std::string materials = R"("materials": [ { "name": "m", "model": "solid", "density": 1000,
+                                                   "youngs_modulus": 1e5, "magnetic": { "law": "none" } } ])";
+  const std::string settings[] = {
+      R"("domain": { "min": [0, 0, 0], "max": [0.2, 0.1, 0.1], "dx": 0.02 }, "time": { "frames": 2 })",
+      R"("domain": { "min": [0, 0, 0], "max": [0.2, 0.1, 0.1], "dx": 0.02, "boundary": "slip", "friction": 0.3 },
+         "time": { "frames": 2, "fps": 30, "dt": 1e-4, "cfl": 0.3, "dt_max": 2e-4, "field_solve_every": 3 },
+         "gravity": [0, -1, 0],
+         "magnetic": { "boundary": "shield", "tolerance": 1e-5, "preconditioner": "jacobi",
+                       "max_newton_iterations": 7, "padding": 2 })"};
+  for (const std::string& s : settings) {
+    SCOPED_TRACE(s);
+    const nlohmann::json doc = nlohmann::json::parse("{" + s + "}");
+    const Scene scene = parseScene("{\"name\": \"s\", " + s + ", " + materials + "}", "test.json");
+    Network net;
+    net.addNode("mpm_solver", "sim");
+    setParamsFromJson(net, "sim", doc, "sim");
+    const MpmSettings node = mpmSettingsFrom(net.params("sim"));
+    const MpmSettings& read = scene.settings;
+    EXPECT_EQ(read.grid.dims.i, node.grid.dims.i);
+    EXPECT_EQ(read.grid.dims.j, node.grid.dims.j);
+    EXPECT_EQ(read.grid.dx, node.grid.dx);
+    EXPECT_EQ(read.walls.mode, node.walls.mode);
+    EXPECT_EQ(read.walls.friction, node.walls.friction);
+    EXPECT_EQ(read.fixedDt, node.fixedDt);
+    EXPECT_EQ(read.cfl, node.cfl);
+    EXPECT_EQ(read.dtMax, node.dtMax);
+    EXPECT_EQ(read.magneticSolveInterval, node.magneticSolveInterval);
+    EXPECT_EQ(read.gravity.y, node.gravity.y);
+    EXPECT_EQ(read.gravity.z, node.gravity.z);
+    EXPECT_EQ(read.magnetic.boundary, node.magnetic.boundary);
+    EXPECT_EQ(read.magnetic.solve.tolerance, node.magnetic.solve.tolerance);
+    EXPECT_EQ(read.magnetic.solve.preconditioner, node.magnetic.solve.preconditioner);
+    EXPECT_EQ(read.magnetic.solve.maxNewtonIterations, node.magnetic.solve.maxNewtonIterations);
+    ASSERT_EQ(read.magneticGrid.has_value(), node.magneticGrid.has_value());
+    EXPECT_EQ(read.magneticGrid->dims.i, node.magneticGrid->dims.i);
+    EXPECT_EQ(scene.frames, net.params("sim").getInt("time.frames"));
+    EXPECT_EQ(scene.fps, net.params("sim").getFloat("time.fps"));
+  }
+}
+
+// A grid too large is refused by the one settings builder, before any int
+// overflow, with the same message for a scene and a node.
+TEST(SceneNodes, ATooLargeGridIsRefusedByTheSettingsBuilder) {
+  Network net;
+  net.addNode("mpm_solver", "sim");
+  setParamsFromJson(net, "sim",
+                    nlohmann::json::parse(R"({"domain": {"min": [0, 0, 0], "max": [1, 1, 1], "dx": 1e-300}})"), "sim");
+  try {
+    mpmSettingsFrom(net.params("sim"));
+    FAIL() << "accepted";
+  } catch (const InvalidArgument& e) {
+    EXPECT_NE(std::string(e.what()).find("domain: a grid of"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("GiB"), std::string::npos) << e.what();
   }
 }
 

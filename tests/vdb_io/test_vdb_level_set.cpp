@@ -29,7 +29,7 @@
 #include "lodestone/vdb_io/level_set_file.h"
 #include "lodestone_test/scenes.h"
 #if LODESTONE_TEST_SCENE
-#include "scene.h"
+#include "lodestone/plugin/scene.h"
 #endif
 
 namespace lodestone {
@@ -458,7 +458,7 @@ TEST(VdbLevelSet, SceneShapesFromFiles) {
       {"shape": "level_set", "file": "ball.vdb", "grid": "ball", "center": [0.1, 0.1, 0.1], "boundary": "slip"}
     ]
   })";
-  examples::SceneOptions options;
+  plugin::SceneOptions options;
   options.loaders.levelSet = [](const std::string& p, const std::string& grid) {
     return std::make_shared<const SampledSdf>(readLevelSetVdb(p, grid));
   };
@@ -466,7 +466,7 @@ TEST(VdbLevelSet, SceneShapesFromFiles) {
     return std::make_shared<const SampledSdf>(levelSetFromObj(p, voxel));
   };
   const std::string source = (dir / "scene.json").string();
-  const examples::Scene scene = examples::parseScene(text, source, options);
+  const plugin::Scene scene = plugin::parseScene(text, source, options);
   ASSERT_EQ(scene.bodies.size(), 2u);
   EXPECT_EQ(scene.bodies[0].shape.kind, EmitterShapeKind::LevelSet);
   EXPECT_NEAR(scene.bodies[0].shape.volume(), 4.0 / 3.0 * kPi * 0.03 * 0.03 * 0.03, 0.01 * 1.2e-4);
@@ -474,13 +474,13 @@ TEST(VdbLevelSet, SceneShapesFromFiles) {
   ASSERT_EQ(scene.colliders.size(), 1u);
   EXPECT_EQ(scene.colliders[0].shape().kind, ColliderShapeKind::LevelSet);
   EXPECT_NEAR(scene.colliders[0].signedDistance({0.1, 0.1, 0.1}, 0.0), -0.0075, 1e-6);  // -background (3 voxels)
-  const auto solver = examples::buildSolver(scene);
+  const auto solver = plugin::buildSolver(scene);
   EXPECT_GT(solver->particles().size(), 100u);
   // Errors name the scene entry and the file; without readers the shapes are refused.
   std::string wrongGrid = text;
   wrongGrid.replace(wrongGrid.find("\"grid\": \"ball\""), 14, "\"grid\": \"cube\"");
-  expectMessageNames([&] { examples::parseScene(wrongGrid, source, options); }, {"bodies[0]", "ball.vdb", "'cube'"});
-  expectMessageNames([&] { examples::parseScene(text, source, {}); }, {"bodies[0]", "OpenVDB"});
+  expectMessageNames([&] { plugin::parseScene(wrongGrid, source, options); }, {"bodies[0]", "ball.vdb", "'cube'"});
+  expectMessageNames([&] { plugin::parseScene(text, source, {}); }, {"bodies[0]", "OpenVDB"});
 }
 #endif
 

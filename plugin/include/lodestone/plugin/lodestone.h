@@ -296,7 +296,9 @@ typedef struct lodestone_api {
                                          const char* value); /* STRING and CHOICE */
   lodestone_status (*network_set_vec3)(lodestone_network* network, const char* node, const char* param,
                                        const double value[3]);
-  /* Parameters from a JSON object text {"param": value, ...} with the scene-file checks. */
+  /* Parameters from a JSON object text {"param": value, ...} read and checked as scene files are
+     (syntax errors at line:column, duplicate and unknown keys refused, {"a": {"b": v}} sets a.b);
+     when a value is refused, none is set. */
   lodestone_status (*network_set_json)(lodestone_network* network, const char* node, const char* json);
   lodestone_status (*network_connect)(lodestone_network* network, const char* from_node, const char* output,
                                       const char* to_node, const char* input);

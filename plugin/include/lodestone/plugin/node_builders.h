@@ -1,15 +1,18 @@
 #pragma once
 // Core objects built from node parameter values: the shared glue between the
-// nodes' cooks and scene files (whose entries are nodes' parameters).
+// nodes' cooks and scene files (whose entries are nodes' parameters). Each
+// builder is the only place its parameters become a core object.
 #include <memory>
+#include <vector>
 
-#include "lodestone/core/sources/field_source.h"
-#include "lodestone/core/sources/magnet_source.h"
+#include "lodestone/core/base/pose.h"
 #include "lodestone/core/mpm/collider.h"
 #include "lodestone/core/mpm/emitter.h"
-#include "lodestone/core/mpm/solver.h"
-#include "lodestone/core/base/pose.h"
 #include "lodestone/core/mpm/sampled_sdf.h"
+#include "lodestone/core/mpm/solver.h"
+#include "lodestone/core/sources/field_source.h"
+#include "lodestone/core/sources/magnet_source.h"
+#include "lodestone/plugin/node_data.h"
 #include "lodestone/plugin/param.h"
 
 namespace lodestone::plugin {
@@ -30,6 +33,10 @@ std::shared_ptr<const SampledSdf> loadShapeFile(const std::string& shape, const 
 /// file). File shapes are placed by their own frame, turned by `axis`.
 EmitterShape shapeFrom(const ParamSet& params);
 
+/// The emission of particle_source parameters (cell_size, particles_per_cell,
+/// jitter, seed, velocity).
+EmitterSettings emitterSettingsFrom(const ParamSet& params);
+
 /// The MPM material of material parameters (model, density, moduli, magnetic.*).
 MpmMaterial materialFrom(const ParamSet& params);
 
@@ -39,17 +46,40 @@ std::unique_ptr<FieldSource> appliedFieldFrom(const ParamSet& params);
 /// The collider shape and rest pose of collider parameters (shape, point, normal, center, axis, sizes, file, inverted).
 ColliderShape colliderShapeFrom(const ParamSet& params, Pose& pose);
 
-/// The boundary condition of `boundary` and `friction` parameters.
-BoundaryCondition boundaryFrom(const ParamSet& params);
+/// The boundary condition of `boundary` and `friction` parameters (named
+/// `prefix` + "boundary" and so on: "domain." for the MPM walls).
+BoundaryCondition boundaryFrom(const ParamSet& params, const std::string& prefix = "");
+
+/// The field-solve settings of `boundary`, `tolerance`, `preconditioner` and
+/// `max_newton_iterations` parameters (with `prefix`: "magnetic." for an
+/// mpm_solver's stage); the other settings keep their defaults.
+MagneticStageSettings solveSettingsFrom(const ParamSet& params, const std::string& prefix = "");
 
 /// The magnet of magnet parameters (shape, sizes, magnetization or remanence) at `pose`.
 std::unique_ptr<MagnetSource> makeMagnet(const ParamSet& params, const Pose& pose);
 
+/// The motion of motion.velocity and motion.angular_velocity parameters
+/// (m/s, rad/s about the body origin) from the rest pose; fixed when both are zero.
+ColliderMotion motionFrom(const ParamSet& params, const Pose& rest);
+
+/// A magnet node's magnet: the source at its pose (center, axis), its motion,
+/// whether it is also a collider and its boundary condition; the rest pose
+/// goes to `restPose` when given.
+SourcesData::Magnet magnetFrom(const ParamSet& params, Pose* restPose = nullptr);
+
 /// MPM settings of mpm_solver parameters (domain.*, time.*, gravity, magnetic.*):
 /// the grid covers [domain.min, domain.max] at domain.dx, the field solve's
 /// grid adds magnetic.padding cells of free space on every side. Throws
-/// InvalidArgument for an empty box or a grid too large for memory.
+/// InvalidArgument "domain: ..." for an empty box or a grid too large for
+/// memory (about 600 bytes per node, at most 25 GiB and 2^20 nodes an axis;
+/// counted in double, so a tiny dx is refused rather than overflowing), and
+/// MpmSettings::validate's errors.
 MpmSettings mpmSettingsFrom(const ParamSet& params);
+
+/// Adds the applied fields, the magnets (field sources, and colliders where
+/// `collider` is set) and the colliders to `solver`, in that order.
+void addSourcesAndColliders(MpmSolver& solver, const FieldSourceSet& fields,
+                            const std::vector<SourcesData::Magnet>& magnets, const std::vector<MpmCollider>& colliders);
 
 /// Adds the vector grid `gridName` (A/m) of a .vdb file to `set`; throws
 /// NotBuilt without OpenVDB, InvalidArgument when the file cannot be read.

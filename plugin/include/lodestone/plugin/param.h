@@ -57,9 +57,12 @@ struct ParamDecl {
   std::string describeRange() const;
   /// The default as JSON text.
   std::string defaultText() const;
-  /// Throws InvalidArgument "<where>: <name>: expected ..., found ..." unless
-  /// `value` has this parameter's type and lies in its range; returns it
-  /// normalised (Direction: unit length; Int from a whole Float accepted).
+  /// Throws InvalidArgument "<where>: <name>: expected ..., found ..." (for a
+  /// vector or list component "<name>[i]: ...", in the words of the JSON
+  /// reader, json_reader.h, so that scene files, network_set_json and the
+  /// typed setters say the same) unless `value` has this parameter's type,
+  /// is finite and lies in its range; returns it normalised (Direction: unit
+  /// length; Int from a whole Float accepted).
   ParamValue check(const ParamValue& value, const std::string& where) const;
 };
 

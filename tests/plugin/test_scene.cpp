@@ -6,10 +6,10 @@
 #include <string>
 
 #include "lodestone/core/base/error.h"
-#include "scene.h"
+#include "lodestone/plugin/scene.h"
 
 using namespace lodestone;
-using namespace lodestone::examples;
+using namespace lodestone::plugin;
 
 namespace {
 

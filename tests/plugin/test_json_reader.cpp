@@ -11,11 +11,11 @@
 #include <limits>
 #include <string>
 
-#include "json_schema.h"
+#include "lodestone/plugin/json_reader.h"
 #include "lodestone/core/base/error.h"
 
 using namespace lodestone;
-using namespace lodestone::examples;
+using namespace lodestone::plugin;
 using nlohmann::json;
 
 namespace {
@@ -102,7 +102,7 @@ TEST(JsonParse, FileErrorsNameThePath) {
   EXPECT_TRUE(contains(errorOf([&] { parseJsonFile(missing); }), missing));
 
   const auto path =
-      std::filesystem::temp_directory_path() / ("lodestone_test_json_schema_" + std::to_string(::getpid()) + ".json");
+      std::filesystem::temp_directory_path() / ("lodestone_test_json_reader_" + std::to_string(::getpid()) + ".json");
   {
     std::ofstream out(path);
     out << "{\n  \"a\": [1,\n        2\n  \"b\": 3\n}\n";

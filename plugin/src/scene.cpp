@@ -1,48 +1,18 @@
-#include "scene.h"
+#include "lodestone/plugin/scene.h"
 
 #include <algorithm>
-#include <cmath>
 #include <filesystem>
 
-#include "json_schema.h"
-#include "node_entry.h"
-#include "lodestone/core/planner/accuracy_preset.h"
-#include "lodestone/core/base/constants.h"
-#include "lodestone/core/sources/cuboid_magnet.h"
-#include "lodestone/core/sources/cylinder_magnet.h"
 #include "lodestone/core/base/error.h"
-#include "lodestone/core/field/material.h"
-#include "lodestone/core/sources/point_dipole.h"
-#include "lodestone/core/sources/sphere_magnet.h"
-#include "lodestone/core/sources/uniform_field.h"
+#include "lodestone/core/planner/accuracy_preset.h"
+#include "lodestone/plugin/json_reader.h"
 #include "lodestone/plugin/node_builders.h"
+#include "lodestone/plugin/node_registry.h"
+#include "lodestone/plugin/param_json.h"
 
-namespace lodestone::examples {
+namespace lodestone::plugin {
 
 namespace {
-
-// Memory the simulation needs per grid node, bytes: the MPM grid (mass,
-// momentum, velocity, binning) and the magnetic stage's padded grid (n, phi,
-// H_ext, H, M, B, t, f, the solver's vectors and multigrid hierarchy), about
-// 600 B together; the estimate refuses grids that cannot fit before any
-// allocation.
-constexpr double kBytesPerNode = 600;
-constexpr double kMaxGridGiB = 25;
-
-double gridMemoryGiB(double ni, double nj, double nk) {
-  return ni * nj * nk * kBytesPerNode / (1024.0 * 1024.0 * 1024.0);
-}
-
-BoundaryCondition readBoundary(JsonReader& r, const BoundaryCondition& fallback) {
-  BoundaryCondition bc = fallback;
-  const std::string mode = r.string("boundary", {"sticky", "slip", "separate"},
-                                    fallback.mode == BoundaryMode::Sticky ? "sticky"
-                                    : fallback.mode == BoundaryMode::Slip ? "slip"
-                                                                          : "separate");
-  bc.mode = mode == "sticky" ? BoundaryMode::Sticky : mode == "slip" ? BoundaryMode::Slip : BoundaryMode::Separate;
-  bc.friction = r.number("friction", "", Range::closed(0, 10), fallback.friction);
-  return bc;
-}
 
 ColliderMotion readMotion(JsonReader& r, const Pose& rest) {
   if (!r.has("motion")) return ColliderMotion::fixed(rest);
@@ -53,7 +23,7 @@ ColliderMotion readMotion(JsonReader& r, const Pose& rest) {
     std::vector<Pose> poses;
     for (JsonReader& k : m.array("keyframes", 1)) {
       times.push_back(k.number("time", "s", Range::nonNegative()));
-      poses.push_back(plugin::poseAlong(k.vec3("center", "m"), k.direction("axis", rest.rotation * Vec3d{0, 0, 1})));
+      poses.push_back(poseAlong(k.vec3("center", "m"), k.direction("axis", rest.rotation * Vec3d{0, 0, 1})));
       k.finish();
     }
     motion = ColliderMotion::keyframed(std::move(times), std::move(poses));
@@ -74,12 +44,10 @@ struct FileShapes {
   double dx = 0;
 };
 
-bool isFileShape(const std::string& shape) { return shape == "level_set" || shape == "mesh"; }
-
 /// Body-frame placement of a file shape: the file's origin goes to `center`
 /// (default the world origin) and its z axis along `axis`.
 Pose readFilePose(JsonReader& r) {
-  return plugin::poseAlong(r.vec3("center", "m", Range::any(), Vec3d{}), r.direction("axis", {0, 0, 1}));
+  return poseAlong(r.vec3("center", "m", Range::any(), Vec3d{}), r.direction("axis", {0, 0, 1}));
 }
 
 /// The signed distance of a "level_set" (keys file, grid) or "mesh" (keys
@@ -106,9 +74,6 @@ std::vector<JsonReader> optionalArray(JsonReader& r, const std::string& key) {
   return r.has(key) ? r.array(key) : std::vector<JsonReader>{};
 }
 
-}  // namespace
-
-namespace {
 Scene sceneFromJson(const nlohmann::json& doc, const std::string& sourceName, const SceneOptions& options) {
   JsonReader root(doc, "", sourceName);
   Scene scene;
@@ -116,44 +81,37 @@ Scene sceneFromJson(const nlohmann::json& doc, const std::string& sourceName, co
   scene.name = root.string("name");
   scene.description = root.has("description") ? root.string("description") : std::string();
 
-  // Domain and grid.
-  {
-    JsonReader d = root.object("domain");
-    const Vec3d lo = d.vec3("min", "m"), hi = d.vec3("max", "m");
-    for (int a = 0; a < 3; ++a)
-      if (!(hi[a] > lo[a]))
-        d.fail(concat("max must exceed min on every axis; axis ", a, " has min ", lo[a], " m and max ", hi[a], " m"));
-    double dx = d.number("dx", "m", Range::positive());
-    scene.fullDx = d.number("full_dx", "m", Range::nonNegative(), 0.0);
-    if (options.full) {
-      if (!(scene.fullDx > 0)) d.fail("--full needs domain.full_dx in the scene");
-      dx = scene.fullDx;
-    }
-    if (options.dx > 0) dx = options.dx;
-    GridSpec g;
-    g.origin = lo;
-    g.dx = dx;
-    // Node counts in double first: a tiny dx must be refused, not overflow an int.
-    double n[3];
-    for (int a = 0; a < 3; ++a) n[a] = std::ceil((hi[a] - lo[a]) / dx - 1e-9) + 1;
-    const double gib = gridMemoryGiB(n[0], n[1], n[2]);
-    if (!(gib <= kMaxGridGiB) || !(std::max(n[0], std::max(n[1], n[2])) <= 1 << 20))
-      d.fail(concat("a grid of ", n[0], " x ", n[1], " x ", n[2], " nodes at dx = ", dx, " m is too large (needs about ",
-                    gib, " GiB, limit ", kMaxGridGiB, " GiB)"));
-    g.dims = {int(n[0]), int(n[1]), int(n[2])};
-    scene.settings.grid = g;
-    scene.settings.walls = readBoundary(d, BoundaryCondition{});
-    d.finish();
+  // The simulation's settings: the domain, time, gravity and magnetic objects
+  // are the parameters of the mpm_solver node (docs/nodes.md), built by the
+  // node's own settings builder; domain.full_dx is the scene's own key. The
+  // domain and time objects are required (a missing one is named only after
+  // the domain is known to fit in memory).
+  if (!root.has("domain")) root.object("domain");  // throws: missing required key
+  ParamSet solverParams = readNodeEntry(root, "mpm_solver", {}, [&](const std::string& group, JsonReader& r) {
+    if (group == "domain") scene.fullDx = r.number("full_dx", "m", Range::nonNegative(), 0.0);
+  });
+  if (options.full) {
+    if (!(scene.fullDx > 0)) root.failAt("domain", "--full needs domain.full_dx in the scene");
+    solverParams.set("domain.dx", scene.fullDx);
   }
+  if (options.dx > 0) solverParams.set("domain.dx", options.dx);
+  try {
+    scene.settings = mpmSettingsFrom(solverParams);
+  } catch (const InvalidArgument& e) {
+    throw InvalidArgument(concat(sourceName, ": ", e.what()));
+  }
+  if (!root.has("time")) root.object("time");
+  scene.frames = int(solverParams.getInt("time.frames"));
+  scene.fps = solverParams.getFloat("time.fps");
 
   // Accuracy preset (docs/accuracy_vs_time.md): the defaults of the field
-  // solve's tolerance and frequency; explicit keys below still win.
+  // solve's tolerance and frequency; explicit keys still win.
   if (root.has("accuracy")) {
     const AccuracyPresetSettings p =
         accuracyPresetSettings(parseAccuracyPreset(root.string("accuracy", {"draft", "preview", "final"})));
     scene.accuracy = p;
-    scene.settings.magnetic.solve.tolerance = p.solveTolerance;
-    scene.settings.magneticSolveInterval = p.solveInterval;
+    if (!solverParams.given("magnetic.tolerance")) scene.settings.magnetic.solve.tolerance = p.solveTolerance;
+    if (!solverParams.given("time.field_solve_every")) scene.settings.magneticSolveInterval = p.solveInterval;
     scene.settings.planner.enabled = true;  // a preset is also the planner's budget
     scene.settings.planner.budget = p.bound;
   }
@@ -171,51 +129,14 @@ Scene sceneFromJson(const nlohmann::json& doc, const std::string& sourceName, co
     pl.finish();
   }
 
-  // Time stepping.
-  {
-    JsonReader t = root.object("time");
-    scene.frames = t.integer("frames", 1, 100000);
-    scene.fps = t.number("fps", "1/s", Range::closed(1, 10000), 24.0);
-    scene.settings.fixedDt = t.number("dt", "s", Range::closed(0, 1), 0.0);
-    scene.settings.cfl = t.number("cfl", "", Range::closed(0.01, 1), scene.settings.cfl);
-    scene.settings.dtMax = t.number("dt_max", "s", Range::positive(), scene.settings.dtMax);
-    scene.settings.magneticSolveInterval =
-        t.integer("field_solve_every", 0, 1000000, scene.settings.magneticSolveInterval);
-    t.finish();
-  }
-  scene.settings.gravity = root.vec3("gravity", "m/s^2", Range::any(), scene.settings.gravity);
-
-  // Magnetic stage.
-  int padding = 4;  // cells of free space around the MPM domain for the field solve
-  if (root.has("magnetic")) {
-    JsonReader m = root.object("magnetic");
-    auto& s = scene.settings.magnetic;
-    s.boundary = m.string("boundary", {"open", "shield"}, "open") == "open" ? BoundaryKind::Open : BoundaryKind::Shield;
-    s.solve.tolerance = m.number("tolerance", "", Range::closed(1e-14, 1e-1), s.solve.tolerance);
-    s.solve.preconditioner = m.string("preconditioner", {"multigrid", "jacobi"}, "multigrid") == "multigrid"
-                                 ? PreconditionerKind::Multigrid
-                                 : PreconditionerKind::Jacobi;
-    s.solve.maxNewtonIterations = m.integer("max_newton_iterations", 1, 1000, s.solve.maxNewtonIterations);
-    padding = m.integer("padding", 0, 64, padding);
-    m.finish();
-  }
-  if (padding > 0) {
-    // The field solve sees free space beyond the MPM walls: material resting
-    // on the floor is not at the magnetic grid's edge.
-    GridSpec mg = scene.settings.grid;
-    mg.origin = mg.origin - double(padding) * Vec3d{mg.dx, mg.dx, mg.dx};
-    mg.dims = {mg.dims.i + 2 * padding, mg.dims.j + 2 * padding, mg.dims.k + 2 * padding};
-    scene.settings.magneticGrid = mg;
-  }
-
   // Materials: each entry is a `material` node (docs/nodes.md); its keys are
   // the node's parameters, read and checked from the declarations.
   for (JsonReader& m : root.array("materials", 1)) {
-    const plugin::ParamSet p = readNodeEntry(m, "material");
+    const ParamSet p = readNodeEntry(m, "material");
     const std::string& name = p.getString("name");
     if (std::find(scene.materialNames.begin(), scene.materialNames.end(), name) != scene.materialNames.end())
       m.fail(concat("duplicate material name '", name, "'"));
-    scene.materials.push_back(plugin::materialFrom(p));
+    scene.materials.push_back(materialFrom(p));
     scene.materialNames.push_back(name);
     m.finish();
   }
@@ -227,7 +148,7 @@ Scene sceneFromJson(const nlohmann::json& doc, const std::string& sourceName, co
   for (JsonReader& b : optionalArray(root, "bodies")) {
     SceneBody body;
     const std::string material = b.string("material", scene.materialNames);
-    const plugin::ParamSet p = readNodeEntry(b, "particle_source", {"cell_size"});
+    const ParamSet p = readNodeEntry(b, "particle_source", {"cell_size"});
     body.name = p.given("name") ? p.getString("name") : concat("body ", scene.bodies.size());
     body.material = std::uint32_t(std::find(scene.materialNames.begin(), scene.materialNames.end(), material) -
                                   scene.materialNames.begin());
@@ -236,12 +157,10 @@ Scene sceneFromJson(const nlohmann::json& doc, const std::string& sourceName, co
       const Pose pose = readFilePose(b);
       body.shape = EmitterShape::levelSetShape(pose, readFileShape(b, shape, files));
     } else {
-      body.shape = plugin::shapeFrom(p);
+      body.shape = shapeFrom(p);
     }
-    body.emit.particlesPerCell = int(p.getInt("particles_per_cell"));
-    body.emit.jitter = p.getFloat("jitter");
-    body.emit.seed = std::uint64_t(p.getInt("seed"));
-    body.emit.velocity = p.getVec3("velocity");
+    body.emit = emitterSettingsFrom(p);
+    body.emit.cellSize = scene.settings.grid.dx;
     b.finish();
     scene.bodies.push_back(std::move(body));
   }
@@ -249,28 +168,26 @@ Scene sceneFromJson(const nlohmann::json& doc, const std::string& sourceName, co
   // Permanent magnets (field sources, and colliders unless told otherwise):
   // `magnet` nodes; `motion` may also hold keyframes.
   for (JsonReader& m : optionalArray(root, "magnets")) {
-    SceneMagnet sm;
-    const plugin::ParamSet p = readNodeEntry(m, "magnet", {"motion."});
+    const ParamSet p = readNodeEntry(m, "magnet", {"motion."});
     if (p.given("remanence") && p.given("magnetization")) m.fail("give magnetization or remanence, not both");
-    if (!p.given("remanence")) m.number("magnetization", "A/m", Range::closed(-3e6, 3e6));  // required then
-    const Pose pose = plugin::poseAlong(p.getVec3("center"), p.getVec3("axis"));
-    sm.magnet = plugin::makeMagnet(p, pose);
+    if (!p.given("remanence"))  // magnetization is required then (missing: named with its declared unit and range)
+      readParam(m, "magnetization", *requireNode("magnet").param("magnetization"));
+    Pose pose;
+    SceneMagnet sm = magnetFrom(p, &pose);
     sm.motion = readMotion(m, pose);
-    sm.collider = p.getBool("collider");
-    sm.boundary = plugin::boundaryFrom(p);
     m.finish();
     scene.magnets.push_back(std::move(sm));
   }
 
   // Applied fields: `applied_field` nodes (a VDB file is relative to the scene file).
   for (JsonReader& f : optionalArray(root, "fields")) {
-    plugin::ParamSet p = readNodeEntry(f, "applied_field");
+    ParamSet p = readNodeEntry(f, "applied_field");
     if (p.getString("type") == "vdb") {
       std::filesystem::path path(p.getString("file"));
       if (path.is_relative()) p.set("file", (files.directory / path).string());
     }
     try {
-      scene.fields.add(plugin::appliedFieldFrom(p));
+      scene.fields.add(appliedFieldFrom(p));
     } catch (const std::exception& e) {
       f.failAt(p.getString("type") == "vdb" ? "file" : "type", e.what());
     }
@@ -279,7 +196,7 @@ Scene sceneFromJson(const nlohmann::json& doc, const std::string& sourceName, co
 
   // Colliders: `collider` nodes; `motion` may also hold keyframes.
   for (JsonReader& c : optionalArray(root, "colliders")) {
-    const plugin::ParamSet p = readNodeEntry(c, "collider", {"motion."});
+    const ParamSet p = readNodeEntry(c, "collider", {"motion."});
     const std::string& shape = p.getString("shape");
     ColliderShape cs;
     Pose pose;
@@ -288,10 +205,10 @@ Scene sceneFromJson(const nlohmann::json& doc, const std::string& sourceName, co
       cs = ColliderShape::levelSetShape(readFileShape(c, shape, files));
       if (p.getBool("inverted")) cs = cs.invertedShape();
     } else {
-      cs = plugin::colliderShapeFrom(p, pose);
+      cs = colliderShapeFrom(p, pose);
     }
     const ColliderMotion motion = readMotion(c, pose);
-    const BoundaryCondition bc = plugin::boundaryFrom(p);
+    const BoundaryCondition bc = boundaryFrom(p);
     c.finish();
     scene.colliders.emplace_back(cs, motion, bc);
   }
@@ -306,11 +223,11 @@ Scene sceneFromJson(const nlohmann::json& doc, const std::string& sourceName, co
     scene.output.fovDegrees = o.number("fov", "degrees", Range::closed(5, 120), 35.0);
     if (o.has("vdb")) {
       const nlohmann::json& list = o.raw("vdb");
-      if (!list.is_array())
-        o.failAt("vdb", "expected an array of grid names (n, phi, H, M, B, force, mass, velocity)");
+      if (!list.is_array()) o.failAt("vdb", "expected an array of grid names (n, phi, H, M, B, force, mass, velocity)");
       for (std::size_t k = 0; k < list.size(); ++k) {
         const std::vector<std::string> allowed{"n", "phi", "H", "M", "B", "force", "mass", "velocity"};
-        if (!list[k].is_string() || std::find(allowed.begin(), allowed.end(), list[k].get<std::string>()) == allowed.end())
+        if (!list[k].is_string() ||
+            std::find(allowed.begin(), allowed.end(), list[k].get<std::string>()) == allowed.end())
           o.failAt("vdb", concat("element ", k, ": expected one of n, phi, H, M, B, force, mass, velocity, found ",
                                  list[k].dump()));
         scene.output.vdbFields.push_back(list[k].get<std::string>());
@@ -355,15 +272,8 @@ std::unique_ptr<MpmSolver> buildSolver(const Scene& scene) {
     s.cellSize = scene.settings.grid.dx;
     solver->emit(b.shape, b.material, s);
   }
-  solver->setSources(scene.fields);
-  for (const SceneMagnet& m : scene.magnets) {
-    if (m.collider)
-      solver->addMagnet(*m.magnet, m.motion, m.boundary);
-    else
-      solver->sources().add(*m.magnet);
-  }
-  for (const MpmCollider& c : scene.colliders) solver->addCollider(c);
+  addSourcesAndColliders(*solver, scene.fields, scene.magnets, scene.colliders);
   return solver;
 }
 
-}  // namespace lodestone::examples
+}  // namespace lodestone::plugin

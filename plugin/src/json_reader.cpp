@@ -1,4 +1,4 @@
-#include "json_schema.h"
+#include "lodestone/plugin/json_reader.h"
 
 #include <algorithm>
 #include <cctype>
@@ -12,12 +12,20 @@
 
 #include "lodestone/core/base/error.h"
 
-namespace lodestone::examples {
+namespace lodestone::plugin {
 namespace {
 
 using nlohmann::json;
 
-// Shortest "%g" text that reads back as the same double.
+std::string withUnit(const std::string& unit) { return unit.empty() || unit == "1" ? std::string() : " in " + unit; }
+
+std::string lowerCase(std::string s) {
+  for (char& c : s) c = char(std::tolower(static_cast<unsigned char>(c)));
+  return s;
+}
+
+}  // namespace
+
 std::string formatNumber(double v) {
   if (std::isnan(v)) return "nan";
   if (std::isinf(v)) return v > 0 ? "inf" : "-inf";
@@ -29,9 +37,6 @@ std::string formatNumber(double v) {
   return buf;
 }
 
-std::string withUnit(const std::string& unit) { return unit.empty() || unit == "1" ? std::string() : " in " + unit; }
-
-// "a number in kg/m^3 > 0"
 std::string numberExpectation(const std::string& what, const std::string& unit, const Range& range) {
   std::string s = what + withUnit(unit);
   const std::string r = range.describe();
@@ -39,8 +44,7 @@ std::string numberExpectation(const std::string& what, const std::string& unit, 
   return s;
 }
 
-// 'a', 'b' or 'c' (conjunction "or" / "and")
-std::string quoteList(const std::vector<std::string>& words, const char* conjunction = "or") {
+std::string quoteList(const std::vector<std::string>& words, const char* conjunction) {
   std::string s;
   for (std::size_t i = 0; i < words.size(); ++i) {
     if (i > 0) s += i + 1 == words.size() ? concat(" ", conjunction, " ") : std::string(", ");
@@ -49,12 +53,6 @@ std::string quoteList(const std::vector<std::string>& words, const char* conjunc
   return s;
 }
 
-std::string lowerCase(std::string s) {
-  for (char& c : s) c = char(std::tolower(static_cast<unsigned char>(c)));
-  return s;
-}
-
-// "an array of [at least N | N | N to M] <what>"
 std::string arrayOf(std::size_t minCount, std::size_t maxCount, const char* what) {
   std::string count;
   if (maxCount == std::numeric_limits<std::size_t>::max()) {
@@ -64,6 +62,8 @@ std::string arrayOf(std::size_t minCount, std::size_t maxCount, const char* what
   }
   return concat("an array of ", count, what);
 }
+
+namespace {
 
 // Tracks the path of the value being parsed, to name duplicate keys.
 class DuplicateKeyCheck {
@@ -263,6 +263,11 @@ std::string closestMatch(const std::string& word, const std::vector<std::string>
   return best;
 }
 
+std::string didYouMean(const std::string& word, const std::vector<std::string>& candidates) {
+  const std::string guess = closestMatch(word, candidates);
+  return guess.empty() ? std::string() : "; did you mean '" + guess + "'?";
+}
+
 std::string jsonTypeName(const nlohmann::json& value) {
   if (value.is_number()) return "number";
   return value.type_name();
@@ -413,11 +418,8 @@ std::string JsonReader::toString(const nlohmann::json& v, const std::string& key
   const std::string expected = allowed.empty() ? std::string("a string") : "one of " + quoteList(allowed);
   if (!v.is_string()) failAt(key, concat("expected ", expected, ", found ", describeJsonValue(v)));
   std::string s = v.get<std::string>();
-  if (!allowed.empty() && std::find(allowed.begin(), allowed.end(), s) == allowed.end()) {
-    const std::string guess = closestMatch(s, allowed);
-    failAt(key,
-           concat("expected ", expected, ", found '", s, "'", guess.empty() ? "" : "; did you mean '" + guess + "'?"));
-  }
+  if (!allowed.empty() && std::find(allowed.begin(), allowed.end(), s) == allowed.end())
+    failAt(key, concat("expected ", expected, ", found '", s, "'", didYouMean(s, allowed)));
   return s;
 }
 
@@ -453,11 +455,16 @@ Vec3d JsonReader::vec3(const std::string& key, const std::string& unit, const Ra
   return v == nullptr ? fallback : toVec3(*v, key, unit, componentRange);
 }
 
-Vec3d JsonReader::direction(const std::string& key) {
+Vec3d JsonReader::nonZeroVec3(const std::string& key) {
   const Vec3d d = vec3(key, "");
   const double n = norm(d);
   if (!(n > 0) || !std::isfinite(n)) failAt(key, "expected a non-zero direction vector [x, y, z], found [0, 0, 0]");
-  return d / n;
+  return d;
+}
+
+Vec3d JsonReader::direction(const std::string& key) {
+  const Vec3d d = nonZeroVec3(key);
+  return d / norm(d);
 }
 
 Vec3d JsonReader::direction(const std::string& key, const Vec3d& fallback) {
@@ -522,4 +529,4 @@ void JsonReader::finish() const {
   fail(message);
 }
 
-}  // namespace lodestone::examples
+}  // namespace lodestone::plugin

@@ -1,12 +1,16 @@
 #pragma once
 // Scene files: a JSON description of an MLS-MPM simulation with magnetism
 // (domain, materials, bodies, magnets, applied fields, colliders, time
-// stepping, outputs), read strictly: unknown keys, wrong types and
-// out-of-range values are rejected with the path of the entry and what was
-// expected. The format is documented in docs/scenes.md. The entries of
-// materials, bodies, magnets, fields and colliders are nodes of the node
-// library (docs/nodes.md): their keys are those nodes' declared parameters,
-// read and checked from the declarations (node_entry.h).
+// stepping, outputs), read strictly (json_reader.h): unknown keys, wrong
+// types and out-of-range values are rejected with the path of the entry and
+// what was expected. The format is documented in docs/scenes.md. A scene is a
+// network of the node library's nodes (docs/nodes.md) written out: the
+// entries of materials, bodies, magnets, fields and colliders are material,
+// particle_source, magnet, applied_field and collider nodes, and the domain,
+// time, gravity and magnetic objects are the mpm_solver node's settings;
+// their keys are those nodes' declared parameters, read and checked from the
+// declarations (param_json.h) and built by the nodes' own builders
+// (node_builders.h).
 #include <cstdint>
 #include <functional>
 #include <memory>
@@ -14,13 +18,14 @@
 #include <string>
 #include <vector>
 
+#include "lodestone/core/mpm/sampled_sdf.h"
+#include "lodestone/core/mpm/solver.h"
 #include "lodestone/core/planner/accuracy_preset.h"
 #include "lodestone/core/sources/field_source_set.h"
 #include "lodestone/core/sources/magnet_source.h"
-#include "lodestone/core/mpm/solver.h"
-#include "lodestone/core/mpm/sampled_sdf.h"
+#include "lodestone/plugin/node_data.h"
 
-namespace lodestone::examples {
+namespace lodestone::plugin {
 
 struct SceneBody {
   std::string name;
@@ -29,20 +34,18 @@ struct SceneBody {
   EmitterSettings emit;
 };
 
-struct SceneMagnet {
-  std::unique_ptr<MagnetSource> magnet;
-  ColliderMotion motion;
-  BoundaryCondition boundary;
-  bool collider = true;  ///< also an obstacle for the material
-};
+/// A permanent magnet: a field source, and an obstacle for the material
+/// unless `collider` is false (what a magnet node gives).
+using SceneMagnet = SourcesData::Magnet;
 
 struct SceneOutput {
-  bool ply = true;           ///< per-frame particle files
-  bool png = true;           ///< per-frame preview renders
-  std::vector<std::string> vdbFields;  ///< grids of the per-frame field file (n, phi, H, M, B, force, mass, velocity); empty = none
-  bool vdbAliases = false;   ///< also write `density` (= n) and `vel` (= velocity) for Blender and Houdini
-  bool vdbPoints = false;    ///< per-frame particles_NNNN.vdb (OpenVDB PointDataGrid)
-  int checkpointEvery = 0;   ///< frames between checkpoint files (checkpoint_NNNN.lsck); 0 = none
+  bool ply = true;  ///< per-frame particle files
+  bool png = true;  ///< per-frame preview renders
+  std::vector<std::string>
+      vdbFields;  ///< grids of the per-frame field file (n, phi, H, M, B, force, mass, velocity); empty = none
+  bool vdbAliases = false;        ///< also write `density` (= n) and `vel` (= velocity) for Blender and Houdini
+  bool vdbPoints = false;         ///< per-frame particles_NNNN.vdb (OpenVDB PointDataGrid)
+  int checkpointEvery = 0;        ///< frames between checkpoint files (checkpoint_NNNN.lsck); 0 = none
   int width = 640, height = 480;  ///< preview size, pixels
   bool autoCamera = true;
   Vec3d cameraPosition, cameraLookAt;  ///< m (when not automatic)
@@ -54,7 +57,7 @@ struct Scene {
   std::string name;
   std::string description;
   MpmSettings settings;
-  double fullDx = 0;   ///< dx of the paper-scale variant (m), 0 when the scene has none
+  double fullDx = 0;  ///< dx of the paper-scale variant (m), 0 when the scene has none
   std::vector<std::string> materialNames;
   std::vector<MpmMaterial> materials;
   std::vector<SceneBody> bodies;
@@ -63,7 +66,7 @@ struct Scene {
   std::vector<MpmCollider> colliders;
   std::optional<AccuracyPresetSettings> accuracy;  ///< the scene's accuracy preset, if it names one
   int frames = 1;
-  double fps = 24;     ///< frames per second
+  double fps = 24;  ///< frames per second
   SceneOutput output;
 
   double frameDuration() const { return 1.0 / fps; }
@@ -85,18 +88,22 @@ struct ShapeLoaders {
 };
 
 struct SceneOptions {
-  bool full = false;   ///< use the scene's full-resolution dx (domain.full_dx)
-  double dx = 0;       ///< > 0: override the grid spacing (m)
+  bool full = false;     ///< use the scene's full-resolution dx (domain.full_dx)
+  double dx = 0;         ///< > 0: override the grid spacing (m)
   ShapeLoaders loaders;  ///< readers for "level_set" and "mesh" shapes (none: such shapes are rejected)
 };
 
 /// Reads and validates a scene file; throws InvalidArgument naming the file,
-/// the path of the bad entry and what was expected.
+/// the path of the bad entry and what was expected (also for a file that
+/// cannot be read, a JSON syntax error at line:column, and a grid too large
+/// for memory, refused before anything is allocated).
 Scene loadScene(const std::string& path, const SceneOptions& options = {});
-/// The same from text (`sourceName` is used in messages).
+/// The same from text (`sourceName` is used in messages and is the directory
+/// relative file paths are resolved against).
 Scene parseScene(const std::string& text, const std::string& sourceName, const SceneOptions& options = {});
 
-/// A solver with the scene's materials, bodies, magnets, fields and colliders.
+/// A solver with the scene's materials, bodies, magnets, fields and colliders
+/// (the particles emitted at the scene's dx).
 std::unique_ptr<MpmSolver> buildSolver(const Scene& scene);
 
-}  // namespace lodestone::examples
+}  // namespace lodestone::plugin

@@ -1,5 +1,7 @@
 #pragma once
-// Strict reading of JSON input files (scene files of the `lodestone` program).
+// Strict reading of JSON: the one reader behind scene files (scene.h), node
+// parameters given as JSON (param_json.h, the C ABI's network_set_json) and
+// the `lodestone` program's own JSON files.
 //
 // Parsing: parseJsonFile / parseJsonText use nlohmann::json and turn its parse
 // errors into lodestone::InvalidArgument "file:line:column: message" (line
@@ -44,7 +46,7 @@
 
 #include "lodestone/core/base/vec3.h"
 
-namespace lodestone::examples {
+namespace lodestone::plugin {
 
 /// Parses JSON text. `sourceName` (a file name) prefixes error messages.
 /// Throws lodestone::InvalidArgument "sourceName:line:column: message" on a
@@ -82,8 +84,24 @@ int editDistance(const std::string& a, const std::string& b);
 
 /// The candidate closest to `word` when close enough to be a likely typo
 /// (distance <= max(1, longer length / 3) and below the shorter length, or
-/// equal ignoring case); "" otherwise.
+/// equal ignoring case); "" otherwise. The one suggestion of every "did you
+/// mean" message: scene keys and values, node types, nodes, parameters and
+/// ports of a network.
 std::string closestMatch(const std::string& word, const std::vector<std::string>& candidates);
+/// "; did you mean 'x'?" for closestMatch's answer, "" when there is none.
+std::string didYouMean(const std::string& word, const std::vector<std::string>& candidates);
+
+// The words of every "expected ..., found ..." message, shared by the reader
+// and ParamDecl::check (a value set on a network node).
+
+/// Shortest "%g" text that reads back as the same double ("nan", "inf").
+std::string formatNumber(double v);
+/// "a number in kg/m^3 > 0": `what`, the unit (none when "" or "1") and the range.
+std::string numberExpectation(const std::string& what, const std::string& unit, const Range& range);
+/// "'a', 'b' or 'c'" (`conjunction` "or" or "and").
+std::string quoteList(const std::vector<std::string>& words, const char* conjunction = "or");
+/// "an array of [at least N | N | N to M] <what>".
+std::string arrayOf(std::size_t minCount, std::size_t maxCount, const char* what);
 
 /// "object", "array", "string", "boolean", "number", "null"...
 std::string jsonTypeName(const nlohmann::json& value);
@@ -133,6 +151,8 @@ class JsonReader {
   /// A 3-element array of numbers, each finite and in `componentRange`.
   Vec3d vec3(const std::string& key, const std::string& unit, const Range& componentRange = Range::any());
   Vec3d vec3(const std::string& key, const std::string& unit, const Range& componentRange, const Vec3d& fallback);
+  /// A non-zero 3-vector (any length), returned as given.
+  Vec3d nonZeroVec3(const std::string& key);
   /// A non-zero 3-vector (any length), returned normalised.
   Vec3d direction(const std::string& key);
   Vec3d direction(const std::string& key, const Vec3d& fallback);
@@ -178,4 +198,4 @@ class JsonReader {
   std::set<std::string> read_;   // keys consumed
 };
 
-}  // namespace lodestone::examples
+}  // namespace lodestone::plugin

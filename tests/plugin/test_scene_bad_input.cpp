@@ -9,10 +9,10 @@
 #include <vector>
 
 #include "lodestone/core/base/error.h"
-#include "scene.h"
+#include "lodestone/plugin/scene.h"
 
 using namespace lodestone;
-using namespace lodestone::examples;
+using namespace lodestone::plugin;
 
 namespace {
 
