@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "field_backend.h"
+#include "lodestone/core/field/pcg_iteration.h"
 #include "lodestone/core/field/solve_backend.h"
 #include "lodestone/core/field/solve_settings.h"
 #include "lodestone/gpu/field_solver.h"
@@ -34,58 +35,70 @@ enum Slot : int {
 };
 static_assert(kSolverFirst + (kNodeVecCount - 1) + kWallVecCount + 2 <= kWorkSlots, "too few work slots");
 
-/// Preconditioned CG on a level from x = 0 with the given preconditioner
-/// apply (z = P^-1 r), on work slots firstSlot..firstSlot+3 of that level.
+/// The device operations of the CG iteration (core's pcg_iteration.h) on
+/// a level, work slots firstSlot..firstSlot+3, with the given preconditioner
+/// apply (z = P^-1 r).
+template <typename Precondition>
+class DevicePcgOps {
+ public:
+  DevicePcgOps(FieldBackend& be, int level, const double* b, double* x, bool project, int firstSlot,
+               const Precondition& precondition)
+      : be_(be),
+        n_(be.levelNodes(level)),
+        b_(b),
+        x_(x),
+        project_(project),
+        precondition_(precondition),
+        r_(be.work(level, firstSlot)),
+        z_(be.work(level, firstSlot + 1)),
+        p_(be.work(level, firstSlot + 2)),
+        Ap_(be.work(level, firstSlot + 3)),
+        level_(level) {}
+
+  double start() {
+    be_.copy(n_, b_, r_);
+    be_.fill(n_, 0.0, x_);
+    if (project_) be_.removeMean(n_, r_);
+    return be_.dot(n_, r_, r_);
+  }
+  double precondition() {
+    precondition_(r_, z_);
+    if (project_) be_.removeMean(n_, z_);
+    return be_.dot(n_, r_, z_);
+  }
+  void firstDirection() { be_.copy(n_, z_, p_); }
+  double applyA() {
+    be_.applyLevel(level_, p_, Ap_);
+    return be_.dot(n_, p_, Ap_);
+  }
+  double step(double alpha) {
+    be_.axpby(n_, 1.0, x_, alpha, p_, x_);
+    be_.axpby(n_, 1.0, r_, -alpha, Ap_, r_);
+    if (project_) be_.removeMean(n_, r_);
+    return be_.dot(n_, r_, r_);
+  }
+  void nextDirection(double beta) { be_.axpby(n_, 1.0, z_, beta, p_, p_); }
+  void finish() {
+    if (project_) be_.removeMean(n_, x_);
+  }
+
+ private:
+  FieldBackend& be_;
+  std::size_t n_;
+  const double* b_;
+  double* x_;
+  bool project_;
+  const Precondition& precondition_;
+  double *r_, *z_, *p_, *Ap_;
+  int level_;
+};
+
+/// Preconditioned CG on a level from x = 0 (see DevicePcgOps).
 template <typename Precondition>
 PcgResult pcg(FieldBackend& be, int level, const double* b, double* x, double relTol, int maxIterations, bool project,
-               int firstSlot, const Precondition& precondition) {
-  PcgResult res;
-  const std::size_t n = be.levelNodes(level);
-  double* r = be.work(level, firstSlot);
-  double* z = be.work(level, firstSlot + 1);
-  double* p = be.work(level, firstSlot + 2);
-  double* Ap = be.work(level, firstSlot + 3);
-  be.copy(n, b, r);
-  be.fill(n, 0.0, x);
-  if (project) be.removeMean(n, r);
-  const double bnorm = std::sqrt(be.dot(n, r, r));
-  if (!(bnorm > 0)) {
-    res.converged = std::isfinite(bnorm);
-    res.breakdown = !std::isfinite(bnorm);
-    return res;
-  }
-  precondition(r, z);
-  if (project) be.removeMean(n, z);
-  be.copy(n, z, p);
-  double rz = be.dot(n, r, z);
-  double rnorm = bnorm;
-  while (res.iterations < maxIterations) {
-    be.applyLevel(level, p, Ap);
-    const double pAp = be.dot(n, p, Ap);
-    if (!(pAp > 0) || !std::isfinite(pAp) || !std::isfinite(rz)) {
-      res.breakdown = true;
-      break;
-    }
-    const double alpha = rz / pAp;
-    be.axpby(n, 1.0, x, alpha, p, x);
-    be.axpby(n, 1.0, r, -alpha, Ap, r);
-    if (project) be.removeMean(n, r);
-    ++res.iterations;
-    rnorm = std::sqrt(be.dot(n, r, r));
-    if (rnorm <= relTol * bnorm) {
-      res.converged = true;
-      break;
-    }
-    precondition(r, z);
-    if (project) be.removeMean(n, z);
-    const double rzNew = be.dot(n, r, z);
-    const double beta = rzNew / rz;
-    rz = rzNew;
-    be.axpby(n, 1.0, z, beta, p, p);
-  }
-  res.relativeResidual = rnorm / bnorm;
-  if (project) be.removeMean(n, x);
-  return res;
+              int firstSlot, const Precondition& precondition) {
+  DevicePcgOps<Precondition> ops(be, level, b, x, project, firstSlot, precondition);
+  return pcgIterate(ops, relTol, maxIterations);
 }
 
 /// The V-cycle of multigrid.cpp over the backend's levels.

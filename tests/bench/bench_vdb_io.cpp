@@ -33,7 +33,7 @@
 
 #include "lodestone/cli/command_line.h"
 #include "lodestone/core/base/constants.h"
-include "lodestone/core/base/error.h"
+#include "lodestone/core/base/error.h"
 #include "lodestone/core/base/stopwatch.h"
 #include "lodestone/core/field/material.h"
 #include "lodestone/core/mpm/emitter.h"

@@ -7,6 +7,7 @@
 
 #include "lodestone/core/field/magnetostatic_problem.h"
 #include "lodestone/core/base/parallel.h"
+#include "lodestone/core/field/pcg_iteration.h"
 
 namespace lodestone {
 
@@ -36,93 +37,96 @@ double Preconditioner::applyDot(std::size_t n, const double* r, double* z) const
   return deterministicDot(r, z, n);
 }
 
+namespace {
+// The TBB operations of the CG iteration (pcg_iteration.h), each update fused
+// with its reduction where nothing is projected in between.
+class CpuPcgOps {
+ public:
+  CpuPcgOps(std::size_t n, const std::function<void(const double*, double*)>& applyA,
+            const Preconditioner& preconditioner, const double* b, double* x, const std::function<void(double*)>& project,
+            PcgWorkspace& ws, const std::function<double(const double*, double*)>& applyADot)
+      : n_(n), applyA_(applyA), pre_(preconditioner), b_(b), x_(x), project_(project), applyADot_(applyADot), ws_(ws) {
+    for (std::vector<double>* v : {&ws.r, &ws.z, &ws.p, &ws.Ap}) v->resize(n);
+  }
+
+  double start() {
+    double* r = ws_.r.data();
+    if (project_) {
+      forEach(n_, [&](std::size_t m) {
+        r[m] = b_[m];
+        x_[m] = 0.0;
+      });
+      project_(r);
+      return deterministicDot(r, r, n_);
+    }
+    return deterministicSum<double>(n_, [&](std::size_t m) {
+      r[m] = b_[m];
+      x_[m] = 0.0;
+      return r[m] * r[m];
+    });
+  }
+  // z = M^-1 r and r . z, fused when nothing is projected in between.
+  double precondition() {
+    if (project_) {
+      pre_.apply(ws_.r.data(), ws_.z.data());
+      project_(ws_.z.data());
+      return deterministicDot(ws_.r.data(), ws_.z.data(), n_);
+    }
+    return pre_.applyDot(n_, ws_.r.data(), ws_.z.data());
+  }
+  void firstDirection() { ws_.p.swap(ws_.z); }  // p = z; z is overwritten by the next precondition()
+  double applyA() {
+    if (applyADot_) return applyADot_(ws_.p.data(), ws_.Ap.data());
+    applyA_(ws_.p.data(), ws_.Ap.data());
+    return deterministicDot(ws_.p.data(), ws_.Ap.data(), n_);
+  }
+  double step(double alpha) {
+    const double *p = ws_.p.data(), *Ap = ws_.Ap.data();
+    double *r = ws_.r.data(), *x = x_;
+    if (project_) {
+      forEach(n_, [&](std::size_t m) {
+        x[m] += alpha * p[m];
+        r[m] -= alpha * Ap[m];
+      });
+      project_(r);
+      return deterministicDot(r, r, n_);
+    }
+    // One pass over the vectors: the update and |r|^2 together (each index
+    // is visited exactly once; the sum is as deterministic as deterministicDot).
+    return deterministicSum<double>(n_, [&](std::size_t m) {
+      x[m] += alpha * p[m];
+      r[m] -= alpha * Ap[m];
+      return r[m] * r[m];
+    });
+  }
+  void nextDirection(double beta) {
+    const double* z = ws_.z.data();
+    double* p = ws_.p.data();
+    forEach(n_, [&](std::size_t m) { p[m] = z[m] + beta * p[m]; });
+  }
+  void finish() {
+    if (project_) project_(x_);
+  }
+
+ private:
+  std::size_t n_;
+  const std::function<void(const double*, double*)>& applyA_;
+  const Preconditioner& pre_;
+  const double* b_;
+  double* x_;
+  const std::function<void(double*)>& project_;
+  const std::function<double(const double*, double*)>& applyADot_;
+  PcgWorkspace& ws_;
+};
+}  // namespace
+
 PcgResult solvePcg(std::size_t n, const std::function<void(const double*, double*)>& applyA,
                    const Preconditioner& preconditioner, const double* b, double* x, double relTol,
                    int maxIterations, const std::function<void(double*)>& project, PcgWorkspace* workspace,
                    const std::function<double(const double*, double*)>& applyADot) {
-  PcgResult res;
   PcgWorkspace local;
-  PcgWorkspace& ws = workspace ? *workspace : local;
-  ws.r.resize(n);
-  ws.z.resize(n);
-  ws.p.resize(n);
-  ws.Ap.resize(n);
-  std::vector<double>&r = ws.r, &z = ws.z, &p = ws.p, &Ap = ws.Ap;
-  double bnorm2;
-  if (project) {
-    forEach(n, [&](std::size_t m) {
-      r[m] = b[m];
-      x[m] = 0.0;
-    });
-    project(r.data());
-    bnorm2 = deterministicDot(r.data(), r.data(), n);
-  } else {
-    bnorm2 = deterministicSum<double>(n, [&](std::size_t m) {
-      r[m] = b[m];
-      x[m] = 0.0;
-      return r[m] * r[m];
-    });
-  }
-  const double bnorm = std::sqrt(bnorm2);
-  if (!(bnorm > 0)) {
-    res.converged = std::isfinite(bnorm);
-    res.breakdown = !std::isfinite(bnorm);
-    return res;
-  }
-  // z = M^-1 r and r . z, fused when nothing is projected in between.
-  const auto precondition = [&]() {
-    if (project) {
-      preconditioner.apply(r.data(), z.data());
-      project(z.data());
-      return deterministicDot(r.data(), z.data(), n);
-    }
-    return preconditioner.applyDot(n, r.data(), z.data());
-  };
-  double rz = precondition();
-  p.swap(z);  // p = z; z is overwritten by the next precondition()
-  double rnorm = bnorm;
-  while (res.iterations < maxIterations) {
-    double pAp;
-    if (applyADot) {
-      pAp = applyADot(p.data(), Ap.data());
-    } else {
-      applyA(p.data(), Ap.data());
-      pAp = deterministicDot(p.data(), Ap.data(), n);
-    }
-    if (!(pAp > 0) || !std::isfinite(pAp) || !std::isfinite(rz)) {
-      res.breakdown = true;
-      break;
-    }
-    const double alpha = rz / pAp;
-    ++res.iterations;
-    if (project) {
-      forEach(n, [&](std::size_t m) {
-        x[m] += alpha * p[m];
-        r[m] -= alpha * Ap[m];
-      });
-      project(r.data());
-      rnorm = std::sqrt(deterministicDot(r.data(), r.data(), n));
-    } else {
-      // One pass over the vectors: the update and |r|^2 together (each index
-      // is visited exactly once; the sum is as deterministic as deterministicDot).
-      rnorm = std::sqrt(deterministicSum<double>(n, [&](std::size_t m) {
-        x[m] += alpha * p[m];
-        r[m] -= alpha * Ap[m];
-        return r[m] * r[m];
-      }));
-    }
-    if (rnorm <= relTol * bnorm) {
-      res.converged = true;
-      break;
-    }
-    const double rzNew = precondition();
-    const double beta = rzNew / rz;
-    rz = rzNew;
-    forEach(n, [&](std::size_t m) { p[m] = z[m] + beta * p[m]; });
-  }
-  res.relativeResidual = rnorm / bnorm;
-  if (project) project(x);
-  return res;
+  CpuPcgOps ops(n, applyA, preconditioner, b, x, project, workspace ? *workspace : local, applyADot);
+  return pcgIterate(ops, relTol, maxIterations);
 }
 
 }  // namespace lodestone
