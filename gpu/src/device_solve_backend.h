@@ -2,10 +2,11 @@
 // The backend of core's Newton solver (lodestone/core/field/newton_solver.h)
 // over the device operations of FieldBackend (field_backend.h): the CUDA
 // backend and its serial host reference run the same Newton iteration as
-// core's TBB backend. What is the device's own stays here: preconditioned CG
-// and the V-cycle over the backend's levels (the algorithm of core's pcg.cpp
-// and multigrid.cpp in double precision), and the open wall's operations,
-// with the far field computed on the host (FieldSolver::setWallUpdate).
+// core's TBB backend. What is the device's own stays here: the operations of
+// core's CG loop (pcg_iteration.h), the V-cycle over the backend's levels
+// (multigrid.cpp's cycle in double precision), and the open wall's
+// operations, with the far field computed on the host
+// (FieldSolver::setWallUpdate).
 //
 // Node vectors are the backend's level-0 work slots; swap() exchanges
 // pointers. Wall vectors are node vectors whose free entries are 0.
