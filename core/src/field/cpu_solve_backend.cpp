@@ -14,9 +14,7 @@ namespace lodestone {
 namespace {
 template <typename Fn>
 void forEach(std::size_t n, const Fn& fn) {
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 1 << 13), [&](const tbb::blocked_range<std::size_t>& r) {
-    for (std::size_t m = r.begin(); m != r.end(); ++m) fn(m);
-  });
+  parallelForEach(n, fn);
 }
 
 std::unique_ptr<Preconditioner> makePreconditioner(PreconditionerKind kind, const MultigridSettings& multigrid) {
@@ -165,9 +163,7 @@ PcgResult CpuSolveBackend::solveJacobian(NodeVec rhs, NodeVec x, double relTol, 
 namespace {
 template <typename Fn>
 void forWall(std::size_t count, const Fn& fn) {
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, 1 << 12), [&](const tbb::blocked_range<std::size_t>& r) {
-    for (std::size_t w = r.begin(); w != r.end(); ++w) fn(w);
-  });
+  parallelForEach(count, fn, std::size_t(1) << 12);
 }
 }  // namespace
 

@@ -14,9 +14,7 @@ namespace lodestone {
 namespace {
 template <typename Fn>
 void forEach(std::size_t n, const Fn& fn) {
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 1 << 13), [&](const tbb::blocked_range<std::size_t>& r) {
-    for (std::size_t m = r.begin(); m != r.end(); ++m) fn(m);
-  });
+  parallelForEach(n, fn);
 }
 }  // namespace
 

@@ -6,11 +6,21 @@
 #include <cstddef>
 
 #include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>
 
 namespace lodestone {
 
 constexpr std::size_t kReduceGrain = 4096;
+
+/// fn(m) for every m in [0, count), in parallel chunks of at least `grain`
+/// (each index once: loops that write disjoint outputs).
+template <typename Fn>
+void parallelForEach(std::size_t count, const Fn& fn, std::size_t grain = std::size_t(1) << 13) {
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, grain), [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t m = r.begin(); m != r.end(); ++m) fn(m);
+  });
+}
 
 /// sum_{n in [0,count)} term(n), deterministic.
 template <typename T, typename Term>
