@@ -3,10 +3,9 @@
 // over the device operations of FieldBackend (field_backend.h): the CUDA
 // backend and its serial host reference run the same Newton iteration as
 // core's TBB backend. What is the device's own stays here: the operations of
-// core's CG loop (pcg_iteration.h), the V-cycle over the backend's levels
-// (multigrid.cpp's cycle in double precision), and the open wall's
-// operations, with the far field computed on the host
-// (FieldSolver::setWallUpdate).
+// core's CG loop (pcg_iteration.h) and V-cycle (v_cycle.h) over the backend's
+// double-precision levels, and the open wall's operations, with the far field
+// computed on the host (FieldSolver::setWallUpdate).
 //
 // Node vectors are the backend's level-0 work slots; swap() exchanges
 // pointers. Wall vectors are node vectors whose free entries are 0.
@@ -17,6 +16,7 @@
 #include "field_backend.h"
 #include "lodestone/core/field/pcg_iteration.h"
 #include "lodestone/core/field/solve_backend.h"
+#include "lodestone/core/field/v_cycle.h"
 #include "lodestone/core/field/solve_settings.h"
 #include "lodestone/gpu/field_solver.h"
 
@@ -102,47 +102,67 @@ PcgResult pcg(FieldBackend& be, int level, const double* b, double* x, double re
   return pcgIterate(ops, relTol, maxIterations);
 }
 
-/// The V-cycle of multigrid.cpp over the backend's levels.
+/// The device operations of core's V-cycle (v_cycle.h) over the backend's
+/// levels: level 0's b and x are the caller's, the coarser ones work slots.
+class DeviceCycleOps {
+ public:
+  DeviceCycleOps(FieldBackend& be, const MultigridSettings& s, const double* b, double* x)
+      : be_(be), w_(s.jacobiWeight), b0_(b), x0_(x) {}
+
+  bool coarsest(int level) const { return level + 1 == be_.levelCount(); }
+  void solveCoarsest(int level) {
+    // Diagonally preconditioned CG to a tight tolerance.
+    if (be_.solveCoarsest(level, b(level), x(level))) return;
+    const std::size_t n = be_.levelNodes(level);
+    const double* dinv = be_.inverseDiagonal(level, false);
+    pcg(be_, level, b(level), x(level), 1e-10, 10 * int(n), be_.shield(), kPcgCoarse,
+        [&](const double* in, double* out) { be_.jacobi(n, 1.0, dinv, in, nullptr, out); });
+  }
+  void smoothFromZero(int level) {
+    be_.jacobi(be_.levelNodes(level), w_, be_.inverseDiagonal(level, false), b(level), nullptr, x(level));
+  }
+  void smooth(int level, bool last) {
+    (void)last;
+    double* r = be_.work(level, kMgR);
+    be_.applyLevel(level, x(level), r);
+    be_.jacobi(be_.levelNodes(level), w_, be_.inverseDiagonal(level, false), b(level), r, x(level));
+  }
+  void restrictResidual(int level) {
+    const std::size_t n = be_.levelNodes(level);
+    double* r = be_.work(level, kMgR);
+    be_.applyLevel(level, x(level), r);
+    be_.axpby(n, 1.0, b(level), -1.0, r, r);
+    double* coarseB = be_.work(level + 1, kMgB);
+    be_.restrictTo(level, r, coarseB);
+    be_.zeroFixed(level + 1, coarseB);
+  }
+  void prolongAdd(int level) {
+    double* r = be_.work(level, kMgR);
+    be_.prolong(level, x(level + 1), r);
+    be_.zeroFixed(level, r);
+    be_.axpby(be_.levelNodes(level), 1.0, x(level), 1.0, r, x(level));
+  }
+
+ private:
+  const double* b(int level) { return level == 0 ? b0_ : be_.work(level, kMgB); }
+  double* x(int level) { return level == 0 ? x0_ : be_.work(level, kMgX); }
+
+  FieldBackend& be_;
+  double w_;
+  const double* b0_;
+  double* x0_;
+};
+
+/// z = V-cycle(r) with the backend's levels.
 class VCycle {
  public:
   VCycle(FieldBackend& be, const MultigridSettings& s) : be_(be), s_(s) {}
-
-  void operator()(const double* b, double* x) const { cycle(0, b, x); }
-
- private:
-  void cycle(int level, const double* b, double* x) const {
-    const std::size_t n = be_.levelNodes(level);
-    const double* dinv = be_.inverseDiagonal(level, false);
-    double* r = be_.work(level, kMgR);
-    if (level + 1 == be_.levelCount()) {
-      // Coarsest grid: diagonally preconditioned CG to a tight tolerance.
-      if (be_.solveCoarsest(level, b, x)) return;
-      pcg(be_, level, b, x, 1e-10, 10 * int(n), be_.shield(), kPcgCoarse,
-          [&](const double* in, double* out) { be_.jacobi(n, 1.0, dinv, in, nullptr, out); });
-      return;
-    }
-    const double w = s_.jacobiWeight;
-    be_.jacobi(n, w, dinv, b, nullptr, x);
-    for (int s = 1; s < s_.preSmoothing; ++s) {
-      be_.applyLevel(level, x, r);
-      be_.jacobi(n, w, dinv, b, r, x);
-    }
-    be_.applyLevel(level, x, r);
-    be_.axpby(n, 1.0, b, -1.0, r, r);
-    double* cb = be_.work(level + 1, kMgB);
-    double* cx = be_.work(level + 1, kMgX);
-    be_.restrictTo(level, r, cb);
-    be_.zeroFixed(level + 1, cb);
-    cycle(level + 1, cb, cx);
-    be_.prolong(level, cx, r);
-    be_.zeroFixed(level, r);
-    be_.axpby(n, 1.0, x, 1.0, r, x);
-    for (int s = 0; s < s_.preSmoothing; ++s) {
-      be_.applyLevel(level, x, r);
-      be_.jacobi(n, w, dinv, b, r, x);
-    }
+  void operator()(const double* b, double* x) const {
+    DeviceCycleOps ops(be_, s_, b, x);
+    vCycle(ops, 0, s_.preSmoothing, s_.postSmoothing);
   }
 
+ private:
   FieldBackend& be_;
   const MultigridSettings& s_;
 };

@@ -1,5 +1,7 @@
 #include "lodestone/core/field/multigrid.h"
 
+#include "lodestone/core/field/v_cycle.h"
+
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -195,7 +197,10 @@ class MultigridPreconditioner::Hierarchy {
   static void forEachHullNode(const Level& L, const Fn& fn);
   static void setInverseDiagonal(Level& L, std::size_t m, int i, int j, int k);
 
-  void cycle(std::size_t level, const double* in, double* out) const;
+  class CycleOps;
+  /// One V-cycle from level 0: z = cycle(r), in double at the ends.
+  void cycle(const double* in, double* out) const;
+  void solveCoarsest(std::size_t level, const double* in, double* out) const;
   void applyLevel(std::size_t level, const T* v, T* out) const;
   template <typename RowFn>
   void product(const Level& L, const T* v, const RowFn& rowFn) const;
@@ -752,118 +757,147 @@ void MultigridPreconditioner::Hierarchy<T>::prolongAdd(const Level& L, const Lev
 }
 
 template <typename T>
-void MultigridPreconditioner::Hierarchy<T>::cycle(std::size_t level, const double* in, double* out) const {
-  // Approximately solves A x = b on `level` with b = work.b (or `in`,
-  // converted into it) and x = work.x (or `out`).
+void MultigridPreconditioner::Hierarchy<T>::solveCoarsest(std::size_t level, const double* in, double* out) const {
+  // CG to a tight tolerance (a few hundred unknowns), in double; b = work.b
+  // (or `in`, converted into it), x = work.x (and `out`).
   const Level& L = *levels_[level];
   Work& W = L.work;
   const std::size_t n = L.grid.nodeCount();
   const T* dinv = L.invDiagonal.data();
   T* b = W.b.data();
-  if (level + 1 == levels_.size()) {
-    // Coarsest grid: CG to a tight tolerance (a few hundred unknowns), in double.
-    struct Diagonal final : Preconditioner {
-      const T* d;
-      std::size_t n;
-      void update(const MagnetostaticProblem&) override {}
-      void apply(const double* in, double* out) const override {
-        for (std::size_t m = 0; m < n; ++m) out[m] = double(d[m]) * in[m];
-      }
-      std::string name() const override { return "diagonal"; }
-    } diag;
-    diag.d = dinv;
-    diag.n = n;
-    std::function<void(double*)> project;
-    if (L.boundary == BoundaryKind::Shield)
-      project = [n](double* v) {
-        double mean = 0;
-        for (std::size_t m = 0; m < n; ++m) mean += v[m];
-        mean /= double(n);
-        for (std::size_t m = 0; m < n; ++m) v[m] -= mean;
-      };
-    if (in)
-      for (std::size_t m = 0; m < n; ++m) b[m] = T(in[m]);
-    for (std::size_t m = 0; m < n; ++m) coarseIn_[m] = double(b[m]);
-    T* tv = W.t1.data();
-    T* tout = W.t2.data();
-    solvePcg(
-        n,
-        [&](const double* v, double* o) {
-          for (std::size_t m = 0; m < n; ++m) tv[m] = T(v[m]);
-          applyLevel(level, tv, tout);
-          for (std::size_t m = 0; m < n; ++m) o[m] = double(tout[m]);
-        },
-        diag, coarseIn_.data(), coarseOut_.data(), 1e-10, 10 * int(n), project);
-    T* x = W.x.data();
-    for (std::size_t m = 0; m < n; ++m) x[m] = T(coarseOut_[m]);
-    if (out)
-      for (std::size_t m = 0; m < n; ++m) out[m] = double(x[m]);
-    return;
-  }
-  const T w = T(settings_.jacobiWeight);
-  // The sweeps alternate between x and x2; start where the last one lands in x.
-  const int sweeps = settings_.preSmoothing - 1 + settings_.postSmoothing;
-  T* cur = sweeps % 2 == 0 ? W.x.data() : W.x2.data();
-  T* other = sweeps % 2 == 0 ? W.x2.data() : W.x.data();
-  // Pre-smoothing from x = 0.
-  const T wv = w * L.vacuumInvDiagonal;
-  forEachRow(L.grid, [&](int j, int k) {
-    const std::size_t row = L.grid.index(0, j, k);
-    T* br = b + row;
-    T* xr = cur + row;
-    if (in) {
-      const double* ir = in + row;
-      for (int i = 0; i < L.grid.dims.i; ++i) br[i] = T(ir[i]);
+  struct Diagonal final : Preconditioner {
+    const T* d;
+    std::size_t n;
+    void update(const MagnetostaticProblem&) override {}
+    void apply(const double* in, double* out) const override {
+      for (std::size_t m = 0; m < n; ++m) out[m] = double(d[m]) * in[m];
     }
-    forEachSegment(L, j, k, [&](int from, int to, bool diagonalArray) {
-      if (diagonalArray) {
-        const T* dr = dinv + row;
-        for (int i = from; i < to; ++i) xr[i] = w * dr[i] * br[i];
-      } else {
-        for (int i = from; i < to; ++i) xr[i] = wv * br[i];
+    std::string name() const override { return "diagonal"; }
+  } diag;
+  diag.d = dinv;
+  diag.n = n;
+  std::function<void(double*)> project;
+  if (L.boundary == BoundaryKind::Shield)
+    project = [n](double* v) {
+      double mean = 0;
+      for (std::size_t m = 0; m < n; ++m) mean += v[m];
+      mean /= double(n);
+      for (std::size_t m = 0; m < n; ++m) v[m] -= mean;
+    };
+  if (in)
+    for (std::size_t m = 0; m < n; ++m) b[m] = T(in[m]);
+  for (std::size_t m = 0; m < n; ++m) coarseIn_[m] = double(b[m]);
+  T* tv = W.t1.data();
+  T* tout = W.t2.data();
+  solvePcg(
+      n,
+      [&](const double* v, double* o) {
+        for (std::size_t m = 0; m < n; ++m) tv[m] = T(v[m]);
+        applyLevel(level, tv, tout);
+        for (std::size_t m = 0; m < n; ++m) o[m] = double(tout[m]);
+      },
+      diag, coarseIn_.data(), coarseOut_.data(), 1e-10, 10 * int(n), project);
+  T* x = W.x.data();
+  for (std::size_t m = 0; m < n; ++m) x[m] = T(coarseOut_[m]);
+  if (out)
+    for (std::size_t m = 0; m < n; ++m) out[m] = double(x[m]);
+}
+
+// The level operations of the V-cycle (v_cycle.h). Each level's sweeps
+// alternate between its x and x2; `in` and `out` (double) are level 0's
+// right-hand side and result, converted in the first and the last sweep.
+template <typename T>
+class MultigridPreconditioner::Hierarchy<T>::CycleOps {
+ public:
+  CycleOps(const Hierarchy& h, const double* in, double* out) : h_(h), in_(in), out_(out) {}
+
+  bool coarsest(int level) const { return std::size_t(level) + 1 == h_.levels_.size(); }
+  void solveCoarsest(int level) const {
+    h_.solveCoarsest(std::size_t(level), level == 0 ? in_ : nullptr, level == 0 ? out_ : nullptr);
+  }
+  void smoothFromZero(int level) {
+    const Level& L = *h_.levels_[std::size_t(level)];
+    Work& W = L.work;
+    const T* dinv = L.invDiagonal.data();
+    T* b = W.b.data();
+    const double* in = level == 0 ? in_ : nullptr;
+    // Start where the last sweep lands in x.
+    const int sweeps = h_.settings_.preSmoothing - 1 + h_.settings_.postSmoothing;
+    T* cur = cur_[level] = sweeps % 2 == 0 ? W.x.data() : W.x2.data();
+    other_[level] = sweeps % 2 == 0 ? W.x2.data() : W.x.data();
+    const T w = T(h_.settings_.jacobiWeight);
+    const T wv = w * L.vacuumInvDiagonal;
+    forEachRow(L.grid, [&](int j, int k) {
+      const std::size_t row = L.grid.index(0, j, k);
+      T* br = b + row;
+      T* xr = cur + row;
+      if (in) {
+        const double* ir = in + row;
+        for (int i = 0; i < L.grid.dims.i; ++i) br[i] = T(ir[i]);
       }
+      h_.forEachSegment(L, j, k, [&](int from, int to, bool diagonalArray) {
+        if (diagonalArray) {
+          const T* dr = dinv + row;
+          for (int i = from; i < to; ++i) xr[i] = w * dr[i] * br[i];
+        } else {
+          for (int i = from; i < to; ++i) xr[i] = wv * br[i];
+        }
+      });
     });
-  });
-  for (int s = 1; s < settings_.preSmoothing; ++s) {
-    sweep(L, cur, b, other);
-    std::swap(cur, other);
   }
-  // Coarse correction.
-  const Level& C = *levels_[level + 1];
-  restrictResidual(L, C, cur, b);
-  cycle(level + 1, nullptr, nullptr);
-  prolongAdd(L, C, cur);
-  // Post-smoothing; the last sweep may write the double result directly.
-  for (int s = 0; s < settings_.postSmoothing; ++s) {
-    if (out && s + 1 == settings_.postSmoothing) {
-      if (level == 0 && dotWith_) {
-        rowDot_.resize(std::size_t(L.grid.dims.j) * std::size_t(L.grid.dims.k));
-        sweep(L, cur, b, out, dotWith_, rowDot_.data());
+  // The last sweep of level 0 writes the double result directly (with
+  // applyDot's r . z summed row by row).
+  void smooth(int level, bool last) {
+    const Level& L = *h_.levels_[std::size_t(level)];
+    const T* b = L.work.b.data();
+    if (last && level == 0 && out_) {
+      if (h_.dotWith_) {
+        h_.rowDot_.resize(std::size_t(L.grid.dims.j) * std::size_t(L.grid.dims.k));
+        h_.sweep(L, cur_[level], b, out_, h_.dotWith_, h_.rowDot_.data());
       } else {
-        sweep(L, cur, b, out);
+        h_.sweep(L, cur_[level], b, out_);
       }
-    } else {
-      sweep(L, cur, b, other);
-      std::swap(cur, other);
+      return;
     }
+    h_.sweep(L, cur_[level], b, other_[level]);
+    std::swap(cur_[level], other_[level]);
   }
+  void restrictResidual(int level) const {
+    const Level& L = *h_.levels_[std::size_t(level)];
+    h_.restrictResidual(L, *h_.levels_[std::size_t(level) + 1], cur_[level], L.work.b.data());
+  }
+  void prolongAdd(int level) const {
+    h_.prolongAdd(*h_.levels_[std::size_t(level)], *h_.levels_[std::size_t(level) + 1], cur_[level]);
+  }
+
+ private:
+  const Hierarchy& h_;
+  const double* in_;
+  double* out_;
+  std::array<T*, 64> cur_{}, other_{};
+};
+
+template <typename T>
+void MultigridPreconditioner::Hierarchy<T>::cycle(const double* in, double* out) const {
+  CycleOps ops(*this, in, out);
+  vCycle(ops, 0, settings_.preSmoothing, settings_.postSmoothing);
 }
 
 template <typename T>
 void MultigridPreconditioner::Hierarchy<T>::apply(const double* r, double* z) const {
   require(!levels_.empty(), "multigrid: apply() before update()");
-  cycle(0, r, z);
+  cycle(r, z);
 }
 
 template <typename T>
 double MultigridPreconditioner::Hierarchy<T>::applyDot(const double* r, double* z) const {
   require(!levels_.empty(), "multigrid: apply() before update()");
   if (levels_.size() == 1) {  // the coarsest-grid solve alone: no sweep to fuse into
-    cycle(0, r, z);
+    cycle(r, z);
     return deterministicDot(r, z, levels_.front()->grid.nodeCount());
   }
   dotWith_ = r;
-  cycle(0, r, z);
+  cycle(r, z);
   dotWith_ = nullptr;
   double total = 0;
   for (const double d : rowDot_) total += d;
