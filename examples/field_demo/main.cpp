@@ -36,7 +36,7 @@
 
 #include "lodestone/cli/command_line.h"
 
-#include "colormap.h"
+#include "lodestone/plugin/output/colormap.h"
 #include "lodestone/core/base/stopwatch.h"
 #include "lodestone/core/base/constants.h"
 #include "lodestone/core/sources/cylinder_magnet.h"
@@ -46,12 +46,12 @@
 #include "lodestone/core/field/material.h"
 #include "lodestone/core/base/pose.h"
 #include "lodestone/core/sources/uniform_field.h"
-#include "png_writer.h"
+#include "lodestone/plugin/output/png_writer.h"
 
 namespace {
 
 using namespace lodestone;
-using namespace lodestone::examples;
+using namespace lodestone::output;
 using Clock = std::chrono::steady_clock;
 
 

@@ -20,7 +20,7 @@
 
 #include "lodestone/cli/command_line.h"
 
-#include "atomic_file.h"
+#include "lodestone/plugin/output/atomic_file.h"
 #include "lodestone/core/base/error.h"
 #include "lodestone/core/mpm/checkpoint.h"
 #include "lodestone/plugin/node_registry.h"
@@ -30,15 +30,16 @@
 #include "lodestone/vdb_io/level_set_file.h"
 #include "lodestone/vdb_io/point_file.h"
 #endif
-#include "ply_writer.h"
-#include "png_writer.h"
+#include "lodestone/plugin/output/ply_writer.h"
+#include "lodestone/plugin/output/png_writer.h"
 #include "preview.h"
-#include "progress.h"
+#include "lodestone/plugin/output/progress.h"
 #include "plan_report.h"
-#include "stats_json.h"
+#include "lodestone/plugin/output/stats_json.h"
 
 using namespace lodestone;
 using namespace lodestone::examples;
+using namespace lodestone::output;
 using namespace lodestone::plugin;
 
 namespace {

@@ -6,9 +6,11 @@
 #include "lodestone/core/sources/cuboid_magnet.h"
 #include "lodestone/core/sources/cylinder_magnet.h"
 #include "lodestone/core/sources/sphere_magnet.h"
-#include "particle_render.h"
+#include "lodestone/plugin/output/particle_render.h"
 
 namespace lodestone::examples {
+
+using namespace lodestone::output;
 
 namespace {
 const Rgb kMagneticColours[] = {{38, 40, 52}, {70, 48, 80}, {30, 60, 70}};
@@ -64,7 +66,7 @@ RgbImage renderPreview(const plugin::Scene& scene, const MpmSolver& solver) {
     cam.width = scene.output.width;
     cam.height = scene.output.height;
   }
-  ParticleView view;
+  output::ParticleView view;
   view.positions = p.x.data();
   view.count = p.size();
   view.colours = colours.data();

@@ -5,13 +5,13 @@
 // a ground grid at the bottom of the domain.
 #include <string>
 
-#include "colormap.h"
+#include "lodestone/plugin/output/colormap.h"
 #include "lodestone/core/mpm/solver.h"
 #include "lodestone/plugin/scene.h"
 
 namespace lodestone::examples {
 
 /// Renders the solver's current state as the scene's output settings ask.
-RgbImage renderPreview(const plugin::Scene& scene, const MpmSolver& solver);
+output::RgbImage renderPreview(const plugin::Scene& scene, const MpmSolver& solver);
 
 }  // namespace lodestone::examples

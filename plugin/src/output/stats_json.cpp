@@ -1,11 +1,11 @@
-#include "stats_json.h"
+#include "lodestone/plugin/output/stats_json.h"
 
 #include <cmath>
 
-#include "atomic_file.h"
+#include "lodestone/plugin/output/atomic_file.h"
 #include "lodestone/core/base/error.h"
 
-namespace lodestone::examples {
+namespace lodestone::output {
 namespace {
 
 bool isWordChar(char c) {
@@ -81,4 +81,4 @@ void writeJsonFile(const std::string& path, const nlohmann::json& value, int ind
   writeFileAtomically(path, value.dump(indent, ' ', false, nlohmann::json::error_handler_t::replace) + "\n");
 }
 
-}  // namespace lodestone::examples
+}  // namespace lodestone::output

@@ -14,10 +14,10 @@
 #include <vector>
 
 #include "lodestone/core/base/error.h"
-#include "particle_render.h"
+#include "lodestone/plugin/output/particle_render.h"
 
 using namespace lodestone;
-using namespace lodestone::examples;
+using namespace lodestone::output;
 
 namespace {
 

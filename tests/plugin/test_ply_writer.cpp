@@ -16,10 +16,10 @@
 #include <vector>
 
 #include "lodestone/core/base/error.h"
-#include "ply_writer.h"
+#include "lodestone/plugin/output/ply_writer.h"
 
 using namespace lodestone;
-using namespace lodestone::examples;
+using namespace lodestone::output;
 
 namespace {
 

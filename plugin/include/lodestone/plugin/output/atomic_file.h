@@ -10,7 +10,7 @@
 #include <string>
 #include <vector>
 
-namespace lodestone::examples {
+namespace lodestone::output {
 
 /// Writes `size` bytes to `path` atomically (see above), replacing any
 /// existing file. On failure the temporary file is removed and
@@ -25,4 +25,4 @@ inline void writeFileAtomically(const std::string& path, const std::string& text
   writeFileAtomically(path, text.data(), text.size());
 }
 
-}  // namespace lodestone::examples
+}  // namespace lodestone::output

@@ -25,10 +25,10 @@
 #include <utility>
 #include <vector>
 
-#include "colormap.h"
+#include "lodestone/plugin/output/colormap.h"
 #include "lodestone/core/base/vec3.h"
 
-namespace lodestone::examples {
+namespace lodestone::output {
 
 enum class PlyType { Float32, Int32, UInt8 };
 /// "float", "int", "uchar" (the PLY type names).
@@ -86,4 +86,4 @@ class PlyPointCloud {
   std::vector<Column> columns_;
 };
 
-}  // namespace lodestone::examples
+}  // namespace lodestone::output

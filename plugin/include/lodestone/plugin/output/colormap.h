@@ -8,7 +8,7 @@
 #include <limits>
 #include <vector>
 
-namespace lodestone::examples {
+namespace lodestone::output {
 
 struct Rgb {
   std::uint8_t r = 0, g = 0, b = 0;
@@ -88,4 +88,4 @@ void drawContour(RgbImage& image, const ScalarSlice& field, int pixelsPerSample,
 void appendColourBar(RgbImage& image, Colormap map, const ColourRange& range, int height = 16, int gap = 4,
                      Rgb background = {});
 
-}  // namespace lodestone::examples
+}  // namespace lodestone::output

@@ -11,11 +11,11 @@
 #include <iterator>
 #include <string>
 
-#include "atomic_file.h"
+#include "lodestone/plugin/output/atomic_file.h"
 #include "lodestone/core/base/error.h"
 
 using namespace lodestone;
-using namespace lodestone::examples;
+using namespace lodestone::output;
 
 namespace {
 

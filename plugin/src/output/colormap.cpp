@@ -1,11 +1,11 @@
-#include "colormap.h"
+#include "lodestone/plugin/output/colormap.h"
 
 #include <algorithm>
 #include <cmath>
 
 #include "lodestone/core/base/error.h"
 
-namespace lodestone::examples {
+namespace lodestone::output {
 namespace {
 
 struct Poly6 {
@@ -191,4 +191,4 @@ void appendColourBar(RgbImage& image, Colormap map, const ColourRange& range, in
   }
 }
 
-}  // namespace lodestone::examples
+}  // namespace lodestone::output

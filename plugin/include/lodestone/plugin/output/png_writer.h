@@ -6,7 +6,7 @@
 #include <string>
 #include <vector>
 
-namespace lodestone::examples {
+namespace lodestone::output {
 
 /// Writes `width` x `height` pixels of 8-bit RGB (3 bytes per pixel, rows top
 /// to bottom, left to right) to `path` as a PNG file, replacing any existing
@@ -18,4 +18,4 @@ void writePng(const std::string& path, int width, int height, const std::uint8_t
 std::vector<std::uint8_t> encodePng(int width, int height, const std::uint8_t* rgb,
                                     const std::string& what = "PNG image");
 
-}  // namespace lodestone::examples
+}  // namespace lodestone::output

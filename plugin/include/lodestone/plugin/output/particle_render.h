@@ -36,11 +36,11 @@
 #include <cstdint>
 #include <vector>
 
-#include "colormap.h"
+#include "lodestone/plugin/output/colormap.h"
 #include "lodestone/core/base/pose.h"
 #include "lodestone/core/base/vec3.h"
 
-namespace lodestone::examples {
+namespace lodestone::output {
 
 struct Camera {
   Vec3d position{0.0, -1.0, 0.5};  ///< m
@@ -163,4 +163,4 @@ struct RenderStats {
 RgbImage renderScene(const Camera& camera, const ParticleView& particles, const std::vector<Primitive>& primitives,
                      const RenderSettings& settings = {}, RenderStats* stats = nullptr);
 
-}  // namespace lodestone::examples
+}  // namespace lodestone::output

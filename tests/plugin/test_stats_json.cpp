@@ -11,10 +11,10 @@
 
 #include "lodestone/core/base/error.h"
 #include "lodestone/plugin/json_reader.h"
-#include "stats_json.h"
+#include "lodestone/plugin/output/stats_json.h"
 
 using namespace lodestone;
-using namespace lodestone::examples;
+using namespace lodestone::output;
 using lodestone::plugin::parseJsonFile;
 using nlohmann::json;
 

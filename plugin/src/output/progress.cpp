@@ -1,4 +1,4 @@
-#include "progress.h"
+#include "lodestone/plugin/output/progress.h"
 
 #include <unistd.h>
 
@@ -7,7 +7,7 @@
 
 #include "lodestone/core/base/error.h"
 
-namespace lodestone::examples {
+namespace lodestone::output {
 
 std::string formatDuration(double seconds) {
   if (!std::isfinite(seconds) || seconds < 0) return "--";
@@ -137,4 +137,4 @@ void ProgressPrinter::finish() {
   lastLine_.clear();
 }
 
-}  // namespace lodestone::examples
+}  // namespace lodestone::output

@@ -13,7 +13,7 @@
 #include <utility>
 #include <vector>
 
-namespace lodestone::examples {
+namespace lodestone::output {
 
 /// Compact durations: "0.42 s", "12.3 s", "4m05s", "1h02m03s"; "--" when
 /// negative or not finite.
@@ -85,4 +85,4 @@ class ProgressPrinter {
   bool open_ = false;        // terminal mode: a bar is on the current line
 };
 
-}  // namespace lodestone::examples
+}  // namespace lodestone::output

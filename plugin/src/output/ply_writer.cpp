@@ -1,12 +1,12 @@
-#include "ply_writer.h"
+#include "lodestone/plugin/output/ply_writer.h"
 
 #include <cmath>
 #include <cstring>
 
-#include "atomic_file.h"
+#include "lodestone/plugin/output/atomic_file.h"
 #include "lodestone/core/base/error.h"
 
-namespace lodestone::examples {
+namespace lodestone::output {
 namespace {
 
 void putLe32(std::uint8_t* out, std::uint32_t v) {
@@ -176,4 +176,4 @@ std::vector<std::uint8_t> PlyPointCloud::encode() const {
 
 void PlyPointCloud::write(const std::string& path) const { writeFileAtomically(path, encode()); }
 
-}  // namespace lodestone::examples
+}  // namespace lodestone::output

@@ -1,11 +1,11 @@
-#include "png_writer.h"
+#include "lodestone/plugin/output/png_writer.h"
 
 #include <zlib.h>
 
-#include "atomic_file.h"
+#include "lodestone/plugin/output/atomic_file.h"
 #include "lodestone/core/base/error.h"
 
-namespace lodestone::examples {
+namespace lodestone::output {
 namespace {
 
 constexpr int kMaxSide = 1 << 24;
@@ -75,4 +75,4 @@ void writePng(const std::string& path, int width, int height, const std::uint8_t
   writeFileAtomically(path, encodePng(width, height, rgb, path));
 }
 
-}  // namespace lodestone::examples
+}  // namespace lodestone::output

@@ -1,4 +1,4 @@
-#include "atomic_file.h"
+#include "lodestone/plugin/output/atomic_file.h"
 
 #include <fcntl.h>
 #include <sys/stat.h>
@@ -11,7 +11,7 @@
 
 #include "lodestone/core/base/error.h"
 
-namespace lodestone::examples {
+namespace lodestone::output {
 
 void writeFileAtomically(const std::string& path, const void* data, std::size_t size) {
   if (path.empty()) throw Error("cannot write a file with an empty path");
@@ -51,4 +51,4 @@ void writeFileAtomically(const std::string& path, const void* data, std::size_t 
   }
 }
 
-}  // namespace lodestone::examples
+}  // namespace lodestone::output

@@ -9,10 +9,10 @@
 #include <string>
 
 #include "lodestone/core/base/error.h"
-#include "progress.h"
+#include "lodestone/plugin/output/progress.h"
 
 using namespace lodestone;
-using namespace lodestone::examples;
+using namespace lodestone::output;
 
 TEST(Progress, FormatDuration) {
   EXPECT_EQ(formatDuration(0.0), "0.00 s");

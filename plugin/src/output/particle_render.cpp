@@ -1,4 +1,4 @@
-#include "particle_render.h"
+#include "lodestone/plugin/output/particle_render.h"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -15,7 +15,7 @@
 
 #include "lodestone/core/base/error.h"
 
-namespace lodestone::examples {
+namespace lodestone::output {
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
@@ -681,4 +681,4 @@ RgbImage renderScene(const Camera& camera, const ParticleView& particles, const 
   return image;
 }
 
-}  // namespace lodestone::examples
+}  // namespace lodestone::output

@@ -11,9 +11,9 @@
 #include <nlohmann/json.hpp>
 
 #include "lodestone/core/base/vec3.h"
-#include "progress.h"
+#include "lodestone/plugin/output/progress.h"
 
-namespace lodestone::examples {
+namespace lodestone::output {
 
 /// Key suffix of a unit: "/" -> "_per_", spaces and '*' -> "_", '^' dropped:
 /// "m" -> "m", "A/m" -> "A_per_m", "N/m^3" -> "N_per_m3", "A m^2" -> "A_m2",
@@ -43,4 +43,4 @@ nlohmann::json stageTimesJson(const StageTimes& times);
 /// atomically (atomic_file.h); lodestone::Error names the path on failure.
 void writeJsonFile(const std::string& path, const nlohmann::json& value, int indent = 2);
 
-}  // namespace lodestone::examples
+}  // namespace lodestone::output

@@ -14,12 +14,12 @@
 #include <string>
 #include <vector>
 
-#include "colormap.h"
+#include "lodestone/plugin/output/colormap.h"
 #include "lodestone/core/base/error.h"
-#include "png_writer.h"
+#include "lodestone/plugin/output/png_writer.h"
 
 using namespace lodestone;
-using namespace lodestone::examples;
+using namespace lodestone::output;
 
 namespace {
 
