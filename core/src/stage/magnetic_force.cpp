@@ -48,7 +48,19 @@ void stressDivergence(GridView<const Vec3d> H, GridView<const Vec3d> B, GridView
     const std::size_t count = g.nodeCount();
     near.resize(count);
     std::vector<std::uint8_t> next(count);
-    tbb::parallel_for(std::size_t(0), count, [&](std::size_t m) { near[m] = n[m] > 0; });
+    // Material is n above kMaskDustFraction of its maximum: particles on
+    // B-spline tie points (a weight 0 in exact arithmetic) leave round-off
+    // dust of 1e-30 and less of the maximum on one side only, which would
+    // break the mask's symmetry (and give a symmetric body a net force).
+    const double nMax = tbb::parallel_reduce(
+        tbb::blocked_range<std::size_t>(0, count), 0.0,
+        [&](const tbb::blocked_range<std::size_t>& r, double acc) {
+          for (std::size_t m = r.begin(); m != r.end(); ++m) acc = std::max(acc, n[m]);
+          return acc;
+        },
+        [](double a, double b) { return std::max(a, b); });
+    const double threshold = kMaskDustFraction * nMax;
+    tbb::parallel_for(std::size_t(0), count, [&](std::size_t m) { near[m] = n[m] > threshold; });
     for (int axis = 0; axis < 3 && dilation > 0; ++axis) {
       tbb::parallel_for(0, g.dims.k, [&](int k) {
         for (int j = 0; j < g.dims.j; ++j)

@@ -20,8 +20,14 @@ namespace lodestone {
 
 class FieldSource;
 
+/// ForceMask::Material counts a node as material where n exceeds this
+/// fraction of the grid's largest n: below it, n is round-off of B-spline
+/// weights that are 0 in exact arithmetic (1e-30 and less measured), not matter.
+constexpr double kMaskDustFraction = 1e-12;
+
 enum class ForceMask : int {
-  /// Keep t_j only at nodes within a few nodes of magnetic material (n > 0).
+  /// Keep t_j only at nodes within a few nodes of magnetic material
+  /// (n > kMaskDustFraction * max n).
   /// Stress jumps at the surfaces of permanent magnets inside the grid then
   /// exert no force on empty space.
   Material = 0,
@@ -32,7 +38,7 @@ const char* toString(ForceMask mask);
 
 /// t_j = div T at every node (N/m^3) from the total field H (A/m), the
 /// induction B (T) and the applied field H_ext (A/m). Under
-/// ForceMask::Material, t_j is kept where n > 0 within `dilation` nodes
+/// ForceMask::Material, t_j is kept where n > kMaskDustFraction max n within `dilation` nodes
 /// (default 2: one node for the nodal gradient of phi, one for the central
 /// difference, so the whole surface traction of the body is kept; measured
 /// on two spheres, 0 nodes loses ~15% of their mutual force, 1 node ~1.5%,

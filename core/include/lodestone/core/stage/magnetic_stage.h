@@ -26,7 +26,7 @@ struct MagneticStageSettings {
   BoundaryKind boundary = BoundaryKind::Open;     ///< far-field (default) or the paper's shield wall
   FieldSolveSettings solve;                       ///< Newton-PCG tolerances and caps
   ForceMask forceMask = ForceMask::Material;      ///< where the stress divergence may act
-  int forceMaskDilation = 2;                      ///< nodes beyond n > 0 kept by ForceMask::Material (0..8)
+  int forceMaskDilation = 2;                      ///< nodes beyond the material kept by ForceMask::Material (0..8)
   OutOfGridPolicy outOfGrid = OutOfGridPolicy::Throw;  ///< particles whose stencil leaves the grid
   bool warmStart = true;                          ///< start each solve from the previous potential
   bool appliedFieldOnly = false;                  ///< skip the solve: phi = 0, H = H_ext (weak magnetization;
