@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdio>
 #include <random>
+#include <string>
 #include <vector>
 
 #include <tbb/global_control.h>
@@ -62,6 +63,17 @@ double sphereOverDipoleForce(double chi, double a, double d, double m) {
   for (int l = 1; l <= 60; ++l)
     sum += l * (l + 1.0) * (l + 1.0) * (l + 2.0) * std::pow(a, 2 * l + 1) / ((l * (2 + chi) + 1) * std::pow(d, 2 * l + 5));
   return -kMu0 * chi * m * m / (4 * kPi) * sum;
+}
+
+// Runs fn, which must throw E with `text` in its message.
+template <typename E, typename Fn>
+void expectThrowContaining(const Fn& fn, const std::string& text) {
+  try {
+    fn();
+    ADD_FAILURE() << "no exception; expected one containing '" << text << "'";
+  } catch (const E& e) {
+    EXPECT_NE(std::string(e.what()).find(text), std::string::npos) << e.what();
+  }
 }
 }  // namespace
 
@@ -311,4 +323,38 @@ TEST(MagneticStage, RoundOffDustOnTiePointsKeepsASymmetricBodyForceFree) {
       EXPECT_LT(norm(rep.totalForce), 1e-9 * scale) << N << " nodes, " << toString(boundary);
     }
   }
+}
+
+TEST(MagneticStage, ParticleForcesRefuseParticlesOtherThanTheLastRuns) {
+  // The per-particle forces share the last run's nodal forces among the
+  // particles that made its density; another set got silent nonsense (902
+  // particles moved 5 mm after a 912-particle run summed to +8.81 N against
+  // the reported -1.36 N).
+  const MagneticMaterial mat = paperMaterial();
+  const GridSpec g = cubeGrid(17, 0.1);
+  const Blob blob = ballOfParticles({0, 0, 0.01}, 0.04, g.dx, mat.numberDensity, 3);
+  MagneticForceStage stage(g, mat);
+  SphereMagnet magnet(Pose::at({0, 0, -0.15}), 0.04, {0, 0, 8e5});
+  const MagneticStageReport rep = stage.run(blob.view(), magnet, 0.0);
+  ASSERT_TRUE(rep.converged()) << rep.summary();
+  std::vector<Vec3d> F(blob.x.size());
+  EXPECT_NO_THROW(stage.particleForces(blob.view(), F.data()));
+
+  Blob fewer = blob;
+  fewer.x.resize(blob.x.size() - 10);
+  fewer.count.resize(blob.x.size() - 10);
+  expectThrowContaining<InvalidArgument>([&] { stage.particleForces(fewer.view(), F.data()); },
+                                         "the last run() deposited");
+  Blob moved = blob;
+  for (Vec3d& x : moved.x) x.z += 0.005;
+  expectThrowContaining<InvalidArgument>([&] { stage.particleForces(moved.view(), F.data()); }, "not the last run()");
+  Blob heavier = blob;
+  heavier.count.back() *= 2;
+  expectThrowContaining<InvalidArgument>([&] { stage.particleForces(heavier.view(), F.data()); },
+                                         "not the last run()");
+
+  // After runOnDensity the host's particles are unknown: any set is taken.
+  std::vector<double> n(stage.density().data, stage.density().data + g.nodeCount());
+  ASSERT_TRUE(stage.runOnDensity({n.data(), g}, magnet, 0.0).converged());
+  EXPECT_NO_THROW(stage.particleForces(moved.view(), F.data()));
 }

@@ -1,5 +1,4 @@
-// The reference MLS-MPM step (Section 4.3 of the paper); see mpm_solver.h.
-#include "lodestone/core/base/stopwatch.h"
+// The reference MLS-MPM step (Section 4.3 of the paper); see mpm/solver.h.
 #include "lodestone/core/mpm/solver.h"
 
 #include <tbb/blocked_range.h>
@@ -12,6 +11,7 @@
 #include <limits>
 #include <sstream>
 
+#include "lodestone/core/base/stopwatch.h"
 #include "lodestone/core/sources/cuboid_magnet.h"
 #include "lodestone/core/sources/cylinder_magnet.h"
 #include "lodestone/core/base/error.h"

@@ -1,6 +1,6 @@
-#include "lodestone/core/base/stopwatch.h"
 #include "lodestone/core/stage/magnetic_stage.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstring>
@@ -9,6 +9,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include "lodestone/core/base/stopwatch.h"
 #include "lodestone/core/base/error.h"
 #include "lodestone/core/field/magnetostatic_problem.h"
 #include "lodestone/core/stage/nodal_field.h"
@@ -85,6 +86,7 @@ MagneticStageReport MagneticForceStage::run(const ParticleView& particles, const
   const auto t0 = Clock::now();
   MagneticStageReport rep;
   rep.transfer = depositNumberDensity(particles, n_.view(), settings_.outOfGrid, binning_);
+  lastParticles_ = fingerprint(particles);
   rep.secondsTransfer = secondsSince(t0);
   if (rep.transfer.skipped > 0)
     rep.warnings.push_back(concat(rep.transfer.skipped, " of ", rep.transfer.particles,
@@ -99,6 +101,7 @@ MagneticStageReport MagneticForceStage::runOnDensity(GridView<const double> dens
   const auto t0 = Clock::now();
   require(density.spec == grid_, "magnetic stage: the density grid does not match the stage grid");
   std::copy(density.data, density.data + grid_.nodeCount(), n_.data());
+  lastParticles_.reset();  // the host's particles are not known
   MagneticStageReport rep = solveAndForce(sources, time, MagneticStageReport{});
   rep.secondsTotal = secondsSince(t0);
   return rep;
@@ -177,7 +180,46 @@ TransferReport MagneticForceStage::sampleForceDensity(const Vec3d* positions, st
   return r;
 }
 
+MagneticForceStage::ParticleFingerprint MagneticForceStage::fingerprint(const ParticleView& particles) {
+  // Up to 4096 particles, evenly spaced and the last one included: their
+  // positions' and counts' bits mixed (splitmix64) with their index.
+  ParticleFingerprint f;
+  f.count = particles.size;
+  const std::size_t stride = std::max<std::size_t>(1, particles.size / 4096);
+  const auto mix = [](std::uint64_t z) {
+    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
+    z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
+    return z ^ (z >> 31);
+  };
+  const auto bits = [](double v) {
+    std::uint64_t u;
+    std::memcpy(&u, &v, sizeof u);
+    return u;
+  };
+  std::uint64_t h = 0x9e3779b97f4a7c15ULL;
+  const auto add = [&](std::size_t p) {
+    const Vec3d& x = particles.positions[p];
+    for (const double v : {x.x, x.y, x.z, particles.counts[p]}) h = mix(h ^ bits(v)) + std::uint64_t(p);
+  };
+  for (std::size_t p = 0; p < particles.size; p += stride) add(p);
+  if (particles.size > 0) add(particles.size - 1);
+  f.hash = h;
+  return f;
+}
+
 TransferReport MagneticForceStage::particleForces(const ParticleView& particles, Vec3d* out) const {
+  if (lastParticles_) {
+    const ParticleFingerprint f = fingerprint(particles);
+    if (f.count != lastParticles_->count)
+      throw InvalidArgument(concat("magnetic stage: particleForces got ", f.count,
+                                   " particles, but the last run() deposited ", lastParticles_->count,
+                                   "; the forces are those of the last run's particles: run() with these first"));
+    if (f.hash != lastParticles_->hash)
+      throw InvalidArgument(concat("magnetic stage: particleForces got ", f.count,
+                                   " particles that are not the last run()'s (their positions or micro-particle",
+                                   " counts changed); the forces are those of the last run's particles: run() with",
+                                   " these first"));
+  }
   // gatherToSupport writes every node: the kept grid needs no clearing.
   if (!(onSupport_.spec() == grid_) || onSupport_.size() != grid_.nodeCount()) onSupport_.reset(grid_);
   DenseGrid<Vec3d>& onSupport = onSupport_;

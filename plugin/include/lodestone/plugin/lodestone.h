@@ -262,7 +262,11 @@ typedef struct lodestone_api {
      another grid is refused). */
   lodestone_status (*stage_run_density)(lodestone_stage* stage, const lodestone_grid* grid, const double* density,
                                         const lodestone_fields* fields, double time, lodestone_report* report);
-  /* Conservative per-particle force (N) for the particles of the last run. */
+  /* Conservative per-particle force (N) for the particles of the last run
+     (stage_run_particles): another set (a different count, or positions or
+     counts that differ from the last run's in a sampled fingerprint) gives
+     LODESTONE_ERROR_INVALID_ARGUMENT. After stage_run_density any set whose
+     deposit is that density is taken, unchecked. */
   lodestone_status (*stage_particle_forces)(const lodestone_stage* stage, const lodestone_particles* particles,
                                             lodestone_vec3_out* forces);
   /* Field samples at arbitrary points (quadratic B-spline): kind H (A/m) or FORCE_DENSITY (N/m^3). */

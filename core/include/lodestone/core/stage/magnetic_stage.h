@@ -9,7 +9,9 @@
 // and can sample the force density back to particle positions for hosts
 // whose grid differs from ours. No I/O; nothing MPM-specific beyond the
 // particle arrays. The potential is kept between calls as the warm start.
+#include <cstdint>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -73,9 +75,12 @@ class MagneticForceStage {
   /// Force on each material point (N), conservative: the nodal forces are
   /// first moved onto the support of n (gatherToSupport), then shared among
   /// the particles in proportion to their B-spline weight times n_p, so
-  /// sum_p F_p = sum_i f_i. `particles` must be the ones of the last run()
-  /// (or ones whose deposit is the density given to runOnDensity). Uses a
-  /// grid kept in the stage: do not call it from two threads at once.
+  /// sum_p F_p = sum_i f_i. `particles` must be the ones of the last run():
+  /// throws InvalidArgument when their count differs, or when a fingerprint
+  /// of their positions and counts (up to 4096 of them, evenly spaced) does.
+  /// After runOnDensity, ones whose deposit is the density given (not
+  /// checked). Uses a grid kept in the stage: do not call it from two
+  /// threads at once.
   TransferReport particleForces(const ParticleView& particles, Vec3d* out) const;
   /// Force density (N/m^3) at arbitrary positions: quadratic B-spline
   /// interpolation of f_i / dx^3. Not conservative near surfaces, where part
@@ -125,6 +130,12 @@ class MagneticForceStage {
   // reusable).
   std::vector<double> hextSignature_;
   GridScratch scratch_;  // temporaries of the nodal fields and the force, kept between runs
+  struct ParticleFingerprint {
+    std::size_t count = 0;
+    std::uint64_t hash = 0;
+  };
+  static ParticleFingerprint fingerprint(const ParticleView& particles);
+  std::optional<ParticleFingerprint> lastParticles_;  // of the last run(); none after runOnDensity
   mutable DenseGrid<Vec3d> onSupport_;  // particleForces' nodal forces moved onto the material
 };
 
