@@ -338,31 +338,6 @@ TEST(PluginAbi, BadSizesStridesAndValuesGiveAStatus) {
   EXPECT_NE(std::string(lastError()).find("still owns 2"), std::string::npos) << lastError();
 }
 
-TEST(PluginAbi, ParticleForcesRefuseAnotherParticleSet) {
-  // stage_particle_forces shares the last run's forces among its particles;
-  // another set (fewer, or moved) is refused with INVALID_ARGUMENT and a
-  // message instead of forces that sum to something else.
-  Fixture f;
-  const lodestone_api* a = f.a;
-  const Ball ball({0.003, -0.002, 0.012}, 0.012, 0.004);
-  const lodestone_particles p = ball.view();
-  lodestone_report rep{};
-  rep.struct_size = sizeof rep;
-  ASSERT_EQ(a->stage_run_particles(f.stage, &p, f.fields, 0, &rep), LODESTONE_OK) << a->context_last_error(f.ctx);
-  std::vector<double> forces(3 * ball.size());
-  lodestone_vec3_out out{sizeof(lodestone_vec3_out), LODESTONE_FLOAT64, forces.data(), 0, ball.size()};
-  EXPECT_EQ(a->stage_particle_forces(f.stage, &p, &out), LODESTONE_OK) << lastError();
-  lodestone_particles fewer = p;
-  fewer.count = p.count - 10;
-  EXPECT_EQ(a->stage_particle_forces(f.stage, &fewer, &out), LODESTONE_ERROR_INVALID_ARGUMENT);
-  EXPECT_NE(lastError().find("the last run() deposited"), std::string::npos) << lastError();
-  Ball moved = ball;
-  for (std::size_t i = 2; i < moved.x.size(); i += 3) moved.x[i] += 0.005;
-  const lodestone_particles pm = moved.view();
-  EXPECT_EQ(a->stage_particle_forces(f.stage, &pm, &out), LODESTONE_ERROR_INVALID_ARGUMENT);
-  EXPECT_NE(lastError().find("not the last run()"), std::string::npos) << lastError();
-}
-
 TEST(PluginAbi, StageMatchesTheCoreStageAndAcceptsFloatsAndStrides) {
   Fixture f;
   const lodestone_api* a = f.a;
@@ -457,6 +432,18 @@ TEST(PluginAbi, StageMatchesTheCoreStageAndAcceptsFloatsAndStrides) {
     EXPECT_EQ(e, LODESTONE_ERROR_NOT_BUILT);
     EXPECT_NE(std::string(a->context_last_error(f.ctx)).find("not built"), std::string::npos);
   }
+
+  // The forces are those of the last run's particles: another set (fewer, or
+  // moved) is refused with a message instead of forces that sum to something else.
+  lodestone_particles fewer = p;
+  fewer.count = p.count - 10;
+  EXPECT_EQ(a->stage_particle_forces(f.stage, &fewer, &out), LODESTONE_ERROR_INVALID_ARGUMENT);
+  EXPECT_NE(lastError().find("the last run() deposited"), std::string::npos) << lastError();
+  Ball moved = ball;
+  for (std::size_t i = 2; i < moved.x.size(); i += 3) moved.x[i] += 0.005;
+  const lodestone_particles pm = moved.view();
+  EXPECT_EQ(a->stage_particle_forces(f.stage, &pm, &out), LODESTONE_ERROR_INVALID_ARGUMENT);
+  EXPECT_NE(lastError().find("not the last run()"), std::string::npos) << lastError();
 }
 
 TEST(PluginAbi, TwoStagesOnTwoThreadsMatchASerialRun) {
