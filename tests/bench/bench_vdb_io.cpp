@@ -44,6 +44,7 @@
 #include "lodestone/vdb_io/grid_conversion.h"
 #include "lodestone/vdb_io/level_set_file.h"
 #include "lodestone/vdb_io/point_file.h"
+#include "lodestone_test/sample_data.h"
 #include "lodestone_test/scenes.h"
 
 using namespace lodestone;
@@ -153,23 +154,9 @@ void solvedFields(Table& table, const fs::path& dir, int N) {
   }
 }
 
-MpmParticles randomParticles(std::size_t n, unsigned seed) {
-  std::mt19937 rng(seed);
-  std::uniform_real_distribution<double> u(-1, 1);
-  MpmParticles p;
-  p.reserve(n);
-  for (std::size_t i = 0; i < n; ++i) {
-    p.add({0.3 + 0.25 * u(rng), -0.1 + 0.2 * u(rng), 0.05 * u(rng)}, {u(rng), 3 * u(rng), -2e-3 * u(rng)},
-          1e-3 * (1.5 + u(rng)), 1e-6, i % 3 == 0 ? 0.0 : 1e9 * (1.5 + u(rng)), std::uint32_t(rng() % 5));
-    p.J[i] = 1 + 0.1 * u(rng);
-    for (int a = 0; a < 3; ++a)
-      for (int b = 0; b < 3; ++b) p.F[i](a, b) = (a == b ? 1.0 : 0.0) + 0.05 * u(rng);
-  }
-  return p;
-}
 
 void particles(Table& table, const fs::path& dir, std::size_t n) {
-  const MpmParticles p = randomParticles(n, 9);
+  const MpmParticles p = lodestone::test::randomParticles(n, 9);
   for (const bool withF : {false, true}) {
     PointFileOptions o;
     o.voxelSize = 0.005;
@@ -188,24 +175,6 @@ void particles(Table& table, const fs::path& dir, std::size_t n) {
   }
 }
 
-/// A closed torus about the z axis (major radius R, minor r, m) as quads split in two.
-TriangleMesh torus(double R, double r, int nu, int nv) {
-  TriangleMesh m;
-  for (int i = 0; i < nu; ++i)
-    for (int j = 0; j < nv; ++j) {
-      const double u = 2 * kPi * i / nu, v = 2 * kPi * j / nv;
-      m.vertices.push_back({(R + r * std::cos(v)) * std::cos(u), (R + r * std::cos(v)) * std::sin(u), r * std::sin(v)});
-    }
-  const auto id = [&](int i, int j) { return std::uint32_t((i % nu) * nv + (j % nv)); };
-  for (int i = 0; i < nu; ++i)
-    for (int j = 0; j < nv; ++j) {
-      m.triangles.push_back({id(i, j), id(i + 1, j), id(i + 1, j + 1)});
-      m.triangles.push_back({id(i, j), id(i + 1, j + 1), id(i, j + 1)});
-    }
-  if (m.volume() < 0)
-    for (auto& t : m.triangles) std::swap(t[1], t[2]);
-  return m;
-}
 
 void levelSets(Table& table, int res) {
   const double R = 0.05, voxel = R / res;
@@ -226,7 +195,7 @@ void levelSets(Table& table, int res) {
   Row fill{"level set", "emitter fill of the sphere, dx = R/10, ppc 8 (items: particles)", double(filled.particles)};
   fill.convertS = secondsSince(t0);
   table.add(fill);
-  const TriangleMesh mesh = torus(0.04, 0.015, 8 * res, 4 * res);
+  const TriangleMesh mesh = lodestone::test::torusMesh({}, 0.04, 0.015, 8 * res, 4 * res);
   MeshLevelSetOptions o;
   o.voxelSize = 0.03 / res;
   t0 = Clock::now();

@@ -20,8 +20,10 @@
 #include "lodestone/core/mpm/grid.h"
 #include "lodestone/core/mpm/particle_order.h"
 #include "lodestone/core/sources/uniform_field.h"
+#include "lodestone_test/mpm_samples.h"
 
 using namespace lodestone;
+using namespace lodestone::test;
 
 namespace {
 
@@ -36,27 +38,8 @@ GridSpec testGrid() {
 // Random particles inside the stencil box, every attribute distinct (magnetic
 // ones, material 1, carry n_p > 0 and a per-particle force).
 MpmParticles randomParticles(const GridSpec& g, std::size_t count, unsigned seed) {
-  std::mt19937 rng(seed);
-  std::uniform_real_distribution<double> U(0, 1), S(-1, 1);
-  MpmParticles p;
-  for (std::size_t n = 0; n < count; ++n) {
-    const Vec3d u{1.5 + U(rng) * (g.dims.i - 4), 1.5 + U(rng) * (g.dims.j - 4), 1.5 + U(rng) * (g.dims.k - 4)};
-    const double vol = std::pow(g.dx / 2, 3) * (0.5 + U(rng));
-    const std::uint32_t mat = std::uint32_t(n % 2);
-    const std::size_t i = p.add(g.origin + g.dx * u, {S(rng), S(rng), S(rng)}, 1000 * vol * (0.5 + U(rng)), vol,
-                                mat == 1 ? 1e6 * U(rng) : 0.0, mat);
-    for (int a = 0; a < 3; ++a)
-      for (int b = 0; b < 3; ++b) {
-        p.C[i](a, b) = 5 * S(rng);
-        p.F[i](a, b) = (a == b ? 1.0 : 0.0) + 0.1 * S(rng);
-      }
-    p.J[i] = 1 + 0.05 * S(rng);
-    if (mat == 1) p.magneticForce[i] = {S(rng), S(rng), S(rng)};
-  }
-  return p;
+  return randomMpmParticles(g, count, seed, true);
 }
-
-std::vector<MpmMaterial> twoMaterials() { return {neoHookeanSolid(1e5, 0.3, 1000), viscousFluid(0.5, 1e5, 1000)}; }
 
 std::vector<std::uint32_t> binnedOrder(const MpmParticles& p, const GridSpec& g) {
   MpmGrid grid(g);

@@ -14,8 +14,10 @@
 #include "lodestone/core/base/error.h"
 #include "lodestone/core/mpm/grid.h"
 #include "lodestone/core/mpm/solver.h"
+#include "lodestone_test/mpm_samples.h"
 
 using namespace lodestone;
+using namespace lodestone::test;
 
 namespace {
 
@@ -27,28 +29,9 @@ GridSpec testGrid(int n, double dx) {
   return g;
 }
 
-// Random particles of two materials (a solid and a fluid) with random
-// velocities, affine matrices and deformations, inside the valid stencil box.
 MpmParticles randomParticles(const GridSpec& g, std::size_t count, unsigned seed) {
-  std::mt19937 rng(seed);
-  std::uniform_real_distribution<double> U(0, 1), S(-1, 1);
-  MpmParticles p;
-  for (std::size_t n = 0; n < count; ++n) {
-    const Vec3d u{1.5 + U(rng) * (g.dims.i - 4), 1.5 + U(rng) * (g.dims.j - 4), 1.5 + U(rng) * (g.dims.k - 4)};
-    const Vec3d x = g.origin + g.dx * u;
-    const double vol = std::pow(g.dx / 2, 3) * (0.5 + U(rng));
-    const std::size_t i = p.add(x, {S(rng), S(rng), S(rng)}, 1000 * vol * (0.5 + U(rng)), vol, 0, std::uint32_t(n % 2));
-    for (int a = 0; a < 3; ++a)
-      for (int b = 0; b < 3; ++b) {
-        p.C[i](a, b) = 5 * S(rng);
-        p.F[i](a, b) = (a == b ? 1.0 : 0.0) + 0.1 * S(rng);
-      }
-    p.J[i] = 1 + 0.05 * S(rng);
-  }
-  return p;
+  return randomMpmParticles(g, count, seed, false);
 }
-
-std::vector<MpmMaterial> twoMaterials() { return {neoHookeanSolid(1e5, 0.3, 1000), viscousFluid(0.5, 1e5, 1000)}; }
 
 struct GridSums {
   double mass = 0;

@@ -18,6 +18,7 @@
 #include "lodestone/vdb_io/field_file.h"
 #include "lodestone/vdb_io/grid_conversion.h"
 #include "lodestone/vdb_io/point_file.h"
+#include "lodestone_test/sample_data.h"
 #include "lodestone_test/scenes.h"
 
 namespace lodestone {
@@ -396,25 +397,15 @@ TEST(VdbFieldFile, PythonOpenVdbReadsTheFile) {
 
 // ---------------------------------------------------------------- particle files
 
-MpmParticles randomParticles(std::size_t n, unsigned seed) {
-  std::mt19937 rng(seed);
-  std::uniform_real_distribution<double> u(-1, 1);
-  MpmParticles p;
-  p.reserve(n);
-  for (std::size_t i = 0; i < n; ++i) {
-    p.add({0.3 + 0.25 * u(rng), -0.1 + 0.2 * u(rng), 0.05 * u(rng)}, {u(rng), 3 * u(rng), -2e-3 * u(rng)},
-          1e-3 * (1.5 + u(rng)), 1e-6, i % 3 == 0 ? 0.0 : 1e9 * (1.5 + u(rng)), std::uint32_t(rng() % 5));
-    p.J[i] = 1 + 0.1 * u(rng);
-    for (int a = 0; a < 3; ++a)
-      for (int b = 0; b < 3; ++b) p.F[i](a, b) = (a == b ? 1.0 : 0.0) + 0.05 * u(rng);
-  }
-  // Large ids (beyond 32 bits) survive.
+// Random particles (sample_data.h) with large ids (beyond 32 bits), which survive.
+MpmParticles randomParticlesWithIds(std::size_t n, unsigned seed) {
+  MpmParticles p = lodestone::test::randomParticles(n, seed);
   for (std::size_t i = 0; i < n; i += 7) p.id[i] = (std::uint64_t(1) << 40) + i;
   return p;
 }
 
 TEST(VdbPointFile, ParticlesRoundTrip) {
-  const MpmParticles p = randomParticles(3000, 11);
+  const MpmParticles p = randomParticlesWithIds(3000, 11);
   const fs::path dir = tempDir();
   const std::string file = (dir / "particles.vdb").string();
   PointFileOptions o;
@@ -497,7 +488,7 @@ TEST(VdbPointFile, BadFilesThrowNamingTheFile) {
   const std::string good = (dir / "good.vdb").string();
   PointFileOptions o;
   o.voxelSize = 0.02;
-  writeParticlesVdb(good, randomParticles(500, 3), o);
+  writeParticlesVdb(good, randomParticlesWithIds(500, 3), o);
   const auto size = fs::file_size(good);
   for (const double frac : {0.1, 0.5, 0.9}) {
     const std::string cut = (dir / ("cut" + std::to_string(int(frac * 100)) + ".vdb")).string();
@@ -506,10 +497,10 @@ TEST(VdbPointFile, BadFilesThrowNamingTheFile) {
     expectNames([&] { readParticlesVdb(cut); }, cut);
   }
   const std::string unwritable = (dir / "no_such_dir" / "p.vdb").string();
-  expectNames([&] { writeParticlesVdb(unwritable, randomParticles(10, 1), o); }, unwritable);
+  expectNames([&] { writeParticlesVdb(unwritable, randomParticlesWithIds(10, 1), o); }, unwritable);
   EXPECT_FALSE(fs::exists(unwritable));
   o.voxelSize = 0;
-  expectNames([&] { writeParticlesVdb(good, randomParticles(10, 1), o); }, good);
+  expectNames([&] { writeParticlesVdb(good, randomParticlesWithIds(10, 1), o); }, good);
 }
 
 TEST(VdbPointFile, PythonOpenVdbSeesThePointGrid) {
@@ -523,7 +514,7 @@ TEST(VdbPointFile, PythonOpenVdbSeesThePointGrid) {
   o.voxelSize = 0.01;
   o.frame = 7;
   o.time = 0.5;
-  writeParticlesVdb(file, randomParticles(2000, 8), o);
+  writeParticlesVdb(file, randomParticlesWithIds(2000, 8), o);
   // Debian 12's binding cannot load point grids (readAll and readGridMetadata
   // raise TypeError naming the point tree type, Tree_ptdataidx32_5_4_3), but
   // the file-level metadata is readable, and the TypeError for "points"

@@ -27,6 +27,7 @@
 #include "lodestone/vdb_io/field_file.h"
 #include "lodestone/vdb_io/grid_conversion.h"
 #include "lodestone/vdb_io/level_set_file.h"
+#include "lodestone_test/sample_data.h"
 #include "lodestone_test/scenes.h"
 #if LODESTONE_TEST_SCENE
 #include "lodestone/plugin/scene.h"
@@ -62,26 +63,6 @@ void expectMessageNames(const std::function<void()>& f, const std::vector<std::s
 
 void writeGrid(const fs::path& file, openvdb::GridBase::Ptr grid) { openvdb::io::File(file.string()).write({grid}); }
 
-/// A closed torus about the z axis (major radius R, minor r, m), outward
-/// counter-clockwise faces, as quads split in two.
-TriangleMesh torus(const Vec3d& centre, double R, double r, int nu, int nv) {
-  TriangleMesh m;
-  for (int i = 0; i < nu; ++i)
-    for (int j = 0; j < nv; ++j) {
-      const double u = 2 * kPi * i / nu, v = 2 * kPi * j / nv;
-      m.vertices.push_back(
-          centre + Vec3d{(R + r * std::cos(v)) * std::cos(u), (R + r * std::cos(v)) * std::sin(u), r * std::sin(v)});
-    }
-  const auto id = [&](int i, int j) { return std::uint32_t((i % nu) * nv + (j % nv)); };
-  for (int i = 0; i < nu; ++i)
-    for (int j = 0; j < nv; ++j) {
-      m.triangles.push_back({id(i, j), id(i + 1, j), id(i + 1, j + 1)});
-      m.triangles.push_back({id(i, j), id(i + 1, j + 1), id(i, j + 1)});
-    }
-  if (m.volume() < 0)
-    for (auto& t : m.triangles) std::swap(t[1], t[2]);
-  return m;
-}
 
 std::string toObj(const TriangleMesh& m) {
   std::string s = "# torus\no torus\n";
@@ -158,7 +139,7 @@ TEST(VdbLevelSet, TorusMeshFillsItsVolume) {
   // A torus mesh (R = 4 cm, r = 1.5 cm): the mesh's own volume (divergence
   // theorem) is the reference; meshToLevelSet at 1.5 mm voxels, then the
   // SDF's volume and the emitted particles' volume must match it.
-  const TriangleMesh mesh = torus({0.01, 0.02, 0.03}, 0.04, 0.015, 64, 32);
+  const TriangleMesh mesh = lodestone::test::torusMesh({0.01, 0.02, 0.03}, 0.04, 0.015, 64, 32);
   const double V = mesh.volume();
   EXPECT_NEAR(V, 2 * kPi * kPi * 0.04 * 0.015 * 0.015, 0.02 * V);  // polygon vs smooth torus
   const fs::path obj = tempDir() / "torus.obj";
@@ -444,7 +425,7 @@ TEST(VdbLevelSet, SceneShapesFromFiles) {
   auto sphere = openvdb::tools::createLevelSetSphere<openvdb::FloatGrid>(0.03f, openvdb::Vec3f(0.f), 0.0025f, 3.0f);
   sphere->setName("ball");
   writeGrid(dir / "ball.vdb", sphere);
-  writeText(dir / "torus.obj", toObj(torus({}, 0.04, 0.015, 32, 16)));
+  writeText(dir / "torus.obj", toObj(lodestone::test::torusMesh({}, 0.04, 0.015, 32, 16)));
   const std::string text = R"({
     "name": "files",
     "domain": {"min": [0, 0, 0], "max": [0.2, 0.2, 0.2], "dx": 0.01},
