@@ -1,0 +1,65 @@
+/* A C host that loads the plugin with dlopen (linking nothing of Lodestone),
+   goes through error paths (a refused version, a refused parameter, a
+   missing VDB file: each an exception inside the library turned into a
+   status) and closes it. Prints "dlopen host: ok" and exits 0 on success.
+   Usage: test_plugin_dlopen <path of liblodestone_plugin.so> */
+#include <dlfcn.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "lodestone/plugin/lodestone.h"
+
+static int failures = 0;
+
+#define CHECK(cond)                                                      \
+  do {                                                                   \
+    if (!(cond)) {                                                       \
+      fprintf(stderr, "%s:%d: failed: %s\n", __FILE__, __LINE__, #cond); \
+      ++failures;                                                        \
+    }                                                                    \
+  } while (0)
+
+int main(int argc, char** argv) {
+  void* lib = NULL;
+  lodestone_get_api_fn get = NULL;
+  const lodestone_api* api = NULL;
+  lodestone_context* ctx = NULL;
+  lodestone_fields* fields = NULL;
+  lodestone_stage* stage = NULL;
+  lodestone_stage_params params;
+
+  if (argc != 2) {
+    fprintf(stderr, "usage: %s <plugin>\n", argv[0]);
+    return 2;
+  }
+  lib = dlopen(argv[1], RTLD_NOW | RTLD_LOCAL);
+  if (!lib) {
+    fprintf(stderr, "dlopen: %s\n", dlerror());
+    return 1;
+  }
+  *(void**)&get = dlsym(lib, "lodestone_get_api");
+  CHECK(get != NULL);
+  if (!get) return 1;
+
+  CHECK(get(LODESTONE_API_VERSION_MAJOR + 1, 0, &api) == LODESTONE_ERROR_VERSION && api == NULL);
+  CHECK(get(LODESTONE_API_VERSION_MAJOR, LODESTONE_API_VERSION_MINOR, &api) == LODESTONE_OK);
+  if (!api) return 1;
+  CHECK(api->context_create(&ctx) == LODESTONE_OK);
+  params.struct_size = sizeof params;
+  CHECK(api->stage_params_default(&params) == LODESTONE_OK);
+  params.grid.dx = -1.0;
+  CHECK(api->stage_create(ctx, &params, &stage) == LODESTONE_ERROR_INVALID_ARGUMENT && stage == NULL);
+  CHECK(strstr(api->context_last_error(ctx), "-1") != NULL);
+  CHECK(api->fields_create(ctx, &fields) == LODESTONE_OK);
+  {
+    const lodestone_status s = api->fields_add_vdb(fields, "/nonexistent/field.vdb", "H");
+    CHECK(s == LODESTONE_ERROR_IO || s == LODESTONE_ERROR_NOT_BUILT);
+  }
+  CHECK(api->fields_destroy(fields) == LODESTONE_OK);
+  CHECK(api->context_destroy(ctx) == LODESTONE_OK);
+
+  CHECK(dlclose(lib) == 0);
+  if (failures) return 1;
+  printf("dlopen host: ok\n");
+  return 0;
+}
