@@ -39,6 +39,7 @@
 #include <tbb/parallel_for.h>
 
 #include "lodestone/cli/command_line.h"
+#include "lodestone/core/stage/density_raster.h"
 #include "lodestone/core/base/stopwatch.h"
 
 #include "lodestone/core/base/constants.h"
@@ -93,36 +94,16 @@ double sphereInteriorField(const MagneticMaterial& mat, double H0) {
 // ------------------------------------------------------------ rasterization
 
 /// n0 times the volume fraction of each node's dual cell inside the union of
-/// balls (centres in m, radius in m): nodes whose dual cell lies wholly
-/// inside or outside are classified by distance, the others by 8^3 samples.
+/// balls (centres in m, radius in m), 8^3 samples a cell.
 DenseGrid<double> rasterizeBalls(const GridSpec& g, double n0, const std::vector<Vec3d>& centres, double radius) {
-  DenseGrid<double> n(g, 0.0);
-  const int S = 8;
-  const double half = 0.5 * std::sqrt(3.0) * g.dx;
-  tbb::parallel_for(0, g.dims.k, [&](int k) {
-    for (int j = 0; j < g.dims.j; ++j)
-      for (int i = 0; i < g.dims.i; ++i) {
-        const Vec3d x = g.nodePosition(i, j, k);
-        double best = std::numeric_limits<double>::infinity();
-        for (const Vec3d& c : centres) best = std::min(best, norm(x - c));
-        if (best > radius + half) continue;
-        if (best < radius - half) {
-          n(i, j, k) = n0;
-          continue;
-        }
-        int in = 0;
-        for (int c = 0; c < S; ++c)
-          for (int b = 0; b < S; ++b)
-            for (int a = 0; a < S; ++a) {
-              const Vec3d p = x + g.dx * Vec3d{(a + 0.5) / S - 0.5, (b + 0.5) / S - 0.5, (c + 0.5) / S - 0.5};
-              bool inside = false;
-              for (const Vec3d& ctr : centres) inside = inside || norm2(p - ctr) < radius * radius;
-              in += inside;
-            }
-        n(i, j, k) = n0 * in / double(S * S * S);
-      }
-  });
-  return n;
+  return rasterizeDensity(
+      g, n0,
+      [&](const Vec3d& p) {
+        for (const Vec3d& c : centres)
+          if (norm2(p - c) < radius * radius) return true;
+        return false;
+      },
+      8);
 }
 
 // ------------------------------------------------------------------ settings

@@ -22,6 +22,7 @@
 
 #include "lodestone/cli/command_line.h"
 
+#include "lodestone/core/stage/density_raster.h"
 #include "lodestone/core/base/error.h"
 #include "lodestone/core/stage/magnetic_stage.h"
 #include "lodestone/core/field/material.h"
@@ -34,25 +35,15 @@ namespace {
 // Density of a sphere (radius N/4 cells) or a cube (edge N/2 cells) centred
 // in an N^3 grid: n0 times the volume fraction of each node's dual cell.
 DenseGrid<double> body(const GridSpec& g, bool cube, double n0) {
-  DenseGrid<double> n(g, 0.0);
-  const int N = g.dims.i;
-  const double c = 0.5 * (N - 1), R = 0.25 * (N - 1);
-  const int S = 4;
-  for (int k = 0; k < N; ++k)
-    for (int j = 0; j < N; ++j)
-      for (int i = 0; i < N; ++i) {
-        int in = 0;
-        for (int z = 0; z < S; ++z)
-          for (int y = 0; y < S; ++y)
-            for (int x = 0; x < S; ++x) {
-              const double px = i - c + (x + 0.5) / S - 0.5, py = j - c + (y + 0.5) / S - 0.5,
-                           pz = k - c + (z + 0.5) / S - 0.5;
-              in += cube ? (std::fabs(px) < R && std::fabs(py) < R && std::fabs(pz) < R)
-                         : (px * px + py * py + pz * pz < R * R);
-            }
-        n(i, j, k) = n0 * in / double(S * S * S);
-      }
-  return n;
+  const Vec3d c = g.origin + 0.5 * g.dx * Vec3d{double(g.dims.i - 1), double(g.dims.j - 1), double(g.dims.k - 1)};
+  const double R = 0.25 * (g.dims.i - 1) * g.dx;
+  return rasterizeDensity(
+      g, n0,
+      [&](const Vec3d& x) {
+        const Vec3d d = x - c;
+        return cube ? (std::fabs(d.x) < R && std::fabs(d.y) < R && std::fabs(d.z) < R) : norm2(d) < R * R;
+      },
+      4);
 }
 
 }  // namespace

@@ -32,6 +32,7 @@
 #include <tbb/info.h>
 
 #include "lodestone/cli/command_line.h"
+#include "lodestone/core/stage/density_raster.h"
 #include "lodestone/core/base/constants.h"
 #include "lodestone/core/base/error.h"
 #include "lodestone/core/base/stopwatch.h"
@@ -83,7 +84,7 @@ class Table {
 
 void fieldSet(Table& table, const fs::path& dir, int N) {
   const GridSpec g = test::cubeGrid(N, 0.5);
-  const DenseGrid<double> n = test::rasterize(g, 1e24, test::ball({}, 0.2));
+  const DenseGrid<double> n = rasterizeDensity(g, 1e24, test::ball({}, 0.2));
   DenseGrid<Vec3d> v(g);
   for (int k = 0; k < N; ++k)
     for (int j = 0; j < N; ++j)
@@ -114,7 +115,7 @@ void fieldSet(Table& table, const fs::path& dir, int N) {
   }
   // A sparse ball against a grid that varies everywhere (96^3, float).
   const GridSpec h = test::cubeGrid(96, 0.5);
-  const DenseGrid<double> sparse = test::rasterize(h, 1.0, test::ball({0.1, -0.05, 0.2}, 0.03));
+  const DenseGrid<double> sparse = rasterizeDensity(h, 1.0, test::ball({0.1, -0.05, 0.2}, 0.03));
   DenseGrid<double> dense = sparse;
   for (std::size_t m = 0; m < dense.size(); ++m) dense[m] += 0.5 + 1e-3 * double(m % 97);
   for (const bool isDense : {false, true}) {
@@ -135,7 +136,7 @@ void solvedFields(Table& table, const fs::path& dir, int N) {
   MagneticForceStage stage(g, mat);
   const auto t0 = Clock::now();
   const MagneticStageReport rep =
-      stage.runOnDensity(test::rasterize(g, 1e24, test::ball({}, 0.04), 2).view(), UniformField({0, 0, 1e4}), 0.0);
+      stage.runOnDensity(rasterizeDensity(g, 1e24, test::ball({}, 0.04), 2).view(), UniformField({0, 0, 1e4}), 0.0);
   require(rep.converged(), "the ", N, "^3 solve did not converge: ", rep.solve.message);
   Row solve{"solved", concat(N, "^3 solve, linear ball chi 0.8 (convert_s: the solve)"), double(g.nodeCount())};
   solve.convertS = secondsSince(t0);

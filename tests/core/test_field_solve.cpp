@@ -6,6 +6,7 @@
 #include <cmath>
 #include <vector>
 
+#include "lodestone/core/stage/density_raster.h"
 #include "lodestone/core/stage/magnetic_stage.h"
 #include "lodestone/core/field/material.h"
 #include "lodestone/core/sources/point_dipole.h"
@@ -30,7 +31,7 @@ SphereResult solveSphere(const MagneticMaterial& material, double H0, int N,
                          BoundaryKind boundary = BoundaryKind::Open, double halfWidth = 2 * kRadius,
                          bool predictWall = true) {
   const GridSpec g = cubeGrid(N, halfWidth);
-  const DenseGrid<double> n = rasterize(g, material.numberDensity, ball({}, kRadius));
+  const DenseGrid<double> n = rasterizeDensity(g, material.numberDensity, ball({}, kRadius));
   MagneticStageSettings settings;
   settings.boundary = boundary;
   settings.solve.predictWall = predictWall;
@@ -163,7 +164,7 @@ TEST(FieldSolve, NewtonConvergesFromWeakToExtremeFields) {
 
 TEST(FieldSolve, TinyIterationCapReportsNonConvergenceWithoutNaN) {
   const GridSpec g = cubeGrid(21, 2 * kRadius);
-  const DenseGrid<double> n = rasterize(g, paperMaterial().numberDensity, ball({}, kRadius));
+  const DenseGrid<double> n = rasterizeDensity(g, paperMaterial().numberDensity, ball({}, kRadius));
   MagneticStageSettings s;
   s.solve.maxNewtonIterations = 1;
   s.solve.maxCgIterations = 3;
@@ -182,7 +183,7 @@ TEST(FieldSolve, TinyIterationCapReportsNonConvergenceWithoutNaN) {
 
 TEST(FieldSolve, WarmStartFromTheSolutionNeedsNoNewtonStep) {
   const GridSpec g = cubeGrid(21, 2 * kRadius);
-  const DenseGrid<double> n = rasterize(g, paperMaterial().numberDensity, ball({}, kRadius));
+  const DenseGrid<double> n = rasterizeDensity(g, paperMaterial().numberDensity, ball({}, kRadius));
   MagneticForceStage stage(g, paperMaterial());
   const UniformField src({0, 0, 1e5});
   const auto cold = stage.runOnDensity(n.view(), src, 0.0);
@@ -222,7 +223,7 @@ TEST(FieldSolve, DeferredFinalJacobianGivesTheSameIterates) {
         on.solve.tolerance = off.solve.tolerance = tol;
         off.solve.deferFinalJacobian = false;
         MagneticForceStage a(g, mat, on), b(g, mat, off);
-        const DenseGrid<double> n = rasterize(g, mat.numberDensity, [&](const Vec3d& x) {
+        const DenseGrid<double> n = rasterizeDensity(g, mat.numberDensity, [&](const Vec3d& x) {
           return cube ? std::fabs(x.x) < kRadius && std::fabs(x.y) < kRadius && std::fabs(x.z) < kRadius
                       : norm(x) < kRadius;
         });
@@ -274,7 +275,7 @@ TEST(FieldSolve, WallPredictionIsDroppedWhereItDoesNotHelp) {
   MagneticMaterial strong = paperMaterial();
   strong.numberDensity *= 100;
   const GridSpec g = cubeGrid(25, 2 * kRadius);
-  const DenseGrid<double> n = rasterize(g, strong.numberDensity, ball({}, 1.6 * kRadius));
+  const DenseGrid<double> n = rasterizeDensity(g, strong.numberDensity, ball({}, 1.6 * kRadius));
   MagneticStageSettings on, off;
   off.solve.predictWall = false;
   MagneticForceStage a(g, strong, on), b(g, strong, off);

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdio>
 
+#include "lodestone/core/stage/density_raster.h"
 #include "lodestone/core/base/constants.h"
 #include "lodestone/core/stage/magnetic_force.h"
 #include "lodestone/core/stage/magnetic_stage.h"
@@ -45,7 +46,7 @@ PairResult spherePair(int axis, int cellsPerRadius) {
   c2[axis] = d / 2;
   const auto in1 = ball(c1, a), in2 = ball(c2, a);
   const DenseGrid<double> n =
-      rasterize(g, mat.numberDensity, [&](const Vec3d& x) { return in1(x) || in2(x); });
+      rasterizeDensity(g, mat.numberDensity, [&](const Vec3d& x) { return in1(x) || in2(x); });
   MagneticForceStage stage(g, mat);
   const auto rep = stage.runOnDensity(n.view(), UniformField({0, 0, H0}), 0.0);
   EXPECT_TRUE(rep.converged()) << rep.solve.message;
@@ -94,7 +95,7 @@ TEST(MagneticForce, IrregularBodyFeelsNoNetForceInAUniformField) {
   const double a = 0.02;
   const GridSpec g = cubeGrid(49, 3 * a);
   const auto inBall = ball({0.8 * a, 0.6 * a, 0.4 * a}, 0.9 * a);
-  const DenseGrid<double> n = rasterize(g, paperMaterial().numberDensity, [&](const Vec3d& x) {
+  const DenseGrid<double> n = rasterizeDensity(g, paperMaterial().numberDensity, [&](const Vec3d& x) {
     return inBall(x) || (std::fabs(x.x + 0.5 * a) < a && std::fabs(x.y) < 0.5 * a && std::fabs(x.z) < 1.4 * a);
   });
   for (double H0 : {1e4, 1e5}) {
@@ -116,7 +117,7 @@ TEST(MagneticForce, SpreadConservesTheTotalForce) {
   const MagneticMaterial mat = linearized(paperMaterial());
   const double a = 0.02;
   const GridSpec g = cubeGrid(33, 2.5 * a);  // 6.4 cells per radius
-  const DenseGrid<double> n = rasterize(g, mat.numberDensity, ball({0.1 * a, 0, 0}, a));
+  const DenseGrid<double> n = rasterizeDensity(g, mat.numberDensity, ball({0.1 * a, 0, 0}, a));
   MagneticForceStage stage(g, mat);
   // A gradient field pulls the ball: H = H0 (0, 0, 1) + G (-x/2, -y/2, z).
   const double H0 = 5e4, G = 1e6;
@@ -157,7 +158,7 @@ TEST(MagneticForce, MaterialTouchingAMagnetIsPulledNotPushed) {
   std::vector<double> pull;
   for (double gap : {-1.0, 0.0, 1.0, 3.0}) {
     const Vec3d c{0, 0, -0.035 + R + a + gap * g.dx};
-    const DenseGrid<double> n = rasterize(g, paperMaterial().numberDensity, ball(c, a));
+    const DenseGrid<double> n = rasterizeDensity(g, paperMaterial().numberDensity, ball(c, a));
     MagneticForceStage stage(g, paperMaterial());
     const auto rep = stage.runOnDensity(n.view(), magnet, 0.0);
     ASSERT_TRUE(rep.converged()) << rep.solve.message;

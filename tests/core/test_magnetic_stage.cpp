@@ -13,6 +13,7 @@
 
 #include "lodestone/core/base/constants.h"
 #include "lodestone/core/base/error.h"
+#include "lodestone/core/stage/density_raster.h"
 #include "lodestone/core/stage/magnetic_stage.h"
 #include "lodestone/core/field/material.h"
 #include "lodestone/core/sources/sphere_magnet.h"
@@ -357,4 +358,70 @@ TEST(MagneticStage, ParticleForcesRefuseParticlesOtherThanTheLastRuns) {
   std::vector<double> n(stage.density().data, stage.density().data + g.nodeCount());
   ASSERT_TRUE(stage.runOnDensity({n.data(), g}, magnet, 0.0).converged());
   EXPECT_NO_THROW(stage.particleForces(moved.view(), F.data()));
+}
+
+// rasterizeDensity: a body as a density for runOnDensity. A box whose faces
+// pass through nodes holds n0 times its volume exactly (half, quarter and
+// eighth cells on its faces, edges and corners); a ball of 8 cells' radius
+// to within its staircase error; cells wholly inside get n0, outside 0.
+TEST(RasterizeDensity, VolumeFractionsOfABoxAndABall) {
+  const GridSpec g = cubeGrid(21, 0.1);  // dx = 0.01 m, nodes at multiples of dx
+  const double n0 = 3e21;
+  const DenseGrid<double> box = rasterizeDensity(g, n0, [](const Vec3d& x) {
+    return std::fabs(x.x) < 0.05 && std::fabs(x.y) < 0.05 && std::fabs(x.z) < 0.05;
+  });
+  double total = 0;
+  for (std::size_t m = 0; m < g.nodeCount(); ++m) total += box.view()[m] * g.cellVolume();
+  EXPECT_NEAR(total / (n0 * 1e-3), 1.0, 1e-12);
+  EXPECT_EQ(box(10, 10, 10), n0);
+  EXPECT_DOUBLE_EQ(box(15, 10, 10), 0.5 * n0);   // on a face
+  EXPECT_DOUBLE_EQ(box(15, 15, 10), 0.25 * n0);  // on an edge
+  EXPECT_DOUBLE_EQ(box(15, 15, 15), 0.125 * n0); // on a corner
+  EXPECT_EQ(box(16, 10, 10), 0.0);
+
+  const double r = 0.08;
+  const DenseGrid<double> ball = rasterizeDensity(g, n0, test::ball({}, r), 8);
+  double count = 0;
+  for (std::size_t m = 0; m < g.nodeCount(); ++m) count += ball.view()[m] * g.cellVolume();
+  EXPECT_NEAR(count / (n0 * 4.0 / 3.0 * kPi * r * r * r), 1.0, 2e-3);
+  EXPECT_EQ(ball(10, 10, 10), n0);
+  EXPECT_EQ(ball(0, 0, 0), 0.0);
+
+  // The same with one thread (the result does not depend on the thread count).
+  tbb::global_control one(tbb::global_control::max_allowed_parallelism, 1);
+  const DenseGrid<double> serial = rasterizeDensity(g, n0, test::ball({}, r), 8);
+  for (std::size_t m = 0; m < g.nodeCount(); ++m) ASSERT_EQ(serial.view()[m], ball.view()[m]) << m;
+}
+
+TEST(RasterizeDensity, RefusesBadArgumentsNamingTheValue) {
+  const GridSpec g = cubeGrid(5, 0.1);
+  auto message = [&](double n0, int S, const GridSpec& grid) -> std::string {
+    try {
+      rasterizeDensity(grid, n0, test::ball({}, 0.05), S);
+    } catch (const InvalidArgument& e) {
+      return e.what();
+    }
+    return "no exception";
+  };
+  EXPECT_NE(message(-2.5, 6, g).find("-2.5"), std::string::npos) << message(-2.5, 6, g);
+  EXPECT_NE(message(std::nan(""), 6, g).find("nan"), std::string::npos) << message(std::nan(""), 6, g);
+  EXPECT_NE(message(1e24, 0, g).find("samplesPerAxis must be in 1..64, got 0"), std::string::npos);
+  GridSpec bad = g;
+  bad.dx = 0;
+  EXPECT_NE(message(1e24, 6, bad).find("dx"), std::string::npos) << message(1e24, 6, bad);
+  EXPECT_THROW(rasterizeDensity(g, 1e24, std::function<bool(const Vec3d&)>{}), InvalidArgument);
+}
+
+// A host with a shape and no particles: the density goes straight into the
+// stage, and the ball of it is pulled toward the magnet like a deposited one.
+TEST(RasterizeDensity, FeedsRunOnDensity) {
+  const GridSpec g = cubeGrid(17, 0.08);
+  const MagneticMaterial mat = paperMaterial();
+  MagneticForceStage stage(g, mat);
+  const DenseGrid<double> n = rasterizeDensity(g, mat.numberDensity, test::ball({}, 0.03));
+  const SphereMagnet magnet(Pose::at({0, 0, -0.12}), 0.03, {0, 0, 8e5});
+  const MagneticStageReport r = stage.runOnDensity(n.view(), magnet, 0.0);
+  ASSERT_TRUE(r.converged()) << r.summary();
+  EXPECT_LT(r.totalForce.z, 0.0);
+  EXPECT_LT(std::fabs(r.totalForce.x), 1e-6 * std::fabs(r.totalForce.z));
 }

@@ -9,6 +9,7 @@
 #include <random>
 #include <vector>
 
+#include "lodestone/core/stage/density_raster.h"
 #include "lodestone/core/field/field_solver.h"
 #include "lodestone/core/stage/magnetic_stage.h"
 #include "lodestone/core/field/material.h"
@@ -36,7 +37,7 @@ struct SphereProblem {
   SphereProblem(int N, BoundaryKind b, double H0 = 1e5, int Ny = 0) {
     grid = cubeGrid(N, 0.1);
     if (Ny) grid.dims.j = Ny;
-    n = rasterize(grid, paperMaterial().numberDensity, ball({0.01, 0.0, -0.005}, 0.05), 3);
+    n = rasterizeDensity(grid, paperMaterial().numberDensity, ball({0.01, 0.0, -0.005}, 0.05), 3);
     problem = std::make_unique<MagnetostaticProblem>(grid, paperMaterial().law, b);
     problem->setMaterial(n.view(), uniform({0.3 * H0, 0, H0}));
     std::vector<double> phi(grid.nodeCount(), 0.0), F(grid.nodeCount());
@@ -132,7 +133,7 @@ TEST(Multigrid, IterationsDoNotGrowWithResolution) {
 TEST(Multigrid, SameFieldAsJacobi) {
   for (BoundaryKind b : {BoundaryKind::Open, BoundaryKind::Shield}) {
     const GridSpec g = cubeGrid(29, 0.1);
-    const DenseGrid<double> n = rasterize(g, paperMaterial().numberDensity, ball({0, 0, 0}, 0.05), 3);
+    const DenseGrid<double> n = rasterizeDensity(g, paperMaterial().numberDensity, ball({0, 0, 0}, 0.05), 3);
     std::vector<Vec3d> H[3];  // Jacobi, multigrid (float), multigrid (double)
     for (int k = 0; k < 3; ++k) {
       MagneticStageSettings s;
@@ -193,7 +194,7 @@ TEST(Multigrid, ReusedHierarchyMatchesFresh) {
       expectSameAsFresh("new Newton state");
       // Denser material on a moved, larger ball: a different cell set.
       const DenseGrid<double> n2 =
-          rasterize(sp.grid, 2 * paperMaterial().numberDensity, ball({-0.02, 0.01, 0.0}, 0.07), 3);
+          rasterizeDensity(sp.grid, 2 * paperMaterial().numberDensity, ball({-0.02, 0.01, 0.0}, 0.07), 3);
       sp.problem->setMaterial(n2.view(), uniform({0, 1e5, 0}));
       std::fill(phi.begin(), phi.end(), 0.0);
       sp.problem->evaluate(phi.data(), F.data());

@@ -12,6 +12,7 @@
 #include <thread>
 #include <vector>
 
+#include "lodestone/core/stage/density_raster.h"
 #include "lodestone/core/stage/magnetic_stage.h"
 #include "lodestone/core/field/material.h"
 #include "lodestone/core/sources/uniform_field.h"
@@ -84,7 +85,7 @@ MagneticForceStage& solvedStage() {
     const GridSpec g = test::cubeGrid(12, 0.1);
     const MagneticMaterial mat = linearMaterial(0.5, 1e24);
     auto* s = new MagneticForceStage(g, mat);
-    const DenseGrid<double> n = test::rasterize(g, mat.numberDensity, test::ball({}, 0.05));
+    const DenseGrid<double> n = rasterizeDensity(g, mat.numberDensity, test::ball({}, 0.05));
     s->runOnDensity(n.view(), UniformField({0, 0, 1e4}), 0.0);
     return s;
   }();
@@ -248,7 +249,7 @@ TEST(VdbFieldFile, StageFieldsRoundTripThroughFile) {
 
 TEST(VdbFieldFile, SparseSmallObjectIsMuchSmallerThanDense) {
   const GridSpec g = test::cubeGrid(96, 0.5);
-  const DenseGrid<double> sparse = test::rasterize(g, 1.0, test::ball({0.1, -0.05, 0.2}, 0.03));
+  const DenseGrid<double> sparse = rasterizeDensity(g, 1.0, test::ball({0.1, -0.05, 0.2}, 0.03));
   DenseGrid<double> dense = sparse;
   for (std::size_t n = 0; n < dense.size(); ++n) dense[n] += 0.5 + 1e-3 * double(n % 97);  // varies everywhere
   const fs::path dir = tempDir();

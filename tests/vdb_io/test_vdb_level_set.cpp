@@ -18,6 +18,7 @@
 #include <openvdb/tools/LevelSetSphere.h>
 #include <openvdb/tools/LevelSetUtil.h>
 
+#include "lodestone/core/stage/density_raster.h"
 #include "lodestone/core/base/constants.h"
 #include "lodestone/core/stage/magnetic_stage.h"
 #include "lodestone/core/field/material.h"
@@ -354,7 +355,7 @@ TEST(VdbFieldFile, DisplayAliasesAndMpmGrids) {
   const GridSpec g = test::cubeGrid(9, 0.1);
   const MagneticMaterial mat = linearMaterial(0.5, 1e24);
   MagneticForceStage stage(g, mat);
-  stage.runOnDensity(test::rasterize(g, 1e24, test::ball({}, 0.05)).view(), UniformField({0, 0, 1e4}), 0.0);
+  stage.runOnDensity(rasterizeDensity(g, 1e24, test::ball({}, 0.05)).view(), UniformField({0, 0, 1e4}), 0.0);
   // An MPM grid of another spacing and origin.
   GridSpec mg;
   mg.dx = 0.02;

@@ -1,6 +1,6 @@
 #pragma once
-// Test scenes with closed-form answers: bodies rasterized to a density grid
-// by volume fraction, applied fields, and the sphere closed forms of
+// Test scenes with closed-form answers: bodies (inside tests for
+// rasterizeDensity), applied fields, and the sphere closed forms of
 // PHYSICS.md section 6.
 #include <cmath>
 #include <functional>
@@ -24,25 +24,8 @@ inline GridSpec cubeGrid(int N, double halfWidth) {
   return g;
 }
 
-/// n_i = n0 * (volume fraction of the body in the dual cell of node i),
-/// estimated with S^3 sub-samples. `inside(x)` tells whether x (m) is inside.
-inline DenseGrid<double> rasterize(const GridSpec& g, double n0, const std::function<bool(const Vec3d&)>& inside,
-                                   int S = 6) {
-  DenseGrid<double> n(g, 0.0);
-  for (int k = 0; k < g.dims.k; ++k)
-    for (int j = 0; j < g.dims.j; ++j)
-      for (int i = 0; i < g.dims.i; ++i) {
-        const Vec3d x = g.nodePosition(i, j, k);
-        int in = 0;
-        for (int c = 0; c < S; ++c)
-          for (int b = 0; b < S; ++b)
-            for (int a = 0; a < S; ++a)
-              in += inside(x + g.dx * Vec3d{(a + 0.5) / S - 0.5, (b + 0.5) / S - 0.5, (c + 0.5) / S - 0.5});
-        n(i, j, k) = n0 * in / double(S * S * S);
-      }
-  return n;
-}
-
+/// The inside test of a ball (centre and radius in m), for rasterizeDensity
+/// (lodestone/core/stage/density_raster.h).
 inline std::function<bool(const Vec3d&)> ball(const Vec3d& centre, double radius) {
   return [=](const Vec3d& x) { return norm2(x - centre) < radius * radius; };
 }
