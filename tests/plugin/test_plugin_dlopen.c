@@ -1,7 +1,12 @@
-/* A C host that loads the plugin with dlopen (linking nothing of Lodestone),
-   goes through error paths (a refused version, a refused parameter, a
-   missing VDB file: each an exception inside the library turned into a
-   status) and closes it. Prints "dlopen host: ok" and exits 0 on success.
+/* A C host that loads the plugin with dlopen (linking nothing of Lodestone).
+   First it makes only calls that succeed and closes the library: it must be
+   unloaded then (dlopen with RTLD_NOLOAD finds nothing; no unique symbol pins
+   it). Then it loads it again and goes through error paths (a refused
+   version, a refused parameter, a missing VDB file: each an exception inside
+   the library turned into a status); a failure stores the thread's last error
+   in thread_local state, which keeps the library loaded until the thread
+   exits (docs/plugin.md), so only dlclose's status is checked after that.
+   Prints "dlopen host: ok" and exits 0 on success.
    Usage: test_plugin_dlopen <path of liblodestone_plugin.so> */
 #include <dlfcn.h>
 #include <stdio.h>
@@ -32,6 +37,39 @@ int main(int argc, char** argv) {
     fprintf(stderr, "usage: %s <plugin>\n", argv[0]);
     return 2;
   }
+  /* Success only, then unloaded. */
+  lib = dlopen(argv[1], RTLD_NOW | RTLD_LOCAL);
+  if (!lib) {
+    fprintf(stderr, "dlopen: %s\n", dlerror());
+    return 1;
+  }
+  *(void**)&get = dlsym(lib, "lodestone_get_api");
+  CHECK(get != NULL);
+  if (!get) return 1;
+  CHECK(get(LODESTONE_API_VERSION_MAJOR, LODESTONE_API_VERSION_MINOR, &api) == LODESTONE_OK);
+  if (!api) return 1;
+  CHECK(api->context_create(&ctx) == LODESTONE_OK);
+  CHECK(api->fields_create(ctx, &fields) == LODESTONE_OK);
+  {
+    const double H[3] = {0.0, 0.0, 1e4}, x[3] = {0.0, 0.0, 0.0};
+    double out[3] = {0.0, 0.0, 0.0};
+    CHECK(api->fields_add_uniform(fields, H) == LODESTONE_OK);
+    CHECK(api->fields_evaluate(fields, x, 0.0, out) == LODESTONE_OK && out[2] == 1e4);
+  }
+  CHECK(api->fields_destroy(fields) == LODESTONE_OK);
+  CHECK(api->context_destroy(ctx) == LODESTONE_OK);
+  fields = NULL;
+  ctx = NULL;
+  api = NULL;
+  CHECK(dlclose(lib) == 0);
+  lib = dlopen(argv[1], RTLD_NOW | RTLD_NOLOAD);
+  if (lib) {
+    fprintf(stderr, "the plugin is still loaded after dlclose\n");
+    ++failures;
+    dlclose(lib);
+  }
+
+  /* Error paths. */
   lib = dlopen(argv[1], RTLD_NOW | RTLD_LOCAL);
   if (!lib) {
     fprintf(stderr, "dlopen: %s\n", dlerror());
