@@ -78,6 +78,11 @@ class MpmSolver::SceneField final : public FieldSource {
     for (const auto& m : magnets_) M += m->magnetization(x, t);
     return M;
   }
+  Vec3d exteriorContinuation(const Vec3d& x, double t) const override {
+    Vec3d c = sources_.exteriorContinuation(x, t);
+    for (const auto& m : magnets_) c += m->exteriorContinuation(x, t);
+    return c;
+  }
   void accumulateField(const Vec3d* x, std::size_t count, double t, Vec3d* out) const override {
     sources_.accumulateField(x, count, t, out);
     for (const auto& m : magnets_) m->accumulateField(x, count, t, out);
