@@ -218,7 +218,7 @@ void addSourcesAndColliders(MpmSolver& solver, const FieldSourceSet& fields,
     if (m.collider)
       solver.addMagnet(*m.magnet, m.motion, m.boundary);
     else
-      solver.sources().add(*m.magnet);
+      solver.addNonCollidingMagnet(*m.magnet, m.motion);
   }
   for (const MpmCollider& c : colliders) solver.addCollider(c);
 }
