@@ -21,6 +21,10 @@
 #include <thread>
 #include <vector>
 
+#if LODESTONE_TEST_HAVE_VDB
+#include <openvdb/openvdb.h>
+#endif
+
 namespace fs = std::filesystem;
 
 namespace {
@@ -355,3 +359,56 @@ TEST(RunOutcome, AClosedStandardOutputStopsTheRunWithAMessage) {
   EXPECT_TRUE(fs::exists(frame(dir, 1)));
   fs::remove_all(dir.parent_path());
 }
+
+#if LODESTONE_TEST_HAVE_VDB
+namespace {
+// The grid names of a .vdb file, sorted.
+std::vector<std::string> gridNames(const fs::path& path) {
+  openvdb::initialize();
+  openvdb::io::File file(path.string());
+  file.open(false);
+  std::vector<std::string> names;
+  for (auto it = file.beginName(); it != file.endName(); ++it) names.push_back(it.gridName());
+  file.close();
+  std::sort(names.begin(), names.end());
+  return names;
+}
+
+// The spike scene with every grid and the display aliases in output.vdb.
+std::string allGridsScene(const fs::path& path) {
+  return sceneVariant(path, "\"output\": {",
+                      "\"output\": {\n    \"vdb\": [\"n\", \"phi\", \"H\", \"M\", \"B\", \"force\", \"mass\", "
+                      "\"velocity\"], \"vdb_aliases\": true,");
+}
+}  // namespace
+
+TEST(ExportFields, WritesTheSixFieldGridsItsHelpNamesAndRefusesAFrameBeyondTheScene) {
+  const fs::path dir = scratch("export");
+  const fs::path log = dir.parent_path() / "export.log";
+  const std::string scene = allGridsScene(dir.parent_path() / "all_grids.json");
+  const auto exportArgs = [&](const std::string& frameNumber) {
+    return std::vector<std::string>{LODESTONE_CLI, "export-fields", scene, "--out", (dir / "f.vdb").string(),
+                                    "--frame", frameNumber, "--dx", "0.02"};
+  };
+  ASSERT_EQ(runToEnd(exportArgs("1"), log), 0) << readText(log);
+  EXPECT_EQ(gridNames(dir / "f.vdb"), (std::vector<std::string>{"B", "H", "M", "force", "n", "phi"}));
+  // Frame 201 of a 200-frame scene: refused, not labelled as the last frame's state.
+  EXPECT_EQ(runToEnd(exportArgs("201"), log), 1) << readText(log);
+  EXPECT_NE(readText(log).find("--frame 201: the scene has 200 frames"), std::string::npos) << readText(log);
+  fs::remove_all(dir.parent_path());
+}
+
+TEST(RunOutput, TheInitialStateHasItsFieldFileToo) {
+  const fs::path dir = scratch("fields0");
+  const fs::path log = dir.parent_path() / "fields0.log";
+  const std::string scene = allGridsScene(dir.parent_path() / "all_grids.json");
+  ASSERT_EQ(runToEnd(args(scene, dir, {"--frames", "1:1", "--dx", "0.02", "--no-ply"}), log), 0) << readText(log);
+  ASSERT_TRUE(fs::exists(dir / "fields_0000.vdb"));
+  ASSERT_TRUE(fs::exists(dir / "fields_0001.vdb"));
+  // The scene's eight grids and the display names density and vel, as for frame 1.
+  EXPECT_EQ(gridNames(dir / "fields_0000.vdb"), (std::vector<std::string>{"B", "H", "M", "density", "force", "mass",
+                                                                          "n", "phi", "vel", "velocity"}));
+  EXPECT_EQ(gridNames(dir / "fields_0000.vdb"), gridNames(dir / "fields_0001.vdb"));
+  fs::remove_all(dir.parent_path());
+}
+#endif
