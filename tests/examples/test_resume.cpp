@@ -142,7 +142,9 @@ TEST(Resume, KilledRunResumesToTheSameFramesBitForBit) {
 TEST(Resume, CorruptedCheckpointIsSkippedForTheOlderOne) {
   const fs::path ref = scratch("corrupt_ref"), dir = scratch("corrupt");
   ASSERT_EQ(runToEnd(runArgs(ref, false), ref.parent_path() / "corrupt_ref.log"), 0);
-  // Keep checkpoints 3 and 6; flip one byte of 6's payload.
+  // Keep checkpoints 3 and 6 (and the manifest saying which run wrote them);
+  // flip one byte of 6's payload.
+  fs::copy_file(ref / "lodestone_run.json", dir / "lodestone_run.json");
   fs::copy_file(ref / "checkpoint_0003.lsck", dir / "checkpoint_0003.lsck");
   std::string bytes = readText(ref / "checkpoint_0006.lsck");
   bytes[bytes.size() / 2] = char(bytes[bytes.size() / 2] ^ 0x10);
