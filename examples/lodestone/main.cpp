@@ -35,6 +35,7 @@
 #include "preview.h"
 #include "lodestone/plugin/output/progress.h"
 #include "plan_report.h"
+#include "run_directory.h"
 #include "lodestone/plugin/output/stats_json.h"
 
 using namespace lodestone;
@@ -54,8 +55,18 @@ struct Args {
   bool png = true, ply = true;
   int checkpointEvery = -1;  // -1: the scene's output.checkpoint_every
   bool resume = false, checkFinite = false;
-  bool markdown = false;  // nodes
+  bool clean = false;         // run: delete another run's output in --out first
+  int keepCheckpoints = 0;    // run: checkpoints kept (0 = all)
+  double maxLost = 0.01;      // run: fraction of the particles that may be lost as non-finite
+  long long maxSubsteps = 100000;  // run, export-fields: substeps per frame refused beyond
+  bool markdown = false;      // nodes
+  std::vector<std::string> args;  // the command line as given
 };
+
+// Exit codes (docs/cli.md).
+constexpr int kExitError = 1;       // bad arguments, scene, directory or checkpoint; I/O failure
+constexpr int kExitBlownUp = 3;     // more particles lost as non-finite than --max-lost allows
+constexpr int kExitBrokenPipe = 141;  // standard output closed (128 + SIGPIPE)
 
 [[noreturn]] void usageError(const std::string& message) {
   throw InvalidArgument(message + " (see lodestone --help)");
@@ -103,6 +114,14 @@ std::optional<int> parseArgs(int argc, char** argv, Args& a) {
   const auto addScene = [&](CLI::App& c) {
     c.add_option("SCENE", a.scene, "scene file (JSON, docs/scenes.md)")->required()->type_name("");
   };
+  const auto addMaxSubsteps = [&](CLI::App& c) {
+    cli::addNumber(c, "--max-substeps", a.maxSubsteps,
+                   "refuse a scene whose time step needs more substeps per frame than N (estimated from time.dt or "
+                   "the first CFL step)")
+        ->type_name("N")
+        ->check(cli::wholeNumber(1, 1000000000000LL))
+        ->default_str(cli::formatNumber(double(a.maxSubsteps)));
+  };
   const auto addResolution = [&](CLI::App& c) {
     c.add_flag("--full", a.options.full, "paper resolution: use the scene's domain.full_dx");
     cli::addNumber(c, "--dx", a.options.dx, "override the grid spacing, m")
@@ -136,6 +155,21 @@ std::optional<int> parseArgs(int argc, char** argv, Args& a) {
   run.add_flag("--resume", a.resume,
                "continue from the last valid checkpoint in DIR; the frames it writes equal those of an "
                "uninterrupted run, bit for bit");
+  run.add_flag("--clean", a.clean,
+               "DIR holds another run's output (another scene, a changed scene file, another grid): delete the "
+               "files that run wrote there and start over, instead of refusing");
+  cli::addNumber(run, "--keep-checkpoints", a.keepCheckpoints,
+                 "keep only the newest N checkpoint files, deleting older ones as new ones are written (0 = all)")
+      ->type_name("N")
+      ->check(cli::wholeNumber(0, 1000000))
+      ->default_str(cli::formatNumber(a.keepCheckpoints));
+  cli::addNumber(run, "--max-lost", a.maxLost,
+                 "stop with exit code 3 when more than this fraction of the particles has been lost as non-finite "
+                 "(the simulation blew up); 1 allows any loss")
+      ->type_name("FRACTION")
+      ->check(cli::numberIn(0, 1))
+      ->default_str(cli::formatNumber(a.maxLost));
+  addMaxSubsteps(run);
   run.add_flag("--check-finite", a.checkFinite,
                "stop with an error naming the quantity, substep and particle or node at the first NaN/Inf "
                "(one extra scan per substep)");
@@ -147,9 +181,14 @@ std::optional<int> parseArgs(int argc, char** argv, Args& a) {
       "  particles_NNNN.vdb  the particles as OpenVDB points (when output.vdb_points is true)\n"
       "  stats.json          per-frame time split by stage, field-solve reports, particle\n"
       "                      count and energies (rewritten after every frame)\n"
+      "  lodestone_run.json  what wrote DIR: scene, content hash, grid, command, version,\n"
+      "                      frames, status (a run of anything else into DIR is refused)\n"
+      "  lodestone_run.lock  held while a run writes DIR (a second run is refused)\n"
       "\n"
-      "Ctrl-C stops after the current substep, keeps every complete frame and says how\n"
-      "to resume; a second Ctrl-C exits at once.");
+      "Ctrl-C (or SIGTERM) stops after the current substep, keeps every complete frame and\n"
+      "says how to resume; a second one exits at once.\n"
+      "Exit codes: 0 done; 1 error; 3 blown up (--max-lost); 130 Ctrl-C; 143 SIGTERM;\n"
+      "141 standard output closed.");
 
   CLI::App& validate = *app.add_subcommand("validate", "check a scene file and print what it builds");
   addScene(validate);
@@ -176,6 +215,7 @@ std::optional<int> parseArgs(int argc, char** argv, Args& a) {
   exportFields.add_option("--density-grid", a.densityGrid, "the grid of --density to read")
       ->type_name("G")
       ->capture_default_str();
+  addMaxSubsteps(exportFields);
   addResolution(exportFields);
 
   CLI::App& nodes = *app.add_subcommand("nodes", "list the node library");
@@ -189,9 +229,34 @@ std::optional<int> parseArgs(int argc, char** argv, Args& a) {
     return 1;
   }
   a.command = app.get_subcommands().front()->get_name();
+  if (a.clean && a.resume) usageError("--clean and --resume exclude each other");
+  a.args.assign(argv, argv + argc);
   installShapeLoaders(a.options);
   return std::nullopt;
 }
+/// Substeps per frame the time step takes: time.dt's, or (CFL) the first
+/// step's, which changes as the material moves.
+double substepsPerFrame(const Scene& scene, const MpmSolver& solver) {
+  return std::ceil(scene.frameDuration() / solver.suggestedDt() - 1e-9);
+}
+
+std::string substepText(const Scene& scene, const MpmSolver& solver) {
+  char text[256];
+  const double n = substepsPerFrame(scene, solver);
+  std::snprintf(text, sizeof text, "%s = %.3g s takes %.4g substeps per frame of %.4g s (%.4g for the %d frames)",
+                scene.settings.fixedDt > 0 ? "time.dt" : "the first CFL step", solver.suggestedDt(), n,
+                scene.frameDuration(), n * scene.frames, scene.frames);
+  return text;
+}
+
+/// Refuses a time step that needs more than --max-substeps substeps per frame.
+void checkSubsteps(const Args& a, const Scene& scene, const MpmSolver& solver) {
+  if (substepsPerFrame(scene, solver) > double(a.maxSubsteps))
+    throw InvalidArgument(concat(a.scene, ": ", substepText(scene, solver), ", more than --max-substeps ",
+                                 a.maxSubsteps, ": raise time.dt (or lower the scene's stiffness), or allow them with "
+                                                "--max-substeps N"));
+}
+
 void printSceneSummary(const Scene& scene, const MpmSolver& solver) {
   const GridSpec& g = scene.settings.grid;
   std::printf("scene '%s' (%s)\n", scene.name.c_str(), scene.file.c_str());
@@ -208,7 +273,7 @@ void printSceneSummary(const Scene& scene, const MpmSolver& solver) {
                                          : concat("CFL ", scene.settings.cfl, ", dt <= ", scene.settings.dtMax, " s").c_str(),
               scene.settings.magneticSolveInterval == 0
                   ? "once per frame"
-                  : concat("every ", scene.settings.magneticSolveInterval, " substeps").c_str());
+                  : concat("every ", scene.settings.magneticSolveInterval, " substeps").c_str());  std::printf("  %s\n", substepText(scene, solver).c_str());
 }
 
 nlohmann::json frameJson(int frame, const MpmFrameReport& r, std::size_t particles, double ioSeconds) {
@@ -248,6 +313,7 @@ nlohmann::json frameJson(int frame, const MpmFrameReport& r, std::size_t particl
   putCount(f, "particles", std::int64_t(particles));
   putCount(f, "clamped", std::int64_t(r.clamped));
   putCount(f, "removed", std::int64_t(r.removed));
+  putCount(f, "non_finite", std::int64_t(r.nonFinite));
   nlohmann::json e;
   putQuantity(e, "kinetic", r.energies.kinetic, "J");
   putQuantity(e, "gravitational", r.energies.gravitational, "J");
@@ -278,20 +344,23 @@ void mpmGridData(const MpmSolver& solver, DenseGrid<double>& mass, DenseGrid<Vec
 }
 #endif
 
-/// `solver` (may be null) supplies the MPM grid's mass and velocity when the
-/// scene's output.vdb lists them.
+/// The grids of the scene's output.vdb (sceneGrids) or the six field grids
+/// n, phi, H, M, B and force (export-fields). `solver` (may be null)
+/// supplies the MPM grid's mass and velocity when the scene's output.vdb
+/// lists them.
 void writeFields(const std::string& path, const Scene& scene, const MagneticForceStage& stage, int frame,
-                 double time, const MpmSolver* solver = nullptr) {
+                 double time, const MpmSolver* solver, bool sceneGrids) {
 #if LODESTONE_HAVE_VDB
   VdbWriteOptions o;
   const auto listed = [&](const char* g) {
-    return std::find(scene.output.vdbFields.begin(), scene.output.vdbFields.end(), g) != scene.output.vdbFields.end();
+    return sceneGrids && std::find(scene.output.vdbFields.begin(), scene.output.vdbFields.end(), g) !=
+                             scene.output.vdbFields.end();
   };
-  const auto has = [&](const char* g) { return scene.output.vdbFields.empty() || listed(g); };
+  const auto has = [&](const char* g) { return !sceneGrids || scene.output.vdbFields.empty() || listed(g); };
   o.fields = {has("n"), has("phi"), has("H"), has("M"), has("B"), has("force")};
   o.fields.mass = listed("mass");
   o.fields.velocity = listed("velocity");
-  o.displayAliases = scene.output.vdbAliases;
+  o.displayAliases = sceneGrids && scene.output.vdbAliases;
   DenseGrid<double> mass;
   DenseGrid<Vec3d> velocity;
   if (solver && (o.fields.mass || o.fields.velocity || o.displayAliases)) {
@@ -304,7 +373,7 @@ void writeFields(const std::string& path, const Scene& scene, const MagneticForc
   meta.time = time;
   writeFieldsVdb(path, stage, meta, o);
 #else
-  (void)scene, (void)stage, (void)frame, (void)time, (void)solver;
+  (void)scene, (void)stage, (void)frame, (void)time, (void)solver, (void)sceneGrids;
   throw Error(concat("cannot write ", path, ": this lodestone was built without OpenVDB"));
 #endif
 }
@@ -322,6 +391,50 @@ void writeParticles(const std::string& path, const MpmSolver& solver, int frame)
 #endif
 }
 
+/// The law of the solver's magnetic materials (null when there is none).
+const MpmMaterial* magneticLaw(const MpmSolver& solver) {
+  for (const MpmMaterial& m : solver.materials())
+    if (m.isMagnetic()) return &m;
+  return nullptr;
+}
+
+/// One field solve of the solver's state through the stage's public entry
+/// points, on the scene's magnetic grid: of the magnetic particles, or of the
+/// density n (1/m^3) of `density` (a .vdb file, grid `densityGrid`) when
+/// given. The solver must have a magnetic material.
+std::unique_ptr<MagneticForceStage> solveFieldsNow(const Scene& scene, const MpmSolver& solver,
+                                                   MagneticStageReport& report, const std::string& density = "",
+                                                   const std::string& densityGrid = "n") {
+  const MpmMaterial* law = magneticLaw(solver);
+  if (!law)
+    throw InvalidArgument(concat(scene.file, ": the scene has no magnetic material; there is no field to solve"));
+  const GridSpec grid = scene.settings.magneticGrid ? *scene.settings.magneticGrid : scene.settings.grid;
+  MagneticStageSettings settings = scene.settings.magnetic;
+  settings.outOfGrid = OutOfGridPolicy::Skip;
+  auto stage = std::make_unique<MagneticForceStage>(grid, law->magnetic, settings);
+  if (!density.empty()) {
+    // A host's own particle-to-grid transfer: n (1/m^3) on the field grid.
+#if LODESTONE_HAVE_VDB
+    const DenseGrid<double> n = readDensityVdb(density, grid, densityGrid);
+    report = stage->runOnDensity(n.view(), solver.appliedField(), solver.time());
+#else
+    (void)densityGrid;
+    throw Error(concat("cannot read ", density, ": this lodestone was built without OpenVDB"));
+#endif
+  } else {
+    const MpmParticles& p = solver.particles();
+    std::vector<Vec3d> x;
+    std::vector<double> n;
+    for (std::size_t i = 0; i < p.size(); ++i)
+      if (solver.materials()[p.material[i]].isMagnetic()) {
+        x.push_back(p.x[i]);
+        n.push_back(p.count[i]);
+      }
+    report = stage->run({x.data(), n.data(), x.size()}, solver.appliedField(), solver.time());
+  }
+  return stage;
+}
+
 void writeFrameFiles(const Args& a, const Scene& scene, const MpmSolver& solver, int frame) {
   char name[64];
   const MpmParticles& p = solver.particles();
@@ -337,10 +450,17 @@ void writeFrameFiles(const Args& a, const Scene& scene, const MpmSolver& solver,
                             " time ", solver.time(), " s; units m, m/s"));
     cloud.write((std::filesystem::path(a.out) / name).string());
   }
-  if (!scene.output.vdbFields.empty() && solver.magneticStage()) {
+  if (!scene.output.vdbFields.empty() && (solver.magneticStage() || magneticLaw(solver))) {
     std::snprintf(name, sizeof name, "fields_%04d.vdb", frame);
-    writeFields((std::filesystem::path(a.out) / name).string(), scene, *solver.magneticStage(), frame, solver.time(),
-                &solver);
+    const std::string path = (std::filesystem::path(a.out) / name).string();
+    if (solver.magneticStage()) {
+      writeFields(path, scene, *solver.magneticStage(), frame, solver.time(), &solver, true);
+    } else {
+      // Before the first substep (frame 0): a field solve of this state.
+      MagneticStageReport report;
+      const std::unique_ptr<MagneticForceStage> stage = solveFieldsNow(scene, solver, report);
+      writeFields(path, scene, *stage, frame, solver.time(), &solver, true);
+    }
   }
   if (scene.output.vdbPoints) {
     std::snprintf(name, sizeof name, "particles_%04d.vdb", frame);
@@ -354,26 +474,18 @@ void writeFrameFiles(const Args& a, const Scene& scene, const MpmSolver& solver,
 }
 
 // Ctrl-C / SIGTERM: the first asks the run to stop after the current
-// substep; the handler then restores the default, so a second one exits.
-volatile std::sig_atomic_t gStopRequested = 0;
+// substep (the run then exits with 128 + the signal); the handler restores
+// the default, so a second one exits at once.
+volatile std::sig_atomic_t gStopSignal = 0;
 extern "C" void onStopSignal(int sig) {
-  gStopRequested = 1;
+  gStopSignal = sig;
   std::signal(sig, SIG_DFL);
 }
 
-std::string checkpointName(int frame) {
-  char name[64];
-  std::snprintf(name, sizeof name, "checkpoint_%04d.lsck", frame);
-  return name;
-}
-
-// What a checkpoint must match: the scene and the options that change the
-// simulation (grid spacing, --full).
-std::string checkpointTag(const Scene& scene) {
-  const GridSpec& g = scene.settings.grid;
-  char buf[256];
-  std::snprintf(buf, sizeof buf, " grid %dx%dx%d dx %.17g m", g.dims.i, g.dims.j, g.dims.k, g.dx);
-  return scene.name + buf;
+/// Standard output is gone (a closed pipe: `lodestone run ... | head`).
+bool stdoutBroken() {
+  std::cout.flush();
+  return std::fflush(stdout) != 0 || std::ferror(stdout) != 0 || !std::cout.good();
 }
 
 std::vector<std::uint8_t> readBytes(const std::filesystem::path& path) {
@@ -389,25 +501,25 @@ std::vector<std::uint8_t> readBytes(const std::filesystem::path& path) {
   return bytes;
 }
 
-// Restores the newest checkpoint in `dir` that reads back whole (a corrupted
-// or foreign one is reported and the next older tried); returns its frame.
-int resumeFromCheckpoint(const std::string& dir, const Scene& scene, MpmSolver& solver) {
-  std::vector<std::pair<int, std::filesystem::path>> found;
-  std::error_code ec;
-  for (const auto& e : std::filesystem::directory_iterator(dir, ec)) {
-    const std::string name = e.path().filename().string();
-    int frame = -1;
-    char tail[8] = {};
-    if (std::sscanf(name.c_str(), "checkpoint_%d.%7s", &frame, tail) == 2 && std::string(tail) == "lsck" &&
-        frame >= 0 && name == checkpointName(frame))
-      found.emplace_back(frame, e.path());
-  }
-  if (ec) throw Error(concat("--resume: cannot list '", dir, "' (", ec.message(), ")"));
-  std::sort(found.rbegin(), found.rend());
-  for (const auto& [frame, path] : found) {
+// Restores the newest checkpoint in `dir` that reads back whole and belongs
+// to this run: the same scene content and grid, a frame within --frames, and
+// written by a run whose frames cover this one's start (a corrupted or
+// foreign one is reported and the next older tried). Returns its frame.
+int resumeFromCheckpoint(const std::string& dir, const CheckpointOrigin& run, MpmSolver& solver) {
+  for (const int frame : checkpointFrames(dir)) {
+    const std::filesystem::path path = std::filesystem::path(dir) / checkpointName(frame);
     try {
+      if (frame > run.last)
+        throw InvalidArgument(concat("frame ", frame, " lies beyond --frames ", run.first, ":", run.last));
       const std::vector<std::uint8_t> bytes = readBytes(path);
-      const MpmCheckpointInfo info = restoreMpmCheckpoint(solver, bytes.data(), bytes.size(), checkpointTag(scene));
+      const MpmCheckpointInfo head = readMpmCheckpointInfo(bytes.data(), bytes.size());
+      const CheckpointOrigin origin = checkpointOrigin(head.tag);
+      const std::string difference = origin.identity.differenceFrom(run.identity);
+      if (!difference.empty()) throw InvalidArgument(concat("it belongs to another run: ", difference));
+      if (origin.first > run.first && frame >= run.first)
+        throw InvalidArgument(concat("its run wrote frames from ", origin.first, " on, this one writes from ",
+                                     run.first, " (--frames ", run.first, ":", run.last, ")"));
+      const MpmCheckpointInfo info = restoreMpmCheckpoint(solver, bytes.data(), bytes.size(), head.tag);
       if (info.frame != frame) throw InvalidArgument(concat("it holds frame ", info.frame));
       std::printf("resuming from %s: frame %d, t = %.6g s, %zu particles\n", path.string().c_str(), frame, info.time,
                   info.particles);
@@ -420,8 +532,19 @@ int resumeFromCheckpoint(const std::string& dir, const Scene& scene, MpmSolver& 
                      "' (write them with output.checkpoint_every or --checkpoint-every N)"));
 }
 
+// The command that resumes this run: its own arguments (--dx and all) with
+// --resume instead of --clean.
+std::string resumeCommand(const Args& a) {
+  std::vector<std::string> args{"lodestone"};
+  for (std::size_t i = 1; i < a.args.size(); ++i)
+    if (a.args[i] != "--clean") args.push_back(a.args[i]);
+  if (!a.resume) args.push_back("--resume");
+  return commandLine(args);
+}
+
 int run(const Args& a) {
   if (a.out.empty()) usageError("run needs --out DIR");
+  std::signal(SIGPIPE, SIG_IGN);  // a closed standard output is noticed and said (stdoutBroken)
   std::unique_ptr<tbb::global_control> threads;
   if (a.threads > 0)
     threads = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, std::size_t(a.threads));
@@ -430,12 +553,22 @@ int run(const Args& a) {
   auto solver = buildSolver(scene);
   printSceneSummary(scene, *solver);
   printPlan(scene, *solver, stdout);
+  checkSubsteps(a, scene, *solver);
   std::string planShown;
-  std::filesystem::create_directories(a.out);
   const int last = a.last < 0 ? scene.frames : std::min(a.last, scene.frames);
   if (a.first > scene.frames) usageError(concat("--frames starts at ", a.first, " but the scene has ", scene.frames));
   const int checkpointEvery = a.checkpointEvery >= 0 ? a.checkpointEvery : scene.output.checkpointEvery;
-  const int startFrame = a.resume ? resumeFromCheckpoint(a.out, scene, *solver) : 0;
+  const CheckpointOrigin origin{runIdentity(scene), a.first, last};
+  const RunDirectory directory(a.out, origin.identity, a.clean);
+  const std::string command = commandLine(a.args);
+  const std::size_t initialParticles = solver->particles().size();
+  const int startFrame = a.resume ? resumeFromCheckpoint(a.out, origin, *solver) : 0;
+  if (startFrame == last) {
+    std::printf("nothing to simulate: %s is at the last frame (%d) of --frames %d:%d; the run in %s is complete\n",
+                checkpointName(startFrame).c_str(), last, a.first, last, a.out.c_str());
+    directory.record(command, a.first, last, "complete", last);
+    return 0;
+  }
 
   nlohmann::json stats;
   stats["scene"] = scene.name;
@@ -445,119 +578,140 @@ int run(const Args& a) {
                    {"dx_m", scene.settings.grid.dx}};
   stats["frames"] = nlohmann::json::array();
   const std::filesystem::path statsPath = std::filesystem::path(a.out) / "stats.json";
+  std::int64_t lost = 0;  // particles lost as non-finite since frame 0
   if (startFrame > 0 && std::filesystem::exists(statsPath)) {
     // Keep the per-frame records up to the checkpoint.
     try {
       const std::vector<std::uint8_t> bytes = readBytes(statsPath);
       const nlohmann::json old = nlohmann::json::parse(bytes.begin(), bytes.end());
       for (const nlohmann::json& f : old.at("frames"))
-        if (f.at("frame").get<int>() <= startFrame) stats["frames"].push_back(f);
+        if (f.at("frame").get<int>() <= startFrame) {
+          stats["frames"].push_back(f);
+          lost += f.value("non_finite", std::int64_t(0));
+        }
     } catch (const std::exception& e) {
       std::fprintf(stderr, "lodestone: %s could not be read (%s); it restarts at frame %d\n",
                    statsPath.string().c_str(), e.what(), startFrame + 1);
     }
   }
   int lastCheckpoint = startFrame > 0 ? startFrame : -1;
-  const auto stopMessage = [&](int frame, double time, bool midFrame) {
-    std::string how = lastCheckpoint >= 0
-                          ? concat("resume from ", checkpointName(lastCheckpoint), " (frame ", lastCheckpoint,
-                                   ") with: lodestone run ", a.scene, " --out ", a.out, " --resume")
-                          : std::string("no checkpoint was written (use --checkpoint-every N or "
-                                        "output.checkpoint_every); run again to start over");
-    std::printf("\ninterrupted: stopped %s frame %d at t = %.6g s; frames up to %d are complete in %s; %s\n",
-                midFrame ? "during" : "after", frame, time, midFrame ? frame - 1 : frame, a.out.c_str(), how.c_str());
+  const auto howToResume = [&] {
+    return lastCheckpoint >= 0 ? concat("resume from ", checkpointName(lastCheckpoint), " (frame ", lastCheckpoint,
+                                        ") with: ", resumeCommand(a))
+                               : std::string("no checkpoint was written (use --checkpoint-every N or "
+                                             "output.checkpoint_every); run again to start over");
   };
+  const auto stopMessage = [&](int frame, double time, bool midFrame) {
+    std::printf("\ninterrupted: stopped %s frame %d at t = %.6g s; frames up to %d are complete in %s; %s\n",
+                midFrame ? "during" : "after", frame, time, midFrame ? frame - 1 : frame, a.out.c_str(),
+                howToResume().c_str());
+    directory.record(command, a.first, last, "interrupted", midFrame ? frame - 1 : frame);
+    return 128 + int(gStopSignal);
+  };
+  directory.record(command, a.first, last, "running", startFrame);
   std::signal(SIGINT, onStopSignal);
   std::signal(SIGTERM, onStopSignal);
-  const MpmProgressCallback keepGoing = [](const MpmProgress&) { return gStopRequested == 0; };
+  const MpmProgressCallback keepGoing = [](const MpmProgress&) { return gStopSignal == 0; };
   const auto t0 = std::chrono::steady_clock::now();
   ProgressPrinter progress(std::cout, last, ProgressOptions{isTerminal(stdout)});
-  if (a.first == 1 && startFrame == 0) writeFrameFiles(a, scene, *solver, 0);  // the initial state
-  for (int frame = startFrame + 1; frame <= last; ++frame) {
-    const MpmFrameReport r = solver->advanceFrame(scene.frameDuration(), keepGoing);
-    if (r.cancelled) {
-      progress.finish();
-      stopMessage(frame, solver->time(), true);
-      return 130;
-    }
-    const auto tio = std::chrono::steady_clock::now();
-    if (frame >= a.first) writeFrameFiles(a, scene, *solver, frame);
-    const double io = std::chrono::duration<double>(std::chrono::steady_clock::now() - tio).count();
-    stats["frames"].push_back(frameJson(frame, r, solver->particles().size(), io));
-    if (scene.settings.planner.enabled) {
-      // Every decision in stats.json; a line when one changes.
-      const MagneticPlan& plan = solver->lastMagneticPlan();
-      stats["frames"].back()["planner"] = {{"decisions", decisionsJson(plan.decisions)},
-                                           {"predicted_error", plan.predictedError},
-                                           {"field_solves_reused", r.magneticReused}};
-      const std::string sig = planSignature(plan);
-      if (!plan.decisions.empty() && sig != planShown) {
-        if (!planShown.empty()) progress.message(concat("frame ", frame, ": plan changed\n", plan.summary()));
-        planShown = sig;
+  int frame = startFrame;
+  try {
+    if (a.first == 1 && startFrame == 0) writeFrameFiles(a, scene, *solver, 0);  // the initial state
+    for (frame = startFrame + 1; frame <= last; ++frame) {
+      const MpmFrameReport r = solver->advanceFrame(scene.frameDuration(), keepGoing);
+      if (r.cancelled) {
+        progress.finish();
+        return stopMessage(frame, solver->time(), true);
+      }
+      const auto tio = std::chrono::steady_clock::now();
+      if (frame >= a.first) writeFrameFiles(a, scene, *solver, frame);
+      const double io = std::chrono::duration<double>(std::chrono::steady_clock::now() - tio).count();
+      stats["frames"].push_back(frameJson(frame, r, solver->particles().size(), io));
+      lost += std::int64_t(r.nonFinite);
+      if (scene.settings.planner.enabled) {
+        // Every decision in stats.json; a line when one changes.
+        const MagneticPlan& plan = solver->lastMagneticPlan();
+        stats["frames"].back()["planner"] = {{"decisions", decisionsJson(plan.decisions)},
+                                             {"predicted_error", plan.predictedError},
+                                             {"field_solves_reused", r.magneticReused}};
+        const std::string sig = planSignature(plan);
+        if (!plan.decisions.empty() && sig != planShown) {
+          if (!planShown.empty()) progress.message(concat("frame ", frame, ": plan changed\n", plan.summary()));
+          planShown = sig;
+        }
+      }
+      writeJsonFile(statsPath.string(), stats);
+      if (checkpointEvery > 0 && frame % checkpointEvery == 0) {
+        writeFileAtomically((std::filesystem::path(a.out) / checkpointName(frame)).string(),
+                            saveMpmCheckpoint(*solver, frame, checkpointTag(origin)));
+        // A resumed solver starts its next field solve from phi = 0: so does this one.
+        solver->resetMagneticWarmStart();
+        lastCheckpoint = frame;
+        directory.pruneCheckpoints(frame, a.keepCheckpoints);
+      }
+      for (const MagneticStageReport& m : r.magneticReports)
+        if (!m.converged()) progress.message(concat("frame ", frame, ": ", m.solve.message));
+      for (const std::string& w : r.warnings) progress.message(concat("frame ", frame, ": ", w));
+      const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+      progress.update(frame, elapsed,
+                      formatStageSplit({{"p2g", r.secondsP2G}, {"magnetic", r.secondsMagnetic},
+                                        {"grid", r.secondsGridUpdate}, {"g2p", r.secondsG2P}, {"output", io}}));
+      if (double(lost) > a.maxLost * double(initialParticles)) {
+        progress.finish();
+        std::fprintf(stderr,
+                     "lodestone: the simulation blew up: %lld of its %zu particles (%.3g%%) were lost as non-finite "
+                     "by frame %d (t = %.6g s), more than --max-lost %g allows; frames up to %d are in %s. A smaller "
+                     "time.dt or time.cfl usually helps (--check-finite names the first NaN); --max-lost 1 lets the "
+                     "run go on.\n",
+                     static_cast<long long>(lost), initialParticles, 100.0 * double(lost) / double(initialParticles),
+                     frame, solver->time(), a.maxLost, frame, a.out.c_str());
+        directory.record(command, a.first, last, "failed", frame);
+        return kExitBlownUp;
+      }
+      if (frame < last && stdoutBroken()) {
+        std::fprintf(stderr,
+                     "lodestone: standard output was closed (broken pipe): stopped after frame %d at t = %.6g s; "
+                     "frames up to %d are complete in %s; %s\n",
+                     frame, solver->time(), frame, a.out.c_str(), howToResume().c_str());
+        directory.record(command, a.first, last, "interrupted", frame);
+        return kExitBrokenPipe;
+      }
+      if (gStopSignal != 0 && frame < last) {
+        progress.finish();
+        return stopMessage(frame, solver->time(), false);
       }
     }
-    writeJsonFile(statsPath.string(), stats);
-    if (checkpointEvery > 0 && frame % checkpointEvery == 0) {
-      writeFileAtomically((std::filesystem::path(a.out) / checkpointName(frame)).string(),
-                          saveMpmCheckpoint(*solver, frame, checkpointTag(scene)));
-      // A resumed solver starts its next field solve from phi = 0: so does this one.
-      solver->resetMagneticWarmStart();
-      lastCheckpoint = frame;
-    }
-    for (const MagneticStageReport& m : r.magneticReports)
-      if (!m.converged()) progress.message(concat("frame ", frame, ": ", m.solve.message));
-    for (const std::string& w : r.warnings) progress.message(concat("frame ", frame, ": ", w));
-    const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    progress.update(frame, elapsed,
-                    formatStageSplit({{"p2g", r.secondsP2G}, {"magnetic", r.secondsMagnetic},
-                                      {"grid", r.secondsGridUpdate}, {"g2p", r.secondsG2P}, {"output", io}}));
-    if (gStopRequested != 0 && frame < last) {
-      progress.finish();
-      stopMessage(frame, solver->time(), false);
-      return 130;
-    }
+  } catch (...) {
+    directory.record(command, a.first, last, "failed", frame - 1);
+    throw;
   }
   progress.finish();
+  directory.record(command, a.first, last, "complete", last);
+  if (lost > 0)
+    std::printf("%lld of the %zu particles (%.3g%%) were lost as non-finite (within --max-lost %g)\n",
+                static_cast<long long>(lost), initialParticles, 100.0 * double(lost) / double(initialParticles),
+                a.maxLost);
   std::printf("wrote frames %d..%d to %s (stats.json has the per-frame details)\n", a.first, last, a.out.c_str());
+  if (stdoutBroken()) {
+    std::fprintf(stderr, "lodestone: standard output was closed (broken pipe); the run completed: frames %d..%d are in %s\n",
+                 a.first, last, a.out.c_str());
+    return kExitBrokenPipe;
+  }
   return 0;
 }
 
 int exportFields(const Args& a) {
   if (a.out.empty()) usageError("export-fields needs --out FILE.vdb");
   const Scene scene = loadScene(a.scene, a.options);
+  if (a.frame > scene.frames)
+    usageError(concat("--frame ", a.frame, ": the scene has ", scene.frames, " frames (0..", scene.frames, ")"));
   auto solver = buildSolver(scene);
-  for (int f = 0; f < a.frame && f < scene.frames; ++f) solver->advanceFrame(scene.frameDuration());
-  // One field solve of this state, through the stage's public entry points.
-  const MpmParticles& p = solver->particles();
-  const MpmMaterial* law = nullptr;
-  for (const MpmMaterial& m : solver->materials())
-    if (m.isMagnetic()) law = &m;
-  if (!law) throw InvalidArgument(concat(a.scene, ": the scene has no magnetic material; there is no field to export"));
-  const GridSpec grid = scene.settings.magneticGrid ? *scene.settings.magneticGrid : scene.settings.grid;
-  MagneticStageSettings settings = scene.settings.magnetic;
-  settings.outOfGrid = OutOfGridPolicy::Skip;
-  MagneticForceStage stage(grid, law->magnetic, settings);
+  if (a.frame > 0) checkSubsteps(a, scene, *solver);
+  for (int f = 0; f < a.frame; ++f) solver->advanceFrame(scene.frameDuration());
   MagneticStageReport rep;
-  if (!a.density.empty()) {
-    // A host's own particle-to-grid transfer: n (1/m^3) on the field grid.
-#if LODESTONE_HAVE_VDB
-    const DenseGrid<double> n = readDensityVdb(a.density, grid, a.densityGrid);
-    rep = stage.runOnDensity(n.view(), solver->appliedField(), solver->time());
-#else
-    throw Error(concat("cannot read ", a.density, ": this lodestone was built without OpenVDB"));
-#endif
-  } else {
-    std::vector<Vec3d> x;
-    std::vector<double> n;
-    for (std::size_t i = 0; i < p.size(); ++i)
-      if (solver->materials()[p.material[i]].isMagnetic()) {
-        x.push_back(p.x[i]);
-        n.push_back(p.count[i]);
-      }
-    rep = stage.run({x.data(), n.data(), x.size()}, solver->appliedField(), solver->time());
-  }
+  const std::unique_ptr<MagneticForceStage> stage = solveFieldsNow(scene, *solver, rep, a.density, a.densityGrid);
   std::printf("%s", rep.summary().c_str());
-  writeFields(a.out, scene, stage, a.frame, solver->time(), solver.get());
+  writeFields(a.out, scene, *stage, a.frame, solver->time(), solver.get(), false);
   std::printf("wrote %s (frame %d, t = %g s)\n", a.out.c_str(), a.frame, solver->time());
   return rep.converged() ? 0 : 1;
 }
@@ -574,6 +728,9 @@ int validate(const Args& a) {
   const Scene scene = loadScene(a.scene, a.options);
   auto solver = buildSolver(scene);
   printSceneSummary(scene, *solver);
+  if (substepsPerFrame(scene, *solver) > double(a.maxSubsteps))
+    std::printf("warning: more than %lld substeps per frame: lodestone run refuses it without --max-substeps\n",
+                a.maxSubsteps);
   std::printf("%s: valid\n", a.scene.c_str());
   return 0;
 }

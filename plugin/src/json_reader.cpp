@@ -5,8 +5,9 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
-#include <fstream>
-#include <iterator>
+#include <cstring>
+#include <cerrno>
+#include <filesystem>
 #include <sstream>
 #include <utility>
 
@@ -206,13 +207,31 @@ nlohmann::json parseJsonText(const std::string& text, const std::string& sourceN
   }
 }
 
-nlohmann::json parseJsonFile(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw InvalidArgument(concat("cannot open the JSON file '", path, "'"));
-  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  if (in.bad()) throw InvalidArgument(concat("cannot read the JSON file '", path, "'"));
-  return parseJsonText(text, path);
+std::string readJsonFile(const std::string& path) {
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec))
+    throw InvalidArgument(concat("'", path, "' is a directory, not a JSON file"));
+  std::FILE* f = std::fopen(path.c_str(), "rb");
+  if (!f) throw InvalidArgument(concat("cannot open the JSON file '", path, "' (", std::strerror(errno), ")"));
+  std::string text;
+  char buf[1 << 16];
+  std::size_t n = 0;
+  while ((n = std::fread(buf, 1, sizeof buf, f)) > 0) {
+    if (text.size() + n > kMaxJsonFileBytes) {
+      std::fclose(f);
+      throw InvalidArgument(concat("the JSON file '", path, "' is larger than ", kMaxJsonFileBytes >> 20,
+                                   " MiB (not a scene or parameter file?)"));
+    }
+    text.append(buf, n);
+  }
+  const bool failed = std::ferror(f) != 0;
+  const int error = errno;
+  std::fclose(f);
+  if (failed) throw InvalidArgument(concat("cannot read the JSON file '", path, "' (", std::strerror(error), ")"));
+  return text;
 }
+
+nlohmann::json parseJsonFile(const std::string& path) { return parseJsonText(readJsonFile(path), path); }
 
 // ---------------------------------------------------------------- helpers
 

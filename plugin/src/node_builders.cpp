@@ -1,6 +1,7 @@
 #include "lodestone/plugin/node_builders.h"
 
 #include <algorithm>
+#include <cstdio>
 #include <cmath>
 
 #include "lodestone/core/base/constants.h"
@@ -206,6 +207,18 @@ MpmSettings mpmSettingsFrom(const ParamSet& p) {
     mg.dims = {mg.dims.i + 2 * padding, mg.dims.j + 2 * padding, mg.dims.k + 2 * padding};
     s.magneticGrid = mg;
   }
+  // The walls need 2 W + 2 nodes on every axis: said in the domain's terms
+  // before MpmSettings::validate would name its fields.
+  const int walls = s.wallNodes, nodes = std::min({g.dims.i, g.dims.j, g.dims.k});
+  if (walls > 0 && 2 * walls + 2 > nodes) {
+    const double side = std::min({hi.x - lo.x, hi.y - lo.y, hi.z - lo.z});
+    char text[256];
+    std::snprintf(text, sizeof text,
+                  "domain: dx = %.6g m gives %d nodes across the shortest side (%.6g m), too few for the domain's "
+                  "walls (%d nodes at each face need %d): use a dx below %.4g m",
+                  dx, nodes, side, walls, 2 * walls + 2, side / (2 * walls));
+    throw InvalidArgument(text);
+  }
   s.validate();
   return s;
 }
@@ -218,7 +231,7 @@ void addSourcesAndColliders(MpmSolver& solver, const FieldSourceSet& fields,
     if (m.collider)
       solver.addMagnet(*m.magnet, m.motion, m.boundary);
     else
-      solver.sources().add(*m.magnet);
+      solver.addNonCollidingMagnet(*m.magnet, m.motion);
   }
   for (const MpmCollider& c : colliders) solver.addCollider(c);
 }

@@ -1,9 +1,12 @@
 #include "lodestone/plugin/scene.h"
 
 #include <algorithm>
+#include <cstdio>
 #include <filesystem>
+#include <utility>
 
 #include "lodestone/core/base/error.h"
+#include "lodestone/core/base/hash.h"
 #include "lodestone/core/planner/accuracy_preset.h"
 #include "lodestone/plugin/json_reader.h"
 #include "lodestone/plugin/node_builders.h"
@@ -257,20 +260,37 @@ Scene sceneFromJson(const nlohmann::json& doc, const std::string& sourceName, co
 }  // namespace
 
 Scene parseScene(const std::string& text, const std::string& sourceName, const SceneOptions& options) {
-  return sceneFromJson(parseJsonText(text, sourceName), sourceName, options);
+  Scene scene = sceneFromJson(parseJsonText(text, sourceName), sourceName, options);
+  scene.contentHash = fnv1a64(text);
+  return scene;
 }
 
-Scene loadScene(const std::string& path, const SceneOptions& options) {
-  return sceneFromJson(parseJsonFile(path), path, options);
-}
+Scene loadScene(const std::string& path, const SceneOptions& options) { return parseScene(readJsonFile(path), path, options); }
 
 std::unique_ptr<MpmSolver> buildSolver(const Scene& scene) {
   auto solver = std::make_unique<MpmSolver>(scene.settings);
   for (const MpmMaterial& m : scene.materials) solver->addMaterial(m);
+  const Vec3d lo = solver->domainLower(), hi = solver->domainUpper();
   for (const SceneBody& b : scene.bodies) {
     EmitterSettings s = b.emit;
     s.cellSize = scene.settings.grid.dx;
-    solver->emit(b.shape, b.material, s);
+    const std::size_t first = solver->particles().size();
+    const EmitReport emitted = solver->emit(b.shape, b.material, s);
+    // A body with no particle inside the domain would be clamped onto its
+    // boundary (or removed) at the first substep: refuse it.
+    const std::vector<Vec3d>& x = std::as_const(*solver).particles().x;
+    const auto inside = [&](const Vec3d& p) {
+      return p.x >= lo.x && p.x <= hi.x && p.y >= lo.y && p.y <= hi.y && p.z >= lo.z && p.z <= hi.z;
+    };
+    const auto point = [](const Vec3d& p) {
+      char text[96];
+      std::snprintf(text, sizeof text, "(%.6g, %.6g, %.6g)", p.x, p.y, p.z);
+      return std::string(text);
+    };
+    if (emitted.particles > 0 && std::none_of(x.begin() + std::ptrdiff_t(first), x.end(), inside))
+      throw InvalidArgument(concat(scene.file, ": body '", b.name, "' lies wholly outside the domain ", point(lo),
+                                   " .. ", point(hi), " m (where material can be); none of its ", emitted.particles,
+                                   " particles is inside"));
   }
   addSourcesAndColliders(*solver, scene.fields, scene.magnets, scene.colliders);
   return solver;

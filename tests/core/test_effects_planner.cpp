@@ -31,6 +31,7 @@ struct PlannerCase {
   int frames = 2;
   bool planner = false;
   double budget = 0.05;
+  bool checkFinite = false;
 };
 
 struct Outcome {
@@ -50,6 +51,7 @@ Outcome run(const PlannerCase& s) {
   ms.magnetic.solve.tolerance = 1e-9;
   ms.planner.enabled = s.planner;
   ms.planner.budget = s.budget;
+  ms.checkFinite = s.checkFinite;
   MpmSolver solver(ms);
   const std::uint32_t mat = solver.addMaterial(neoHookeanSolid(1e5, 0.3, 2500, s.material));
   const double c = 0.5 * (s.nodes - 1) * kDx;
@@ -178,6 +180,23 @@ TEST(EffectsPlanner, ActiveRegionAroundTheMaterial) {
   EXPECT_LE(relative(planned.moved, full.moved), wide.budget);
   wide.budget = 0.002;  // share 0.05%: below what a truncated domain costs
   EXPECT_FALSE(run(wide).plan.activeRegion);
+}
+
+TEST(EffectsPlanner, ActiveRegionPassesTheFiniteCheck) {
+  // The finite check after a solve scanned as many nodes as the full
+  // magnetic grid, reading past the smaller grid of the active region, and
+  // stopped healthy runs at t = 0 with a different node index on each run.
+  PlannerCase wide;
+  wide.nodes = 40;
+  wide.frames = 1;
+  wide.planner = true;
+  const Outcome unchecked = run(wide);
+  ASSERT_TRUE(unchecked.plan.activeRegion);
+  wide.checkFinite = true;
+  Outcome checked;
+  EXPECT_NO_THROW(checked = run(wide));
+  EXPECT_EQ(checked.firstForce, unchecked.firstForce);
+  EXPECT_EQ(checked.moved, unchecked.moved);
 }
 
 TEST(EffectsPlanner, ReuseFollowsTheBudget) {

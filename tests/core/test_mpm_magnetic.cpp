@@ -266,6 +266,34 @@ TEST(MpmMagnetic, PerParticleCouplingOnADifferentStageGridConservesTheImpulse) {
   EXPECT_NEAR(first, same, 0.15 * std::fabs(same));
 }
 
+TEST(MpmMagnetic, MagnetThatIsNotAColliderStillMovesItsField) {
+  // A magnet that material passes through (no collider) follows its motion
+  // too: its field is evaluated where the motion puts it at every solve
+  // (it was added as a static source, its motion dropped and its field
+  // reused every frame).
+  MpmSettings s;
+  s.grid.dx = kDx;
+  s.grid.dims = {24, 24, 24};
+  s.gravity = {0, 0, 0};
+  MpmSolver solver(s);
+  const std::uint32_t mag = solver.addMaterial(neoHookeanSolid(1e5, 0.3, 2500, paperMaterial()));
+  const double c = 0.5 * 23 * kDx;
+  const SphereMagnet magnet(Pose::at({c, c, 0.03}), 0.015, {0, 0, magnetizationFromRemanence(1.2)});
+  const Vec3d velocity{0.5, 0, 0};  // m/s
+  EXPECT_EQ(solver.addNonCollidingMagnet(magnet, ColliderMotion::constantVelocity(magnet.pose(), velocity, {})), 0u);
+  EXPECT_EQ(solver.magnetCount(), 1u);
+  EXPECT_EQ(solver.colliderCount(), 0u);
+  solver.emit(EmitterShape::box(Pose::at({c, c, 0.1}), {kHalf, kHalf, kHalf}), mag, {});
+  for (int f = 0; f < 3; ++f) {
+    const MpmFrameReport r = solver.advanceFrame(0.002);
+    ASSERT_EQ(r.magneticReports.size(), 1u);
+    EXPECT_FALSE(r.magneticReports[0].appliedFieldReused) << f;
+  }
+  const Vec3d expect = magnet.pose().position + 0.004 * velocity;
+  EXPECT_LT(norm(solver.magnet(0).pose().position - expect), 1e-12);
+  EXPECT_GT(solver.particles().linearMomentum().x, 0.0);  // pulled along with it
+}
+
 TEST(MpmMagnetic, MovingMagnetMovesItsFieldAndItsCollider) {
   // A magnet moving at constant velocity: before each solve the field source
   // is placed where the collider is, so both move together.

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "lodestone/core/base/error.h"
+#include "lodestone/core/base/hash.h"
 #include "lodestone/core/mpm/checkpoint.h"
 #include "lodestone/plugin/scene.h"
 
@@ -34,11 +35,7 @@ std::vector<std::uint8_t> wrapPayload(const std::uint8_t* payload, std::size_t s
   std::vector<std::uint8_t> out(32 + size);
   std::memcpy(out.data(), "LDSTCKPT", 8);
   const std::uint32_t version = lodestone::kMpmCheckpointVersion, bom = 0x01020304u;
-  std::uint64_t bytes = size, hash = 0xcbf29ce484222325ull;
-  for (std::size_t i = 0; i < size; ++i) {
-    hash ^= payload[i];
-    hash *= 0x100000001b3ull;
-  }
+  const std::uint64_t bytes = size, hash = lodestone::fnv1a64(payload, size);
   std::memcpy(out.data() + 8, &version, 4);
   std::memcpy(out.data() + 12, &bom, 4);
   std::memcpy(out.data() + 16, &bytes, 8);

@@ -122,3 +122,25 @@ TEST(Scene, MissingFileIsNamed) {
     EXPECT_NE(std::string(e.what()).find("/nonexistent/scene.json"), std::string::npos) << e.what();
   }
 }
+
+TEST(Scene, MagnetThatIsNotAColliderKeepsItsMotion) {
+  // "collider": false dropped the magnet's keyframes: it became a static
+  // field source ("0 magnets, 0 colliders").
+  const std::string text = replaced(kMinimal, R"("bodies")", R"("magnets": [ { "shape": "sphere", "center": [0.1, 0.1, 0.02],
+      "radius": 0.01, "remanence": 1.2, "collider": false,
+      "motion": { "keyframes": [ { "time": 0, "center": [0.1, 0.1, 0.02] },
+                                 { "time": 1, "center": [0.1, 0.1, 0.12] } ] } } ],
+  "bodies")");
+  const auto solver = buildSolver(parseScene(
+      replaced(text, R"("youngs_modulus": 1e4 })", R"("youngs_modulus": 1e4, "magnetic": { "law": "linear", "chi": 0.5 } })"),
+      "test.json"));
+  ASSERT_EQ(solver->magnetCount(), 1u);
+  EXPECT_EQ(solver->colliderCount(), 0u);
+  EXPECT_EQ(solver->sources().size(), 0u);
+  solver->advanceFrame(0.01);
+  solver->advanceFrame(0.01);
+  // Posed at the last solve, in the second frame (0.01 s <= t < 0.02 s): the
+  // keyframes move it 0.1 m/s up.
+  EXPECT_GE(solver->magnet(0).pose().position.z, 0.02 + 0.1 * 0.01 - 1e-9);
+  EXPECT_LT(solver->magnet(0).pose().position.z, 0.02 + 0.1 * 0.02);
+}

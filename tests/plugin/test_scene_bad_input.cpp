@@ -110,3 +110,54 @@ TEST(SceneBadInput, GridEstimateIsInGibibytesAndAcceptsTheLargestThatFits) {
   EXPECT_NE(err.find("401 x 401 x 401 nodes"), std::string::npos) << err;
   EXPECT_NE(err.find("36.03"), std::string::npos) << err;
 }
+
+TEST(SceneBadInput, AGridTooCoarseForTheWallsIsSaidInTheDomainsTerms) {
+  // 0.2 m at dx = 0.05 m: 5 nodes, the two 2-node walls need 6.
+  const std::string err = errorOf(replaced(kScene, "\"dx\": 0.02", "\"dx\": 0.05"));
+  EXPECT_NE(err.find("bad.json: domain: dx = 0.05 m gives 5 nodes"), std::string::npos) << err;
+  EXPECT_NE(err.find("use a dx below 0.05 m"), std::string::npos) << err;
+  EXPECT_EQ(err.find("wallNodes"), std::string::npos) << err;
+  EXPECT_EQ(err.find("MPM settings"), std::string::npos) << err;
+  EXPECT_EQ(errorOf(replaced(kScene, "\"dx\": 0.02", "\"dx\": 0.0499")), "");
+}
+
+TEST(SceneBadInput, ABodyWhollyOutsideTheDomainIsRefusedByName) {
+  const std::string text = replaced(replaced(kScene, "\"center\": [0.1, 0.1, 0.1]", "\"center\": [0.5, 0.5, 0.5]"),
+                                    "\"material\": \"ferro\",", "\"material\": \"ferro\", \"name\": \"drop\",");
+  const Scene scene = parseScene(text, "bad.json");
+  try {
+    buildSolver(scene);
+    FAIL() << "a body outside the domain was accepted";
+  } catch (const InvalidArgument& e) {
+    const std::string err = e.what();
+    EXPECT_NE(err.find("bad.json: body 'drop' lies wholly outside the domain"), std::string::npos) << err;
+  }
+  // Partly inside: accepted (the rest is clamped at the first substep).
+  const Scene partly = parseScene(replaced(kScene, "\"center\": [0.1, 0.1, 0.1]", "\"center\": [0.18, 0.1, 0.1]"),
+                                  "bad.json");
+  EXPECT_GT(buildSolver(partly)->particles().size(), 0u);
+}
+
+TEST(SceneBadInput, ADirectoryOrADeviceAsTheSceneFileIsRefusedWithWhy) {
+  const auto messageOf = [](const std::string& path) {
+    try {
+      loadScene(path);
+    } catch (const InvalidArgument& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  const std::string dir = messageOf(::testing::TempDir());
+  EXPECT_NE(dir.find("is a directory, not a JSON file"), std::string::npos) << dir;
+  // An endless device stops at the size limit instead of filling memory.
+  const std::string zero = messageOf("/dev/zero");
+  EXPECT_NE(zero.find("'/dev/zero' is larger than 64 MiB"), std::string::npos) << zero;
+}
+
+TEST(SceneBadInput, TheContentHashFollowsTheSceneText) {
+  const Scene a = parseScene(kScene, "bad.json"), b = parseScene(kScene, "other.json");
+  const Scene c = parseScene(replaced(kScene, "\"density\": 1000", "\"density\": 1001"), "bad.json");
+  EXPECT_NE(a.contentHash, 0u);
+  EXPECT_EQ(a.contentHash, b.contentHash);
+  EXPECT_NE(a.contentHash, c.contentHash);
+}

@@ -178,20 +178,31 @@ void MagnetostaticProblem::setMaterial(GridView<const double> n, const AppliedFi
   totalCount_ = mom.count;
   centroid_ = mom.count > 0 ? mom.first / mom.count : 0.5 * (grid_.origin + grid_.maxCorner());
 
-  // Multipole blocks: cells grouped by (i, j, k) / edge, sorted by (block,
-  // slot) so the per-block sums have a fixed order. The edge grows with the
+  // Multipole blocks: cells grouped per axis into runs of `edge` cells
+  // counted from both ends towards the middle (a middle cell of an odd count
+  // is its own run), so that the tiling, and with it the truncated far field,
+  // is mirror-symmetric about the grid's mid-planes; sorted by (block, slot)
+  // so the per-block sums have a fixed order. The edge grows with the
   // distance to the wall so that edge / clearance stays <= 1/2 beyond 8 cells
   // (the truncated octupole of a block falls as (edge / distance)^3).
   int edge = kMultipoleBlock;
   while (edge < 32 && 4 * edge <= wallClearance_) edge *= 2;
   blockEdge_ = edge;
-  const int bx = (cd.i + edge - 1) / edge, by = (cd.j + edge - 1) / edge;
+  const auto runsPerHalf = [edge](int cellCount) { return (cellCount / 2 + edge - 1) / edge; };
+  const auto run = [edge](int c, int cellCount, int half) {
+    const int mirrored = cellCount - 1 - c;
+    if (c < cellCount / 2) return c / edge;
+    if (mirrored < cellCount / 2) return 2 * half - mirrored / edge;
+    return half;  // the middle cell of an odd count
+  };
+  const int hx = runsPerHalf(cd.i), hy = runsPerHalf(cd.j), hz = runsPerHalf(cd.k);
+  const std::uint64_t bx = std::uint64_t(2 * hx + 1), by = std::uint64_t(2 * hy + 1);
   std::vector<std::uint64_t> key(cells);
   tbb::parallel_for(std::size_t(0), cells, [&](std::size_t s) {
     const std::size_t b = cellBase_[s], nx = std::size_t(grid_.dims.i), ny = std::size_t(grid_.dims.j);
-    const std::uint64_t i = b % nx / std::size_t(edge), j = (b / nx) % ny / std::size_t(edge),
-                        k = b / (nx * ny) / std::size_t(edge);
-    key[s] = i + std::uint64_t(bx) * (j + std::uint64_t(by) * k);
+    const int i = int(b % nx), j = int((b / nx) % ny), k = int(b / (nx * ny));
+    key[s] = std::uint64_t(run(i, cd.i, hx)) +
+             bx * (std::uint64_t(run(j, cd.j, hy)) + by * std::uint64_t(run(k, cd.k, hz)));
   });
   blockCells_.resize(cells);
   std::iota(blockCells_.begin(), blockCells_.end(), std::size_t(0));
@@ -461,7 +472,26 @@ void MagnetostaticProblem::applyOpenBoundary(const std::vector<Multipole>& multi
   const int nx = grid_.dims.i, ny = grid_.dims.j, nz = grid_.dims.k;
   int s = 2;
   while (s < 16 && 6 * (2 * s) <= wallClearance_) s *= 2;
-  const auto onLattice = [s](int c, int count) { return c % s == 0 || c == count - 1; };
+  // The lattice is counted from both ends of each axis (and holds the middle
+  // node, or the two middle nodes of an even count), so that it and the
+  // interpolation between its nodes are mirror-symmetric about the grid's
+  // mid-planes.
+  const auto onLattice = [s](int c, int count) {
+    const int fromEnd = std::min(c, count - 1 - c);
+    return fromEnd % s == 0 || fromEnd == (count - 1) / 2;
+  };
+  // Per axis, the nearest lattice coordinates below and above each coordinate.
+  struct Bracket {
+    std::vector<int> lo, hi;
+  };
+  const auto bracket = [&](int count) {
+    Bracket b{std::vector<int>(std::size_t(count)), std::vector<int>(std::size_t(count))};
+    for (int c = 0, last = 0; c < count; ++c) b.lo[std::size_t(c)] = last = onLattice(c, count) ? c : last;
+    for (int c = count - 1, next = count - 1; c >= 0; --c)
+      b.hi[std::size_t(c)] = next = onLattice(c, count) ? c : next;
+    return b;
+  };
+  const Bracket brackets[3] = {bracket(nx), bracket(ny), bracket(nz)};
   const auto forWallNodes = [&](const auto& fn) {
     tbb::parallel_for(0, nz, [&](int k) {
       for (int j = 0; j < ny; ++j) {
@@ -494,9 +524,9 @@ void MagnetostaticProblem::applyOpenBoundary(const std::vector<Multipole>& multi
     if (!onLattice(i, nx) || !onLattice(j, ny) || !onLattice(k, nz)) return;
     phi[grid_.index(i, j, k)] = multipoleSum(blocks, grid_.nodePosition(i, j, k)) / (4.0 * kPi);
   });
-  // Off-lattice wall nodes: along each off-lattice axis, between the lattice
-  // coordinates lo = s floor(c/s) and hi = min(lo + s, count - 1). The wall's
-  // normal coordinate (0 or count - 1) is always on the lattice.
+  // Off-lattice wall nodes: along each off-lattice axis, between the nearest
+  // lattice coordinates below and above. The wall's normal coordinate (0 or
+  // count - 1) is always on the lattice.
   forWallNodes([&](int i, int j, int k) {
     const int c[3] = {i, j, k}, count[3] = {nx, ny, nz};
     int lo[3], hi[3];
@@ -508,8 +538,8 @@ void MagnetostaticProblem::applyOpenBoundary(const std::vector<Multipole>& multi
         t[a] = 0;
       } else {
         all = false;
-        lo[a] = (c[a] / s) * s;
-        hi[a] = std::min(lo[a] + s, count[a] - 1);
+        lo[a] = brackets[a].lo[std::size_t(c[a])];
+        hi[a] = brackets[a].hi[std::size_t(c[a])];
         t[a] = double(c[a] - lo[a]) / double(hi[a] - lo[a]);
       }
     }

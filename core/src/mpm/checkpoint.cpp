@@ -6,6 +6,7 @@
 #include <type_traits>
 
 #include "lodestone/core/base/error.h"
+#include "lodestone/core/base/hash.h"
 
 namespace lodestone {
 
@@ -15,15 +16,6 @@ constexpr char kMagic[8] = {'L', 'D', 'S', 'T', 'C', 'K', 'P', 'T'};
 constexpr std::uint32_t kByteOrderMark = 0x01020304u;
 constexpr std::size_t kHeaderSize = 8 + 4 + 4 + 8 + 8;
 constexpr std::size_t kMaxTag = 64 * 1024;
-
-std::uint64_t fnv1a64(const std::uint8_t* data, std::size_t size) {
-  std::uint64_t h = 0xcbf29ce484222325ull;
-  for (std::size_t i = 0; i < size; ++i) {
-    h ^= data[i];
-    h *= 0x100000001b3ull;
-  }
-  return h;
-}
 
 class Writer {
  public:

@@ -78,6 +78,11 @@ class MpmSolver::SceneField final : public FieldSource {
     for (const auto& m : magnets_) M += m->magnetization(x, t);
     return M;
   }
+  Vec3d exteriorContinuation(const Vec3d& x, double t) const override {
+    Vec3d c = sources_.exteriorContinuation(x, t);
+    for (const auto& m : magnets_) c += m->exteriorContinuation(x, t);
+    return c;
+  }
   void accumulateField(const Vec3d* x, std::size_t count, double t, Vec3d* out) const override {
     sources_.accumulateField(x, count, t, out);
     for (const auto& m : magnets_) m->accumulateField(x, count, t, out);
@@ -91,7 +96,7 @@ class MpmSolver::SceneField final : public FieldSource {
     return true;
   }
   std::string describe() const override {
-    return concat(sources_.describe(), "; plus ", magnets_.size(), " magnet collider(s)");
+    return concat(sources_.describe(), "; plus ", magnets_.size(), " moving magnet(s)");
   }
   std::unique_ptr<FieldSource> clone() const override {
     auto set = std::make_unique<FieldSourceSet>(sources_);
@@ -203,6 +208,16 @@ const MpmCollider& MpmSolver::collider(std::size_t i) const {
   return colliders_[i];
 }
 
+namespace {
+std::unique_ptr<MagnetSource> ownedCopy(const MagnetSource& magnet) {
+  std::unique_ptr<FieldSource> copy = magnet.clone();
+  std::unique_ptr<MagnetSource> owned(dynamic_cast<MagnetSource*>(copy.get()));
+  require(owned != nullptr, "MPM solver: the magnet's clone is not a magnet");
+  copy.release();
+  return owned;
+}
+}  // namespace
+
 std::size_t MpmSolver::addMagnet(const MagnetSource& magnet, const ColliderMotion& motion,
                                  const BoundaryCondition& boundary) {
   ColliderShape shape;
@@ -216,15 +231,22 @@ std::size_t MpmSolver::addMagnet(const MagnetSource& magnet, const ColliderMotio
     throw InvalidArgument(
         concat("MPM solver: addMagnet supports sphere, cylinder and cuboid magnets, got ", magnet.describe()));
   }
-  std::unique_ptr<FieldSource> copy = magnet.clone();
-  std::unique_ptr<MagnetSource> owned(dynamic_cast<MagnetSource*>(copy.get()));
-  require(owned != nullptr, "MPM solver: the magnet's clone is not a magnet");
-  copy.release();
+  std::unique_ptr<MagnetSource> owned = ownedCopy(magnet);
   owned->setPose(motion.poseAt(time_));
   colliders_.emplace_back(shape, motion, boundary);
   magnets_.push_back(std::move(owned));
   magnetCollider_.push_back(colliders_.size() - 1);
+  magnetMotion_.emplace_back();
   return colliders_.size() - 1;
+}
+
+std::size_t MpmSolver::addNonCollidingMagnet(const MagnetSource& magnet, const ColliderMotion& motion) {
+  std::unique_ptr<MagnetSource> owned = ownedCopy(magnet);
+  owned->setPose(motion.poseAt(time_));
+  magnets_.push_back(std::move(owned));
+  magnetCollider_.push_back(kNoCollider);
+  magnetMotion_.push_back(motion);
+  return magnets_.size() - 1;
 }
 
 std::size_t MpmSolver::addMagnet(const MagnetSource& magnet, const BoundaryCondition& boundary) {
@@ -360,8 +382,11 @@ const MagneticMaterial* MpmSolver::magneticLaw() const {
 }
 
 void MpmSolver::poseMagnetsAt(double t) const {
-  for (std::size_t m = 0; m < magnets_.size(); ++m)
-    magnets_[m]->setPose(colliders_[magnetCollider_[m]].motion().poseAt(t));
+  for (std::size_t m = 0; m < magnets_.size(); ++m) {
+    const ColliderMotion& motion =
+        magnetCollider_[m] == kNoCollider ? magnetMotion_[m] : colliders_[magnetCollider_[m]].motion();
+    magnets_[m]->setPose(motion.poseAt(t));
+  }
 }
 
 bool MpmSolver::lastSolveHolds() {
@@ -471,11 +496,11 @@ void MpmSolver::solveMagnetic(MpmStepReport& rep) {
   rep.magneticSolved = true;
   if (settings_.checkFinite) {
     const GridView<const Vec3d> H = stage_->field(), f = stage_->nodalForce();
-    const std::size_t nn = magneticGrid_.nodeCount();
+    const std::size_t nn = stage_->grid().nodeCount();  // the active region's, when the planner chose one
     const std::size_t bad = firstBad(nn, [&](std::size_t i) { return !isFinite(H.data[i]) || !isFinite(f.data[i]); });
     if (bad < nn)
       throw Error(concat("MPM finite check: non-finite magnetic ", isFinite(H.data[bad]) ? "nodal force (N)" : "field H (A/m)",
-                         " at magnetic-grid node index ", bad, " after the field solve in substep ", substeps_ + 1,
+                         " at magnetic-stage node index ", bad, " after the field solve in substep ", substeps_ + 1,
                          " at t = ", time_, " s (solve: ", toString(rep.magnetic.solve.status), ", ",
                          rep.magnetic.solve.message, ")"));
   }

@@ -104,6 +104,19 @@ bool CuboidMagnet::containsBody(const Vec3d& xBody) const {
          std::fabs(xBody.z) <= half_.z;
 }
 
+double CuboidMagnet::surfaceDepth(const Vec3d& xBody, Vec3d& outwardNormal) const {
+  // Inside: the nearest face. Outside: a negative value (the distance is not needed).
+  int axis = 0;
+  double depth = half_.x - std::fabs(xBody.x);
+  for (int a = 1; a < 3; ++a) {
+    const double d = half_[a] - std::fabs(xBody[a]);
+    if (d < depth) depth = d, axis = a;
+  }
+  outwardNormal = Vec3d{};
+  outwardNormal[axis] = xBody[axis] < 0 ? -1.0 : 1.0;
+  return depth;
+}
+
 Vec3d CuboidMagnet::bodyField(const Vec3d& xBody) const {
   const Vec3d& M = bodyMagnetization();
   const double r = norm(xBody);

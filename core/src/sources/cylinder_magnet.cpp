@@ -76,6 +76,18 @@ CylinderMagnet::CylinderMagnet(const Pose& pose, double radius, double halfLengt
 
 double CylinderMagnet::volume() const { return 2.0 * kPi * radius_ * radius_ * halfLength_; }
 
+double CylinderMagnet::surfaceDepth(const Vec3d& xBody, Vec3d& outwardNormal) const {
+  // The nearer of the side wall and the caps (inside; a negative value outside).
+  const double rho = std::hypot(xBody.x, xBody.y);
+  const double side = radius_ - rho, cap = halfLength_ - std::fabs(xBody.z);
+  if (side < cap) {
+    outwardNormal = rho > 0 ? Vec3d{xBody.x / rho, xBody.y / rho, 0} : Vec3d{1, 0, 0};
+    return side;
+  }
+  outwardNormal = {0, 0, xBody.z < 0 ? -1.0 : 1.0};
+  return cap;
+}
+
 bool CylinderMagnet::containsBody(const Vec3d& xBody) const {
   return std::hypot(xBody.x, xBody.y) <= radius_ && std::fabs(xBody.z) <= halfLength_;
 }

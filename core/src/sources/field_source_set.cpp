@@ -48,6 +48,12 @@ Vec3d FieldSourceSet::magnetization(const Vec3d& x, double t) const {
   return M;
 }
 
+Vec3d FieldSourceSet::exteriorContinuation(const Vec3d& x, double t) const {
+  Vec3d c;
+  for (const auto& s : sources_) c += s->exteriorContinuation(x, t);
+  return c;
+}
+
 void FieldSourceSet::accumulateField(const Vec3d* x, std::size_t count, double t,
                                      Vec3d* out) const {
   for (const auto& s : sources_) s->accumulateField(x, count, t, out);

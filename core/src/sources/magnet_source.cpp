@@ -61,6 +61,14 @@ Vec3d MagnetSource::magnetization(const Vec3d& x, double t) const {
   return pose_.vectorToWorld(M_) * scale_(t);
 }
 
+Vec3d MagnetSource::exteriorContinuation(const Vec3d& x, double t) const {
+  Vec3d n;
+  const double depth = surfaceDepth(pose_.toLocal(x), n);
+  if (depth < 0) return {};
+  const double weight = depth > 0 ? 1.0 : 0.5;
+  return pose_.vectorToWorld((weight * dot(M_, n)) * n) * scale_(t);
+}
+
 void MagnetSource::accumulateField(const Vec3d* x, std::size_t count, double t, Vec3d* out) const {
   const double s = scale_(t);
   for (std::size_t n = 0; n < count; ++n)

@@ -26,6 +26,12 @@ double SphereMagnet::volume() const { return 4.0 / 3.0 * kPi * radius_ * radius_
 
 bool SphereMagnet::containsBody(const Vec3d& xBody) const { return norm(xBody) <= radius_; }
 
+double SphereMagnet::surfaceDepth(const Vec3d& xBody, Vec3d& outwardNormal) const {
+  const double r = norm(xBody);
+  outwardNormal = r > 0 ? xBody / r : Vec3d{0, 0, 1};
+  return radius_ - r;
+}
+
 Vec3d SphereMagnet::bodyField(const Vec3d& xBody) const {
   const Vec3d& M = bodyMagnetization();
   const double r = norm(xBody);

@@ -9,6 +9,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include "lodestone/core/base/constants.h"
 #include "lodestone/core/base/stopwatch.h"
 #include "lodestone/core/base/error.h"
 #include "lodestone/core/field/magnetostatic_problem.h"
@@ -20,9 +21,14 @@ namespace lodestone {
 namespace {
 using Clock = std::chrono::steady_clock;
 
+// The applied field as material sees it: inside a magnet's body, the field
+// outside continued through its nearest face (FieldSource::exteriorContinuation),
+// so that nodes and Gauss points that the transfer's spread puts inside a
+// magnet do not see its demagnetizing field (and the force does not jump when
+// a node crosses a face).
 AppliedFieldFunction appliedFieldOf(const FieldSource& sources, double time) {
   return [&sources, time](const Vec3d* x, std::size_t count, Vec3d* H) {
-    for (std::size_t m = 0; m < count; ++m) H[m] = Vec3d{};
+    for (std::size_t m = 0; m < count; ++m) H[m] = sources.exteriorContinuation(x[m], time);
     sources.accumulateField(x, count, time, H);
   };
 }
@@ -170,6 +176,24 @@ MagneticStageReport MagneticForceStage::solveAndForce(const FieldSource& sources
   spreadForce(t_.view(), f_.view(), &scratch_);
   rep.totalForce = deterministicSum<Vec3d>(count, [&](std::size_t m) { return f_[m]; });
   rep.secondsForce = secondsSince(t);
+
+  // Inside magnets, after the force (which takes the material's M in the
+  // field the material sees): H becomes the true field (the continuation
+  // removed) and the magnets' own magnetization joins M and B, so that
+  // B = mu0 (H + M) holds at every node and B's normal component is
+  // continuous across a magnet's faces.
+  tbb::parallel_for(0, grid_.dims.k, [&](int k) {
+    for (int j = 0; j < grid_.dims.j; ++j)
+      for (int i = 0; i < grid_.dims.i; ++i) {
+        const Vec3d x = grid_.nodePosition(i, j, k);
+        const Vec3d Ms = sources.magnetization(x, time), c = sources.exteriorContinuation(x, time);
+        if (Ms == Vec3d{} && c == Vec3d{}) continue;
+        const std::size_t m = grid_.index(i, j, k);
+        h_[m] -= c;
+        m_[m] += Ms;
+        b_[m] += kMu0 * (Ms - c);
+      }
+  });
   return rep;
 }
 

@@ -53,8 +53,15 @@ namespace lodestone::plugin {
 /// syntax error and "sourceName: path: duplicate key 'k'" on a repeated key.
 nlohmann::json parseJsonText(const std::string& text, const std::string& sourceName);
 
-/// Reads and parses a file (see parseJsonText); the error names `path` when it
-/// cannot be read.
+/// The largest JSON file readJsonFile reads: 64 MiB.
+inline constexpr std::size_t kMaxJsonFileBytes = std::size_t(64) << 20;
+
+/// The text of a JSON file, read whole. Throws lodestone::InvalidArgument
+/// naming `path` when it cannot be opened or read, is a directory, or holds
+/// more than kMaxJsonFileBytes (a device such as /dev/zero stops there).
+std::string readJsonFile(const std::string& path);
+
+/// Reads (readJsonFile) and parses a file (see parseJsonText).
 nlohmann::json parseJsonFile(const std::string& path);
 
 /// An interval of accepted numbers, each end open or closed (or infinite).

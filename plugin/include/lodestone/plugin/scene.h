@@ -54,6 +54,7 @@ struct SceneOutput {
 
 struct Scene {
   std::string file;
+  std::uint64_t contentHash = 0;  ///< FNV-1a 64 of the scene file's bytes (core/base/hash.h)
   std::string name;
   std::string description;
   MpmSettings settings;

@@ -11,8 +11,10 @@
 //  - Open: phi on the outer layer of nodes is the free-space potential of
 //    the current magnetization (a far-field condition), summed over cubic
 //    blocks of cells (edge 8 cells, up to 32 when the material is far from
-//    the wall), each as a dipole + quadrupole about its own centroid.
-//    Interior nodes are unknowns.
+//    the wall), each as a dipole + quadrupole about its own centroid. Blocks
+//    and the wall lattice on which the sum is evaluated are counted from both
+//    ends of each axis, so a mirror-symmetric body in a symmetric field gets
+//    no net force from the wall on any grid size. Interior nodes are unknowns.
 //  - Shield: the paper's wall, grad(phi).n = M.n (natural condition); every
 //    node is an unknown and phi is defined up to a constant (kept at mean 0).
 //

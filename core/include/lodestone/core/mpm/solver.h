@@ -205,8 +205,8 @@ class MpmSolver {
   MpmCollider& collider(std::size_t i);
   const MpmCollider& collider(std::size_t i) const;
 
-  /// The applied-field sources (coils, uniform fields, static magnets that
-  /// are not colliders). Magnets added with addMagnet are kept separately.
+  /// The applied-field sources (coils, uniform fields, static magnets).
+  /// Magnets added with addMagnet or addNonCollidingMagnet are kept separately.
   FieldSourceSet& sources() { return sources_; }
   const FieldSourceSet& sources() const { return sources_; }
   void setSources(FieldSourceSet sources) { sources_ = std::move(sources); }
@@ -220,6 +220,10 @@ class MpmSolver {
                         const BoundaryCondition& boundary = BoundaryCondition());
   /// As above, resting at the magnet's current pose.
   std::size_t addMagnet(const MagnetSource& magnet, const BoundaryCondition& boundary = BoundaryCondition());
+  /// A permanent magnet that is a field source only (material passes
+  /// through it; any MagnetSource). Its pose follows `motion` before each
+  /// field solve, as a colliding magnet's does. Returns the magnet index.
+  std::size_t addNonCollidingMagnet(const MagnetSource& magnet, const ColliderMotion& motion);
   std::size_t magnetCount() const { return magnets_.size(); }
   const MagnetSource& magnet(std::size_t i) const;
 
@@ -306,7 +310,9 @@ class MpmSolver {
   std::vector<MpmCollider> colliders_;
   FieldSourceSet sources_;
   std::vector<std::unique_ptr<MagnetSource>> magnets_;
-  std::vector<std::size_t> magnetCollider_;
+  static constexpr std::size_t kNoCollider = ~std::size_t(0);
+  std::vector<std::size_t> magnetCollider_;  // collider index of each magnet, kNoCollider for none
+  std::vector<ColliderMotion> magnetMotion_;  // motion of each magnet without a collider
   std::unique_ptr<SceneField> scene_;
   MpmGrid grid_;
   std::unique_ptr<MagneticForceStage> stage_;

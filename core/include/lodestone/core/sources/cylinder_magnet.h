@@ -47,6 +47,7 @@ class CylinderMagnet final : public MagnetSource {
   double halfLength() const { return halfLength_; }  ///< m
   double volume() const override;
   bool containsBody(const Vec3d& xBody) const override;
+  double surfaceDepth(const Vec3d& xBody, Vec3d& outwardNormal) const override;
   Vec3d bodyField(const Vec3d& xBody) const override;
   std::string describe() const override;
   std::unique_ptr<FieldSource> clone() const override;

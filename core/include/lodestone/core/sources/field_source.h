@@ -28,6 +28,16 @@ class FieldSource {
   /// outside the body and for sources without a body (uniform field, dipole).
   virtual Vec3d magnetization(const Vec3d& /*x*/, double /*t*/) const { return {}; }
 
+  /// Inside a source body, what to add to field(x, t) (A/m) to continue the
+  /// field outside the body through its nearest face: (M.n) n for a
+  /// uniformly magnetized body with outward face normal n, half that on the
+  /// surface (where field() is the mean of the two sides), zero outside and
+  /// for sources without a body. field + exteriorContinuation is continuous
+  /// across the faces. Material lies outside magnets, but the transfer
+  /// spreads it onto grid nodes up to 1.5 cells away, some of them inside a
+  /// magnet: this is the field that material sees there.
+  virtual Vec3d exteriorContinuation(const Vec3d& /*x*/, double /*t*/) const { return {}; }
+
   /// Adds the field at `count` points to `out` (A/m). Override for speed.
   virtual void accumulateField(const Vec3d* x, std::size_t count, double t, Vec3d* out) const {
     for (std::size_t n = 0; n < count; ++n) out[n] += field(x[n], t);

@@ -36,6 +36,8 @@ class FieldSourceSet final : public FieldSource {
   Vec3d field(const Vec3d& x, double t) const override;
   /// Sum of the sources' magnetizations (A/m).
   Vec3d magnetization(const Vec3d& x, double t) const override;
+  /// Sum of the sources' exterior continuations (A/m).
+  Vec3d exteriorContinuation(const Vec3d& x, double t) const override;
   /// Adds every source's field at the points to `out` (A/m). Const and free
   /// of shared scratch, so threads may call it at once on disjoint outputs.
   void accumulateField(const Vec3d* x, std::size_t count, double t, Vec3d* out) const override;

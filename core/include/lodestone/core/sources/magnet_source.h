@@ -30,6 +30,9 @@ class MagnetSource : public FieldSource {
   Vec3d field(const Vec3d& x, double t) const final;
   /// s(t) * R * M inside the closed body, zero outside (A/m, world frame).
   Vec3d magnetization(const Vec3d& x, double t) const final;
+  /// s(t) * R * (M.n) n inside the body (n: outward normal of the nearest
+  /// face), half that on the surface, zero outside (A/m, world frame).
+  Vec3d exteriorContinuation(const Vec3d& x, double t) const final;
   void accumulateField(const Vec3d* x, std::size_t count, double t, Vec3d* out) const final;
   /// Instance, pose (position and rotation) and s(t).
   bool appendFieldSignature(double t, std::vector<double>& out) const final;
@@ -51,6 +54,11 @@ class MagnetSource : public FieldSource {
 
   /// True when the body-frame point xBody (m) lies in the closed body.
   virtual bool containsBody(const Vec3d& xBody) const = 0;
+  /// Distance (m) from the body-frame point xBody to the nearest point of
+  /// the surface, positive inside, zero on it, negative outside (or any
+  /// negative value outside), and in `outwardNormal` the unit outward normal
+  /// (body frame) of the surface there.
+  virtual double surfaceDepth(const Vec3d& xBody, Vec3d& outwardNormal) const = 0;
   /// H (A/m, body frame) at body-frame point xBody (m) for the unscaled
   /// magnetization bodyMagnetization(). Inside the body this is the
   /// demagnetizing field, so B = mu0 (H + M) there.

@@ -21,6 +21,7 @@ class SphereMagnet final : public MagnetSource {
   double radius() const { return radius_; }  ///< m
   double volume() const override;
   bool containsBody(const Vec3d& xBody) const override;
+  double surfaceDepth(const Vec3d& xBody, Vec3d& outwardNormal) const override;
   Vec3d bodyField(const Vec3d& xBody) const override;
   std::string describe() const override;
   std::unique_ptr<FieldSource> clone() const override;

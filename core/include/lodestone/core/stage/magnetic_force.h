@@ -47,7 +47,9 @@ const char* toString(ForceMask mask);
 /// the source's own directional derivative at the node instead of a central
 /// difference of the nodal H_ext: a difference across the surface of a
 /// permanent magnet that the material touches would see H_ext's jump there
-/// (it pushed a cube resting on a magnet away with 400 N).
+/// (it pushed a cube resting on a magnet away with 400 N). The derivative
+/// is that of the field the material sees (field + exteriorContinuation, as
+/// the magnetic stage samples H_ext), continuous across magnets' faces.
 void stressDivergence(GridView<const Vec3d> H, GridView<const Vec3d> B, GridView<const Vec3d> Hext,
                       GridView<const double> n, ForceMask mask, GridView<Vec3d> t, int dilation = 2,
                       const FieldSource* applied = nullptr, double time = 0.0);

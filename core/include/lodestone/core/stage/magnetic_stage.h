@@ -103,10 +103,13 @@ class MagneticForceStage {
   // Fields of the last run (one value per node).
   GridView<const double> density() const { return n_.view(); }            ///< n, 1/m^3
   GridView<const double> potential() const { return {phi_.data(), grid_}; }  ///< phi, A
-  GridView<const Vec3d> appliedField() const { return hext_.view(); }     ///< H_ext, A/m
-  GridView<const Vec3d> field() const { return h_.view(); }               ///< H, A/m
-  GridView<const Vec3d> magnetization() const { return m_.view(); }       ///< M, A/m
-  GridView<const Vec3d> inductionField() const { return b_.view(); }      ///< B, T
+  /// H_ext (A/m) as the material sees it: inside a magnet's body, the field
+  /// outside continued through its nearest face (FieldSource::exteriorContinuation).
+  GridView<const Vec3d> appliedField() const { return hext_.view(); }
+  GridView<const Vec3d> field() const { return h_.view(); }               ///< H, A/m (true field, inside magnets too)
+  /// M, A/m: the material's plus the sources' own (inside permanent magnets).
+  GridView<const Vec3d> magnetization() const { return m_.view(); }
+  GridView<const Vec3d> inductionField() const { return b_.view(); }      ///< B = mu0 (H + M), T
   GridView<const Vec3d> forceDensity() const { return t_.view(); }        ///< t = div T, N/m^3
   GridView<const Vec3d> nodalForce() const { return f_.view(); }          ///< f = R t, N
 
