@@ -94,14 +94,15 @@ double sphereInteriorField(const MagneticMaterial& mat, double H0) {
 // ------------------------------------------------------------ rasterization
 
 /// n0 times the volume fraction of each node's dual cell inside the union of
-/// balls (centres in m, radius in m), 8^3 samples a cell.
+/// balls (centres in m, radius in m), 8^3 samples a cell where the cell
+/// straddles a surface.
 DenseGrid<double> rasterizeBalls(const GridSpec& g, double n0, const std::vector<Vec3d>& centres, double radius) {
-  return rasterizeDensity(
+  return rasterizeDensityFromDistance(
       g, n0,
       [&](const Vec3d& p) {
-        for (const Vec3d& c : centres)
-          if (norm2(p - c) < radius * radius) return true;
-        return false;
+        double phi = std::numeric_limits<double>::infinity();
+        for (const Vec3d& c : centres) phi = std::min(phi, norm(p - c) - radius);
+        return phi;
       },
       8);
 }

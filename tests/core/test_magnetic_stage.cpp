@@ -541,6 +541,28 @@ TEST(RasterizeDensity, VolumeFractionsOfABoxAndABall) {
   for (std::size_t m = 0; m < g.nodeCount(); ++m) ASSERT_EQ(serial.view()[m], ball.view()[m]) << m;
 }
 
+// From a signed distance: the cells decided by the distance at the node get
+// what sampling them gives, so the grid is rasterizeDensity's with phi < 0.
+TEST(RasterizeDensity, FromDistanceEqualsSamplingTheInside) {
+  const GridSpec g = cubeGrid(21, 0.1);
+  const double n0 = 3e21, r = 0.063;
+  const Vec3d c{0.004, -0.011, 0.02};
+  auto phi = [&](const Vec3d& x) { return norm(x - c) - r; };
+  for (const int S : {3, 8}) {
+    const DenseGrid<double> a = rasterizeDensityFromDistance(g, n0, phi, S);
+    const DenseGrid<double> b = rasterizeDensity(g, n0, [&](const Vec3d& x) { return phi(x) < 0; }, S);
+    std::size_t inside = 0, partial = 0;
+    for (std::size_t m = 0; m < g.nodeCount(); ++m) {
+      ASSERT_EQ(a.view()[m], b.view()[m]) << "node " << m << ", S = " << S;
+      inside += a.view()[m] == n0;
+      partial += a.view()[m] > 0 && a.view()[m] < n0;
+    }
+    EXPECT_GT(inside, 500u);
+    EXPECT_GT(partial, 300u);
+  }
+  EXPECT_THROW(rasterizeDensityFromDistance(g, n0, [](const Vec3d&) { return std::nan(""); }), InvalidArgument);
+}
+
 TEST(RasterizeDensity, RefusesBadArgumentsNamingTheValue) {
   const GridSpec g = cubeGrid(5, 0.1);
   auto message = [&](double n0, int S, const GridSpec& grid) -> std::string {

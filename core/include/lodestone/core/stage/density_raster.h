@@ -27,4 +27,15 @@ namespace lodestone {
 DenseGrid<double> rasterizeDensity(const GridSpec& grid, double n0, const std::function<bool(const Vec3d&)>& inside,
                                    int samplesPerAxis = 6);
 
+/// The same for a body given by its signed distance phi(x) (m, negative
+/// inside; outside the body a lower bound of the distance to it suffices,
+/// inside one of the depth): a node whose dual cell lies wholly on one side
+/// (|phi| above half the cell's diagonal) is decided by phi at the node alone,
+/// the others are sampled with phi < 0 as the inside test, so the result is
+/// rasterizeDensity's with that test at a fraction of the calls. Also throws
+/// InvalidArgument when phi at a node is NaN.
+DenseGrid<double> rasterizeDensityFromDistance(const GridSpec& grid, double n0,
+                                               const std::function<double(const Vec3d&)>& signedDistance,
+                                               int samplesPerAxis = 6);
+
 }  // namespace lodestone
