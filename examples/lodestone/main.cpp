@@ -272,7 +272,11 @@ void printSceneSummary(const Scene& scene, const MpmSolver& solver) {
               scene.settings.fixedDt > 0 ? concat("dt = ", scene.settings.fixedDt, " s").c_str()
                                          : concat("CFL ", scene.settings.cfl, ", dt <= ", scene.settings.dtMax, " s").c_str(),
               scene.settings.magneticSolveInterval == 0
-                  ? "once per frame"
+                  ? (scene.settings.magneticSolveDistance > 0
+                         ? concat("once per frame and whenever material or a magnet moved ",
+                                  scene.settings.magneticSolveDistance, " cells")
+                         : std::string("once per frame"))
+                        .c_str()
                   : concat("every ", scene.settings.magneticSolveInterval, " substeps").c_str());  std::printf("  %s\n", substepText(scene, solver).c_str());
 }
 

@@ -196,6 +196,7 @@ MpmSettings mpmSettingsFrom(const ParamSet& p) {
   s.cfl = p.getFloat("time.cfl");
   s.dtMax = p.getFloat("time.dt_max");
   s.magneticSolveInterval = int(p.getInt("time.field_solve_every"));
+  s.magneticSolveDistance = p.getFloat("time.field_solve_distance");
   s.gravity = p.getVec3("gravity");
   s.magnetic = solveSettingsFrom(p, "magnetic.");
   const int padding = int(p.getInt("magnetic.padding"));

@@ -451,7 +451,11 @@ NodeDecl mpmSolverNode() {
   q.push_back(range(floatParam("time.cfl", "CFL", 0.4, "", "Fraction of a cell crossed per substep."), 0.01, 1));
   q.push_back(positive(floatParam("time.dt_max", "Largest step", 1e-3, "s", "Largest CFL substep.")));
   q.push_back(intParam("time.field_solve_every", "Solve interval", 0, 0, 1000000,
-                       "Substeps between field solves; 0: once per frame."));
+                       "Substeps between field solves; 0: automatic (see time.field_solve_distance)."));
+  q.push_back(range(floatParam("time.field_solve_distance", "Solve distance", 0.25, "cells",
+                               "With field_solve_every 0: solve again when material or a magnet moved this far "
+                               "since the last solve (and once per frame); 0: once per frame."),
+                    0, 100));
   q.push_back(vec3Param("gravity", "Gravity", {0, 0, -9.81}, "m/s^2", "Gravitational acceleration."));
   addSolveParams(q, "magnetic.");
   q.push_back(intParam("magnetic.padding", "Field padding", 4, 0, 64,
