@@ -236,10 +236,6 @@ std::optional<int> parseArgs(int argc, char** argv, Args& a) {
 }
 /// Substeps per frame the time step takes: time.dt's, or (CFL) the first
 /// step's, which changes as the material moves.
-double substepsPerFrame(const Scene& scene, const MpmSolver& solver) {
-  return std::ceil(scene.frameDuration() / solver.suggestedDt() - 1e-9);
-}
-
 std::string substepText(const Scene& scene, const MpmSolver& solver) {
   char text[256];
   const double n = substepsPerFrame(scene, solver);

@@ -418,13 +418,19 @@ bool MpmSolver::lastSolveHolds() {
   return reuse_.fieldWithin(*scene_, time_, lastPlan_.reuseFieldChange);
 }
 
-MagneticPlan MpmSolver::planMagneticNow() const {
+MagneticPlan MpmSolver::planMagneticNow() const { return planMagneticAt(time_); }
+
+MagneticPlan MpmSolver::planMagneticAt(double t) const {
   std::vector<Vec3d> positions;
   const MagneticMaterial* law = magneticLaw();
   for (std::size_t p = 0; p < particles_.size(); ++p)
     if (isMagneticPoint(p)) positions.push_back(particles_.x[p]);
+  poseMagnetsAt(t);
+  PlannerInputs in = plannerInputs(positions, law ? *law : nonMagneticMaterial());
+  in.time = t;
+  MagneticPlan plan = planMagnetic(settings_.planner, in);
   poseMagnetsAt(time_);
-  return planMagnetic(settings_.planner, plannerInputs(positions, law ? *law : nonMagneticMaterial()));
+  return plan;
 }
 
 PlannerInputs MpmSolver::plannerInputs(const std::vector<Vec3d>& positions, const MagneticMaterial& law) const {

@@ -282,6 +282,10 @@ class MpmSolver {
   /// The effects planner's decisions for the magnetic stages in the current
   /// state (what the next field solve would do), without solving.
   MagneticPlan planMagneticNow() const;
+  /// The plan with the material where it is now and the sources (magnets'
+  /// motion, time profiles) at time t (s): what a solve at t would do if
+  /// the material had not moved. The magnets are posed back afterwards.
+  MagneticPlan planMagneticAt(double t) const;
   /// The plan of the last field solve (empty decisions before the first, or
   /// when the planner is off).
   const MagneticPlan& lastMagneticPlan() const { return lastPlan_; }
