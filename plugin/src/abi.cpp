@@ -28,34 +28,36 @@
 #include "lodestone/plugin/node_registry.h"
 #include "lodestone/plugin/json_reader.h"
 #include "lodestone/plugin/param_json.h"
+#include "handle_table.h"
 
 using namespace lodestone;
 using namespace lodestone::plugin;
 
-struct lodestone_context {
+namespace {
+
+// The objects behind the handles (handle_table.h: a handle is an id, not an address).
+struct Context {
   std::mutex mutex;
   std::map<std::thread::id, std::string> errors;  // last error per thread
   std::size_t objects = 0;                        // live stages, field sets, networks
 };
 
-struct lodestone_fields {
-  lodestone_context* context = nullptr;
+struct Fields {
+  Context* context = nullptr;
   FieldSourceSet set;
 };
 
-struct lodestone_stage {
-  lodestone_context* context = nullptr;
+struct Stage {
+  Context* context = nullptr;
   std::unique_ptr<MagneticForceStage> stage;
   MagneticStageReport report;
   bool ran = false;
 };
 
-struct lodestone_network {
-  lodestone_context* context = nullptr;
+struct NetworkObject {
+  Context* context = nullptr;
   Network network;
 };
-
-namespace {
 
 thread_local std::string tlsError;
 
@@ -71,7 +73,7 @@ class AbiError : public std::exception {
   std::string message_;
 };
 
-lodestone_status fail(lodestone_context* context, lodestone_status code, const char* function,
+lodestone_status fail(Context* context, lodestone_status code, const char* function,
                       const char* message) noexcept {
   try {
     tlsError = std::string(function) + ": " + message;
@@ -87,7 +89,7 @@ lodestone_status fail(lodestone_context* context, lodestone_status code, const c
 
 /// Runs `body`, mapping every exception to a status (the exception firewall).
 template <typename F>
-lodestone_status firewall(lodestone_context* context, const char* function, F&& body) noexcept {
+lodestone_status firewall(Context* context, const char* function, F&& body) noexcept {
   try {
     body();
     return LODESTONE_OK;
@@ -121,9 +123,49 @@ void needSize(std::uint32_t given, std::size_t expected, const char* what) {
                           " (set it to sizeof(", what, "))"));
 }
 
-lodestone_context* ctxOf(const lodestone_stage* s) { return s ? s->context : nullptr; }
-lodestone_context* ctxOf(const lodestone_fields* f) { return f ? f->context : nullptr; }
-lodestone_context* ctxOf(const lodestone_network* n) { return n ? n->context : nullptr; }
+// Handles to objects: a NULL handle is LODESTONE_ERROR_NULL_HANDLE, one that
+// is not live (destroyed, of another kind, never handed out)
+// LODESTONE_ERROR_INVALID_HANDLE.
+template <typename Object, typename Handle>
+Object* liveOrNull(const Handle* h, HandleKind kind) noexcept {
+  return static_cast<Object*>(handleTable().find(reinterpret_cast<std::uintptr_t>(h), kind));
+}
+
+template <typename Object, typename Handle>
+Object& live(const Handle* h, HandleKind kind, const char* what) {
+  need(h, what);
+  Object* o = liveOrNull<Object>(h, kind);
+  if (!o)
+    throw AbiError(LODESTONE_ERROR_INVALID_HANDLE,
+                   concat(what, " ", static_cast<const void*>(h),
+                          " is not a live handle (already destroyed, or not one this library handed out)"));
+  return *o;
+}
+
+template <typename Handle>
+Handle* newHandle(HandleKind kind, void* object) {
+  return reinterpret_cast<Handle*>(handleTable().add(kind, object));
+}
+
+Context& contextOf(lodestone_context* h) { return live<Context>(h, HandleKind::Context, "context"); }
+Fields& fieldsOf(const lodestone_fields* h) { return live<Fields>(h, HandleKind::Fields, "fields"); }
+Stage& stageOf(const lodestone_stage* h) { return live<Stage>(h, HandleKind::Stage, "stage"); }
+NetworkObject& networkOf(const lodestone_network* h) { return live<NetworkObject>(h, HandleKind::Network, "network"); }
+
+// The context a failure is also recorded in (null when the handle is not live).
+Context* ctxOf(lodestone_context* h) { return liveOrNull<Context>(h, HandleKind::Context); }
+Context* ctxOf(const lodestone_stage* h) {
+  const Stage* s = liveOrNull<Stage>(h, HandleKind::Stage);
+  return s ? s->context : nullptr;
+}
+Context* ctxOf(const lodestone_fields* h) {
+  const Fields* f = liveOrNull<Fields>(h, HandleKind::Fields);
+  return f ? f->context : nullptr;
+}
+Context* ctxOf(const lodestone_network* h) {
+  const NetworkObject* n = liveOrNull<NetworkObject>(h, HandleKind::Network);
+  return n ? n->context : nullptr;
+}
 
 Vec3d vec(const double* v, const char* what) {
   need(v, what);
@@ -264,21 +306,42 @@ std::string reportJson(const MagneticStageReport& r) {
   return j.dump();
 }
 
-void addObject(lodestone_context* c) {
+void addObject(Context* c) {
   std::lock_guard<std::mutex> lock(c->mutex);
   ++c->objects;
 }
-void removeObject(lodestone_context* c) {
+void removeObject(Context* c) {
   std::lock_guard<std::mutex> lock(c->mutex);
   --c->objects;
 }
 
-const lodestone_stage& ranStage(const lodestone_stage* s) {
-  need(s, "stage");
-  if (!s->ran)
+/// Creates an object of `context` and its handle.
+template <typename Handle, typename Object>
+Handle* adopt(Context& context, HandleKind kind, std::unique_ptr<Object> object) {
+  object->context = &context;
+  Handle* h = newHandle<Handle>(kind, object.get());
+  addObject(&context);
+  object.release();
+  return h;
+}
+
+/// Ends a handle and deletes its object (NULL: nothing).
+template <typename Object, typename Handle>
+void destroy(const Handle* h, HandleKind kind, const char* what) {
+  if (!h) return;
+  live<Object>(h, kind, what);  // the status of a stale handle
+  auto* o = static_cast<Object*>(handleTable().remove(reinterpret_cast<std::uintptr_t>(h), kind));
+  if (!o) return;
+  removeObject(o->context);
+  delete o;
+}
+
+const Stage& ranStage(const lodestone_stage* h) {
+  const Stage& s = stageOf(h);
+  if (!s.ran)
     throw AbiError(LODESTONE_ERROR_NOT_READY,
                    "the stage has not run yet (call stage_run_particles or stage_run_density)");
-  return *s;
+  return s;
 }
 
 std::string needName(const char* s, const char* what) { return std::string(need(s, what)); }
@@ -312,6 +375,8 @@ const char* statusString(lodestone_status s) {
       return "node cook failed";
     case LODESTONE_ERROR_INTERNAL:
       return "internal error";
+    case LODESTONE_ERROR_INVALID_HANDLE:
+      return "invalid handle";
     default:
       return "unknown status";
   }
@@ -325,27 +390,31 @@ lodestone_status contextCreate(lodestone_context** out) {
   return firewall(nullptr, "context_create", [&] {
     need(out, "out");
     *out = nullptr;
-    *out = new lodestone_context();
+    auto c = std::make_unique<Context>();
+    *out = newHandle<lodestone_context>(HandleKind::Context, c.get());
+    c.release();
   });
 }
 
-lodestone_status contextDestroy(lodestone_context* c) {
-  return firewall(nullptr, "context_destroy", [&] {
-    if (!c) return;
-    std::size_t live;
+lodestone_status contextDestroy(lodestone_context* h) {
+  return firewall(ctxOf(h), "context_destroy", [&] {
+    if (!h) return;
+    Context& c = contextOf(h);
+    std::size_t owned;
     {
-      std::lock_guard<std::mutex> lock(c->mutex);
-      live = c->objects;
+      std::lock_guard<std::mutex> lock(c.mutex);
+      owned = c.objects;
     }
-    if (live)
+    if (owned)
       throw AbiError(
           LODESTONE_ERROR_INVALID_ARGUMENT,
-          concat("the context still owns ", live, " stage(s), field set(s) or network(s); destroy them first"));
-    delete c;
+          concat("the context still owns ", owned, " stage(s), field set(s) or network(s); destroy them first"));
+    delete static_cast<Context*>(handleTable().remove(reinterpret_cast<std::uintptr_t>(h), HandleKind::Context));
   });
 }
 
-const char* contextLastError(lodestone_context* c) {
+const char* contextLastError(lodestone_context* h) {
+  Context* c = ctxOf(h);
   if (!c) return "";
   try {
     std::lock_guard<std::mutex> lock(c->mutex);
@@ -358,36 +427,29 @@ const char* contextLastError(lodestone_context* c) {
 
 // ---- fields ------------------------------------------------------------------------
 lodestone_status fieldsCreate(lodestone_context* c, lodestone_fields** out) {
-  return firewall(c, "fields_create", [&] {
-    need(c, "context");
+  return firewall(ctxOf(c), "fields_create", [&] {
+    if (out) *out = nullptr;
+    Context& context = contextOf(c);
     need(out, "out");
-    *out = nullptr;
-    auto f = std::make_unique<lodestone_fields>();
-    f->context = c;
-    addObject(c);
-    *out = f.release();
+    *out = adopt<lodestone_fields>(context, HandleKind::Fields, std::make_unique<Fields>());
   });
 }
 
 lodestone_status fieldsDestroy(lodestone_fields* f) {
-  return firewall(ctxOf(f), "fields_destroy", [&] {
-    if (!f) return;
-    removeObject(f->context);
-    delete f;
-  });
+  return firewall(ctxOf(f), "fields_destroy", [&] { destroy<Fields>(f, HandleKind::Fields, "fields"); });
 }
 
 lodestone_status fieldsAddUniform(lodestone_fields* f, const double H[3]) {
   return firewall(ctxOf(f), "fields_add_uniform", [&] {
-    need(f, "fields");
-    f->set.add(std::make_unique<UniformField>(vec(H, "H")));
+    Fields& fs = fieldsOf(f);
+    fs.set.add(std::make_unique<UniformField>(vec(H, "H")));
   });
 }
 
 lodestone_status fieldsAddDipole(lodestone_fields* f, const double position[3], const double moment[3]) {
   return firewall(ctxOf(f), "fields_add_dipole", [&] {
-    need(f, "fields");
-    f->set.add(std::make_unique<PointDipole>(vec(position, "position"), vec(moment, "moment")));
+    Fields& fs = fieldsOf(f);
+    fs.set.add(std::make_unique<PointDipole>(vec(position, "position"), vec(moment, "moment")));
   });
 }
 
@@ -405,36 +467,36 @@ void checkMagnetization(double M) {
 lodestone_status fieldsAddSphere(lodestone_fields* f, const double center[3], const double axis[3], double radius,
                                  double M) {
   return firewall(ctxOf(f), "fields_add_sphere_magnet", [&] {
-    need(f, "fields");
+    Fields& fs = fieldsOf(f);
     checkMagnetization(M);
-    f->set.add(std::make_unique<SphereMagnet>(magnetPose(center, axis), radius, Vec3d{0, 0, M}));
+    fs.set.add(std::make_unique<SphereMagnet>(magnetPose(center, axis), radius, Vec3d{0, 0, M}));
   });
 }
 
 lodestone_status fieldsAddBox(lodestone_fields* f, const double center[3], const double axis[3],
                               const double halfSize[3], double M) {
   return firewall(ctxOf(f), "fields_add_box_magnet", [&] {
-    need(f, "fields");
+    Fields& fs = fieldsOf(f);
     checkMagnetization(M);
-    f->set.add(std::make_unique<CuboidMagnet>(magnetPose(center, axis), vec(halfSize, "half_size"), Vec3d{0, 0, M}));
+    fs.set.add(std::make_unique<CuboidMagnet>(magnetPose(center, axis), vec(halfSize, "half_size"), Vec3d{0, 0, M}));
   });
 }
 
 lodestone_status fieldsAddCylinder(lodestone_fields* f, const double center[3], const double axis[3], double radius,
                                    double halfLength, double M) {
   return firewall(ctxOf(f), "fields_add_cylinder_magnet", [&] {
-    need(f, "fields");
+    Fields& fs = fieldsOf(f);
     checkMagnetization(M);
-    f->set.add(std::make_unique<CylinderMagnet>(magnetPose(center, axis), radius, halfLength, Vec3d{0, 0, M}));
+    fs.set.add(std::make_unique<CylinderMagnet>(magnetPose(center, axis), radius, halfLength, Vec3d{0, 0, M}));
   });
 }
 
 lodestone_status fieldsAddVdb(lodestone_fields* f, const char* path, const char* grid) {
   return firewall(ctxOf(f), "fields_add_vdb", [&] {
-    need(f, "fields");
+    Fields& fs = fieldsOf(f);
     const std::string file = needName(path, "path"), name = needName(grid, "grid_name");
     try {
-      addVdbField(f->set, file, name);
+      addVdbField(fs.set, file, name);
     } catch (const InvalidArgument& e) {
       throw AbiError(LODESTONE_ERROR_IO, e.what());
     }
@@ -443,16 +505,16 @@ lodestone_status fieldsAddVdb(lodestone_fields* f, const char* path, const char*
 
 lodestone_status fieldsCount(const lodestone_fields* f, uint32_t* out) {
   return firewall(ctxOf(f), "fields_count", [&] {
-    need(f, "fields");
-    *need(out, "out") = uint32_t(f->set.size());
+    Fields& fs = fieldsOf(f);
+    *need(out, "out") = uint32_t(fs.set.size());
   });
 }
 
 lodestone_status fieldsEvaluate(const lodestone_fields* f, const double x[3], double t, double H[3]) {
   return firewall(ctxOf(f), "fields_evaluate", [&] {
-    need(f, "fields");
+    Fields& fs = fieldsOf(f);
     need(H, "H_out");
-    const Vec3d h = f->set.field(vec(x, "x"), t);
+    const Vec3d h = fs.set.field(vec(x, "x"), t);
     for (int a = 0; a < 3; ++a) H[a] = h[a];
   });
 }
@@ -485,11 +547,11 @@ lodestone_status stageParamsDefault(lodestone_stage_params* p) {
 }
 
 lodestone_status stageCreate(lodestone_context* c, const lodestone_stage_params* p, lodestone_stage** out) {
-  return firewall(c, "stage_create", [&] {
-    need(c, "context");
+  return firewall(ctxOf(c), "stage_create", [&] {
+    if (out) *out = nullptr;
+    Context& context = contextOf(c);
     need(p, "params");
     need(out, "out");
-    *out = nullptr;
     needSize(p->struct_size, sizeof(lodestone_stage_params), "lodestone_stage_params");
     const double n0 = p->number_density == 0 ? paperMaterial().numberDensity : p->number_density;
     MagneticMaterial material;
@@ -532,27 +594,21 @@ lodestone_status stageCreate(lodestone_context* c, const lodestone_stage_params*
     s.solve.maxNewtonIterations = p->max_newton_iterations;
     s.outOfGrid = p->out_of_grid == LODESTONE_OUT_OF_GRID_SKIP ? OutOfGridPolicy::Skip : OutOfGridPolicy::Throw;
     s.warmStart = p->warm_start != 0;
-    auto stage = std::make_unique<lodestone_stage>();
-    stage->context = c;
+    auto stage = std::make_unique<Stage>();
     stage->stage = std::make_unique<MagneticForceStage>(g, material, s);
-    addObject(c);
-    *out = stage.release();
+    *out = adopt<lodestone_stage>(context, HandleKind::Stage, std::move(stage));
   });
 }
 
 lodestone_status stageDestroy(lodestone_stage* s) {
-  return firewall(ctxOf(s), "stage_destroy", [&] {
-    if (!s) return;
-    removeObject(s->context);
-    delete s;
-  });
+  return firewall(ctxOf(s), "stage_destroy", [&] { destroy<Stage>(s, HandleKind::Stage, "stage"); });
 }
 
 lodestone_status stageGrid(const lodestone_stage* s, lodestone_grid* out) {
   return firewall(ctxOf(s), "stage_grid", [&] {
-    need(s, "stage");
+    Stage& st = stageOf(s);
     need(out, "out");
-    const GridSpec& g = s->stage->grid();
+    const GridSpec& g = st.stage->grid();
     for (int a = 0; a < 3; ++a) {
       out->origin[a] = g.origin[a];
       out->dims[a] = g.dims[a];
@@ -563,7 +619,7 @@ lodestone_status stageGrid(const lodestone_stage* s, lodestone_grid* out) {
 
 const FieldSource& sourcesOf(const lodestone_fields* f) {
   static const FieldSourceSet kNone;
-  return f ? static_cast<const FieldSource&>(f->set) : kNone;
+  return f ? static_cast<const FieldSource&>(fieldsOf(f).set) : kNone;
 }
 
 void checkTime(double t) {
@@ -573,26 +629,26 @@ void checkTime(double t) {
 lodestone_status stageRunParticles(lodestone_stage* s, const lodestone_particles* p, const lodestone_fields* f,
                                    double t, lodestone_report* report) {
   return firewall(ctxOf(s), "stage_run_particles", [&] {
-    need(s, "stage");
+    Stage& st = stageOf(s);
     checkTime(t);
     if (report) needSize(report->struct_size, sizeof(lodestone_report), "lodestone_report");
     const Particles particles = readParticles(p, true);
-    s->ran = false;
-    s->report = s->stage->run(particles.view(), sourcesOf(f), t);
-    s->ran = true;
-    if (report) fillReport(s->report, report);
+    st.ran = false;
+    st.report = st.stage->run(particles.view(), sourcesOf(f), t);
+    st.ran = true;
+    if (report) fillReport(st.report, report);
   });
 }
 
 lodestone_status stageRunDensity(lodestone_stage* s, const lodestone_grid* grid, const double* density,
                                  const lodestone_fields* f, double t, lodestone_report* report) {
   return firewall(ctxOf(s), "stage_run_density", [&] {
-    need(s, "stage");
+    Stage& st = stageOf(s);
     need(grid, "grid");
     need(density, "density");
     checkTime(t);
     if (report) needSize(report->struct_size, sizeof(lodestone_report), "lodestone_report");
-    const GridSpec& g = s->stage->grid();
+    const GridSpec& g = st.stage->grid();
     GridSpec h;
     h.origin = {grid->origin[0], grid->origin[1], grid->origin[2]};
     h.dx = grid->dx;
@@ -602,17 +658,17 @@ lodestone_status stageRunDensity(lodestone_stage* s, const lodestone_grid* grid,
                      concat("the density's grid (origin ", h.origin.x, ", ", h.origin.y, ", ", h.origin.z, " m, dx ",
                             h.dx, " m, ", h.dims.i, " x ", h.dims.j, " x ", h.dims.k,
                             " nodes) is not the stage's grid (stage_grid); give particles instead"));
-    s->ran = false;
-    s->report = s->stage->runOnDensity({density, g}, sourcesOf(f), t);
-    s->ran = true;
-    if (report) fillReport(s->report, report);
+    st.ran = false;
+    st.report = st.stage->runOnDensity({density, g}, sourcesOf(f), t);
+    st.ran = true;
+    if (report) fillReport(st.report, report);
   });
 }
 
 lodestone_status stageParticleForces(const lodestone_stage* s, const lodestone_particles* p,
                                      lodestone_vec3_out* forces) {
   return firewall(ctxOf(s), "stage_particle_forces", [&] {
-    const lodestone_stage& st = ranStage(s);
+    const Stage& st = ranStage(s);
     const Particles particles = readParticles(p, true);
     need(forces, "forces");
     needSize(forces->struct_size, sizeof(lodestone_vec3_out), "lodestone_vec3_out");
@@ -628,7 +684,7 @@ lodestone_status stageParticleForces(const lodestone_stage* s, const lodestone_p
 lodestone_status stageSample(const lodestone_stage* s, lodestone_field_kind kind, const lodestone_particles* points,
                              lodestone_vec3_out* out) {
   return firewall(ctxOf(s), "stage_sample", [&] {
-    const lodestone_stage& st = ranStage(s);
+    const Stage& st = ranStage(s);
     if (kind != LODESTONE_FIELD_H && kind != LODESTONE_FIELD_FORCE_DENSITY)
       throw AbiError(
           LODESTONE_ERROR_INVALID_ARGUMENT,
@@ -651,7 +707,7 @@ lodestone_status stageSample(const lodestone_stage* s, lodestone_field_kind kind
 lodestone_status stageReadField(const lodestone_stage* s, lodestone_field_kind kind, lodestone_scalar_type type,
                                 void* out, size_t count) {
   return firewall(ctxOf(s), "stage_read_field", [&] {
-    const lodestone_stage& st = ranStage(s);
+    const Stage& st = ranStage(s);
     const std::size_t es = scalarSize(type, "stage_read_field");
     const MagneticForceStage& stage = *st.stage;
     const std::size_t nodes = stage.grid().nodeCount();
@@ -701,21 +757,21 @@ lodestone_status stageReadField(const lodestone_stage* s, lodestone_field_kind k
 
 lodestone_status stageReport(const lodestone_stage* s, lodestone_report* out) {
   return firewall(ctxOf(s), "stage_report", [&] {
-    const lodestone_stage& st = ranStage(s);
+    const Stage& st = ranStage(s);
     fillReport(st.report, need(out, "out"));
   });
 }
 
 lodestone_status stageReportJson(const lodestone_stage* s, char* buffer, size_t capacity, size_t* needed) {
   return firewall(ctxOf(s), "stage_report_json", [&] {
-    const lodestone_stage& st = ranStage(s);
+    const Stage& st = ranStage(s);
     copyText(reportJson(st.report), buffer, capacity, needed);
   });
 }
 
 lodestone_status stageExportVdb(const lodestone_stage* s, const char* path) {
   return firewall(ctxOf(s), "stage_export_vdb", [&] {
-    const lodestone_stage& st = ranStage(s);
+    const Stage& st = ranStage(s);
     const std::string file = needName(path, "path");
     try {
       writeStageVdb(file, *st.stage, st.report.summary());
@@ -843,26 +899,19 @@ lodestone_status nodeOutputInfo(const char* type, uint32_t index, lodestone_port
 
 // ---- networks ------------------------------------------------------------------------
 lodestone_status networkCreate(lodestone_context* c, lodestone_network** out) {
-  return firewall(c, "network_create", [&] {
-    need(c, "context");
+  return firewall(ctxOf(c), "network_create", [&] {
+    if (out) *out = nullptr;
+    Context& context = contextOf(c);
     need(out, "out");
-    *out = nullptr;
-    auto n = std::make_unique<lodestone_network>();
-    n->context = c;
-    addObject(c);
-    *out = n.release();
+    *out = adopt<lodestone_network>(context, HandleKind::Network, std::make_unique<NetworkObject>());
   });
 }
 
 lodestone_status networkDestroy(lodestone_network* n) {
-  return firewall(ctxOf(n), "network_destroy", [&] {
-    if (!n) return;
-    removeObject(n->context);
-    delete n;
-  });
+  return firewall(ctxOf(n), "network_destroy", [&] { destroy<NetworkObject>(n, HandleKind::Network, "network"); });
 }
 
-Network& net(lodestone_network* n) { return need(n, "network")->network; }
+Network& net(lodestone_network* n) { return networkOf(n).network; }
 
 void checkNode(Network& network, const std::string& node) {
   if (!network.hasNode(node)) throw AbiError(LODESTONE_ERROR_NOT_FOUND, concat("no node named '", node, "'"));

@@ -507,4 +507,65 @@ TEST(PluginAbi, LastErrorIsPerThreadAndPerContext) {
   EXPECT_EQ(a->context_destroy(ctx), LODESTONE_OK);
 }
 
+// A handle used after its destroy (destroyed twice, say), one of another
+// kind and a value never handed out give LODESTONE_ERROR_INVALID_HANDLE, also
+// after many objects were created and destroyed meanwhile (slots reused).
+TEST(PluginAbi, StaleAndForeignHandlesGiveAStatus) {
+  const lodestone_api* a = api();
+  lodestone_context* ctx = nullptr;
+  ASSERT_EQ(a->context_create(&ctx), LODESTONE_OK);
+  lodestone_stage_params params{};
+  params.struct_size = sizeof params;
+  ASSERT_EQ(a->stage_params_default(&params), LODESTONE_OK);
+  params.grid.dims[0] = params.grid.dims[1] = params.grid.dims[2] = 5;
+  lodestone_stage* stage = nullptr;
+  lodestone_fields* fields = nullptr;
+  lodestone_network* network = nullptr;
+  ASSERT_EQ(a->stage_create(ctx, &params, &stage), LODESTONE_OK) << lastError();
+  ASSERT_EQ(a->fields_create(ctx, &fields), LODESTONE_OK);
+  ASSERT_EQ(a->network_create(ctx, &network), LODESTONE_OK);
+  // Of another kind, or never handed out.
+  lodestone_grid g{};
+  uint32_t count = 0;
+  EXPECT_EQ(a->stage_grid(reinterpret_cast<lodestone_stage*>(fields), &g), LODESTONE_ERROR_INVALID_HANDLE);
+  EXPECT_NE(lastError().find("not a live handle"), std::string::npos) << lastError();
+  EXPECT_EQ(a->fields_count(reinterpret_cast<lodestone_fields*>(stage), &count), LODESTONE_ERROR_INVALID_HANDLE);
+  EXPECT_EQ(a->network_cook(reinterpret_cast<lodestone_network*>(ctx), "x"), LODESTONE_ERROR_INVALID_HANDLE);
+  double junk[8] = {};
+  EXPECT_EQ(a->stage_destroy(reinterpret_cast<lodestone_stage*>(junk)), LODESTONE_ERROR_INVALID_HANDLE);
+  EXPECT_EQ(a->context_destroy(reinterpret_cast<lodestone_context*>(junk)), LODESTONE_ERROR_INVALID_HANDLE);
+
+  EXPECT_EQ(a->stage_destroy(stage), LODESTONE_OK);
+  EXPECT_EQ(a->fields_destroy(fields), LODESTONE_OK);
+  EXPECT_EQ(a->network_destroy(network), LODESTONE_OK);
+  // Many objects later (their slots reused), the old handles are still stale.
+  for (int k = 0; k < 3000; ++k) {
+    lodestone_fields* f = nullptr;
+    ASSERT_EQ(a->fields_create(ctx, &f), LODESTONE_OK);
+    ASSERT_NE(f, fields);
+    ASSERT_EQ(a->fields_destroy(f), LODESTONE_OK);
+  }
+  lodestone_fields* fresh = nullptr;
+  ASSERT_EQ(a->fields_create(ctx, &fresh), LODESTONE_OK);
+  EXPECT_EQ(a->stage_destroy(stage), LODESTONE_ERROR_INVALID_HANDLE);
+  EXPECT_NE(lastError().find("stage_destroy: stage"), std::string::npos) << lastError();
+  EXPECT_EQ(a->fields_destroy(fields), LODESTONE_ERROR_INVALID_HANDLE);
+  EXPECT_EQ(a->network_destroy(network), LODESTONE_ERROR_INVALID_HANDLE);
+  EXPECT_EQ(a->stage_grid(stage, &g), LODESTONE_ERROR_INVALID_HANDLE);
+  EXPECT_EQ(a->fields_count(fields, &count), LODESTONE_ERROR_INVALID_HANDLE);
+  EXPECT_EQ(a->network_add_node(network, "material", "m"), LODESTONE_ERROR_INVALID_HANDLE);
+  // The live one still works; the context counts it.
+  EXPECT_EQ(a->fields_count(fresh, &count), LODESTONE_OK);
+  EXPECT_EQ(a->context_destroy(ctx), LODESTONE_ERROR_INVALID_ARGUMENT);
+  EXPECT_EQ(a->fields_destroy(fresh), LODESTONE_OK);
+  EXPECT_EQ(a->context_destroy(ctx), LODESTONE_OK);
+  // A context destroyed twice, and objects asked of it.
+  EXPECT_EQ(a->context_destroy(ctx), LODESTONE_ERROR_INVALID_HANDLE);
+  EXPECT_NE(lastError().find("context_destroy: context"), std::string::npos) << lastError();
+  EXPECT_EQ(a->fields_create(ctx, &fresh), LODESTONE_ERROR_INVALID_HANDLE);
+  EXPECT_EQ(fresh, nullptr);
+  EXPECT_STREQ(a->context_last_error(ctx), "");
+  EXPECT_STREQ(a->status_string(LODESTONE_ERROR_INVALID_HANDLE), "invalid handle");
+}
+
 }  // namespace

@@ -18,6 +18,11 @@
  * Handles. lodestone_context, lodestone_stage, lodestone_fields and
  * lodestone_network are opaque. Every object is created by a *_create function
  * and released by the matching *_destroy (destroying NULL is a no-op).
+ * A handle is an id, not the object's address: a handle that is no longer
+ * live (destroyed once already, say), one of another kind and a value the
+ * library never handed out are told apart from live handles and refused with
+ * LODESTONE_ERROR_INVALID_HANDLE by every function, *_destroy included, even
+ * after the library has created new objects meanwhile.
  * A stage, a field set or a network belongs to the context it was created in
  * and must be destroyed before it. Pointers passed in (particles, grids,
  * strings) are only read during the call; nothing keeps them. Buffers a
@@ -79,6 +84,7 @@ typedef int32_t lodestone_status;
 #define LODESTONE_ERROR_IO 9               /* a file could not be read or written */
 #define LODESTONE_ERROR_COOK_FAILED 10     /* a node's cook threw: the message names the node */
 #define LODESTONE_ERROR_INTERNAL 11        /* any other failure inside the library */
+#define LODESTONE_ERROR_INVALID_HANDLE 12  /* a handle already destroyed, of another kind, or never handed out */
 
 /* ---- plain types --------------------------------------------------------- */
 typedef struct lodestone_context lodestone_context;
