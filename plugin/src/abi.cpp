@@ -99,6 +99,8 @@ lodestone_status firewall(Context* context, const char* function, F&& body) noex
     return fail(context, e.notBuilt() ? LODESTONE_ERROR_NOT_BUILT : LODESTONE_ERROR_COOK_FAILED, function, e.what());
   } catch (const NotBuilt& e) {
     return fail(context, LODESTONE_ERROR_NOT_BUILT, function, e.what());
+  } catch (const TooLarge& e) {
+    return fail(context, LODESTONE_ERROR_OUT_OF_MEMORY, function, e.what());
   } catch (const InvalidArgument& e) {
     return fail(context, LODESTONE_ERROR_INVALID_ARGUMENT, function, e.what());
   } catch (const std::bad_alloc&) {
@@ -223,6 +225,8 @@ Particles readParticles(const lodestone_particles* p, bool needCounts) {
                    concat("particles: count_stride ", cs, " bytes is smaller than one count (", es, " bytes)"));
   if (p->count > (std::size_t(1) << 40))
     throw AbiError(LODESTONE_ERROR_INVALID_ARGUMENT, concat("particles: count ", p->count, " is implausibly large"));
+  const double noGrid[3] = {0, 0, 0};
+  requireFitsInMemory("particles", noGrid, 0, double(p->count));
   Particles out;
   if (p->count == 0) return out;
   need(p->positions, "particles->positions");
@@ -425,6 +429,10 @@ const char* contextLastError(lodestone_context* h) {
   }
 }
 
+void checkTime(double t) {
+  if (!std::isfinite(t)) throw AbiError(LODESTONE_ERROR_INVALID_ARGUMENT, concat("time must be finite, got ", t, " s"));
+}
+
 // ---- fields ------------------------------------------------------------------------
 lodestone_status fieldsCreate(lodestone_context* c, lodestone_fields** out) {
   return firewall(ctxOf(c), "fields_create", [&] {
@@ -514,6 +522,7 @@ lodestone_status fieldsEvaluate(const lodestone_fields* f, const double x[3], do
   return firewall(ctxOf(f), "fields_evaluate", [&] {
     Fields& fs = fieldsOf(f);
     need(H, "H_out");
+    checkTime(t);
     const Vec3d h = fs.set.field(vec(x, "x"), t);
     for (int a = 0; a < 3; ++a) H[a] = h[a];
   });
@@ -538,8 +547,9 @@ lodestone_status stageParamsDefault(lodestone_stage_params* p) {
       p->grid.dims[a] = 21;
     }
     p->padding = 0;
-    p->tolerance = 1e-6;
-    p->max_newton_iterations = 40;
+    const FieldSolveSettings solve;  // the library's one set of defaults
+    p->tolerance = solve.tolerance;
+    p->max_newton_iterations = solve.maxNewtonIterations;
     p->boundary = LODESTONE_BOUNDARY_OPEN;
     p->out_of_grid = LODESTONE_OUT_OF_GRID_THROW;
     p->warm_start = 1;
@@ -553,6 +563,14 @@ lodestone_status stageCreate(lodestone_context* c, const lodestone_stage_params*
     need(p, "params");
     need(out, "out");
     needSize(p->struct_size, sizeof(lodestone_stage_params), "lodestone_stage_params");
+    // Every field is checked whatever the law (a value the law does not use
+    // is still a host's mistake when it is out of its range).
+    require(std::isfinite(p->chi) && p->chi >= 0, "chi must be a finite susceptibility >= 0, got ", p->chi);
+    require(std::isfinite(p->moment) && p->moment > 0, "moment must be a finite moment > 0 A*m^2, got ", p->moment);
+    require(std::isfinite(p->temperature) && p->temperature > 0, "temperature must be finite and > 0 K, got ",
+            p->temperature);
+    require(std::isfinite(p->number_density) && p->number_density >= 0,
+            "number_density must be finite and >= 0 1/m^3 (0: the paper's), got ", p->number_density);
     const double n0 = p->number_density == 0 ? paperMaterial().numberDensity : p->number_density;
     MagneticMaterial material;
     switch (p->law) {
@@ -586,8 +604,13 @@ lodestone_status stageCreate(lodestone_context* c, const lodestone_stage_params*
     g.dims = {p->grid.dims[0], p->grid.dims[1], p->grid.dims[2]};
     g.validate("params.grid");
     const int pad = p->padding;
+    // The padded node counts, in 64 bits: dims near INT32_MAX must be named, not wrapped.
+    const std::int64_t padded[3] = {std::int64_t(g.dims.i) + 2 * pad, std::int64_t(g.dims.j) + 2 * pad,
+                                    std::int64_t(g.dims.k) + 2 * pad};
+    const double nodes[3] = {double(padded[0]), double(padded[1]), double(padded[2])};
+    requireFitsInMemory("params.grid (padded)", nodes, g.dx, 0);
     g.origin = g.origin - double(pad) * Vec3d{g.dx, g.dx, g.dx};
-    g.dims = {g.dims.i + 2 * pad, g.dims.j + 2 * pad, g.dims.k + 2 * pad};
+    g.dims = {int(padded[0]), int(padded[1]), int(padded[2])};
     MagneticStageSettings s;
     s.boundary = p->boundary == LODESTONE_BOUNDARY_OPEN ? BoundaryKind::Open : BoundaryKind::Shield;
     s.solve.tolerance = p->tolerance;
@@ -620,10 +643,6 @@ lodestone_status stageGrid(const lodestone_stage* s, lodestone_grid* out) {
 const FieldSource& sourcesOf(const lodestone_fields* f) {
   static const FieldSourceSet kNone;
   return f ? static_cast<const FieldSource&>(fieldsOf(f).set) : kNone;
-}
-
-void checkTime(double t) {
-  if (!std::isfinite(t)) throw AbiError(LODESTONE_ERROR_INVALID_ARGUMENT, concat("time must be finite, got ", t, " s"));
 }
 
 lodestone_status stageRunParticles(lodestone_stage* s, const lodestone_particles* p, const lodestone_fields* f,
@@ -975,6 +994,13 @@ lodestone_status networkConnect(lodestone_network* n, const char* from, const ch
                       i = needName(input, "input");
     checkNode(network, f);
     checkNode(network, t);
+    if (!network.declOf(f).output(o) || !network.declOf(t).input(i)) {
+      try {
+        network.connect(f, o, t, i);  // throws, naming the port and the closest declared one
+      } catch (const InvalidArgument& e) {
+        throw AbiError(LODESTONE_ERROR_NOT_FOUND, e.what());
+      }
+    }
     network.connect(f, o, t, i);
   });
 }

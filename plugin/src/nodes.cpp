@@ -137,6 +137,7 @@ NodeDecl materialNode() {
                                        "Micro-particles per filled cell of size cell_size; with cell_size, "
                                        "replaces number_density.")),
                    "magnetic.law", {"langevin", "linear"}));
+  q.back().replaces = "magnetic.number_density";
   q.push_back(when(positive(floatParam("magnetic.cell_size", "Cell size", 7.8e-3, "m", "Cell size of per_cell.")),
                    "magnetic.law", {"langevin", "linear"}));
   d.outputs = {{"material", PortType::Material, "The material."}};
@@ -207,6 +208,9 @@ NodeDecl particleSourceNode() {
     body.material = material ? *material : MaterialData{"default", neoHookeanSolid(1e5, 0.3, 1000.0)};
     body.shape = shapeFrom(p);
     body.emit = emitterSettingsFrom(p);
+    const double none[3] = {0, 0, 0};
+    requireFitsInMemory(body.name, none, 0,
+                        estimatedParticles(body.shape.volume(), body.emit.cellSize, body.emit.particlesPerCell));
     emitParticles(out.particles, body.shape, body.material.material, 0, body.emit);
     out.materials.push_back(body.material.material);
     out.bodies.push_back(std::move(body));
@@ -233,6 +237,7 @@ NodeDecl magnetNode() {
   q.push_back(range(floatParam("remanence", "Remanence", 1.2, "T",
                                "Remanent induction Br; when given, replaces magnetization (M = Br/mu0)."),
                     -3, 3));
+  q.back().replaces = "magnetization";
   q.push_back(when(required(positive(floatParam("radius", "Radius", 0.02, "m", "Sphere or cylinder radius."))), "shape",
                    {"sphere", "cylinder"}));
   q.push_back(when(required(positive(vec3Param("half_size", "Half size", {0.02, 0.02, 0.02}, "m", "Box half-sizes."))),
@@ -372,11 +377,13 @@ NodeDecl transferNode() {
 void addSolveParams(std::vector<ParamDecl>& q, const std::string& prefix) {
   q.push_back(choiceParam(prefix + "boundary", "Field boundary", {"open", "shield"}, "open",
                           "open: far-field potential on the outer nodes; shield: the paper's Neumann wall."));
-  q.push_back(range(floatParam(prefix + "tolerance", "Tolerance", 1e-6, "", "Relative Newton residual to reach."),
+  q.push_back(range(floatParam(prefix + "tolerance", "Tolerance", FieldSolveSettings().tolerance, "",
+                               "Relative Newton residual to reach."),
                     1e-14, 1e-1));
   q.push_back(choiceParam(prefix + "preconditioner", "Preconditioner", {"multigrid", "jacobi"}, "multigrid",
                           "Preconditioner of the inner CG."));
-  q.push_back(intParam(prefix + "max_newton_iterations", "Newton iterations", 40, 1, 1000, "Newton iteration cap."));
+  q.push_back(intParam(prefix + "max_newton_iterations", "Newton iterations", FieldSolveSettings().maxNewtonIterations, 1,
+                       1000, "Newton iteration cap."));
 }
 
 NodeDecl fieldSolveNode() {
@@ -462,9 +469,9 @@ NodeDecl mpmSolverNode() {
   d.outputs = {{"simulation", PortType::Simulation, "The solver after the frames, with per-frame statistics."}};
   d.cook = [](const CookContext& c) {
     const ParamSet& p = c.params();
-    MpmSettings s = mpmSettingsFrom(p);
-    auto solver = std::make_shared<MpmSolver>(s);
     const ParticlesData all = mergeParticles(c.inputs("particles"));
+    MpmSettings s = mpmSettingsFrom(p, double(all.particles.size()));
+    auto solver = std::make_shared<MpmSolver>(s);
     for (const MpmMaterial& m : all.materials) solver->addMaterial(m);
     solver->particles() = all.particles;
     const SourcesData sources = mergeSources(c.inputs("sources"));

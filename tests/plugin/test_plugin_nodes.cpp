@@ -299,6 +299,12 @@ TEST(PluginNodes, ANetworkBuiltThroughTheCAbiGivesConservativeForces) {
   EXPECT_NE(jsonError("ferro", R"({"density": 1200, "viscosity": "thick"})").find("viscosity: expected a number"),
             std::string::npos);
   EXPECT_EQ(a->network_add_node(n, "nonsense", "x"), LODESTONE_ERROR_NOT_FOUND);
+  // Ports that do not exist are NOT_FOUND, as the header says, with a suggestion.
+  EXPECT_EQ(a->network_connect(n, "ball", "particle", "n", "particles"), LODESTONE_ERROR_NOT_FOUND);
+  EXPECT_NE(std::string(a->context_last_error(ctx)).find("did you mean 'particles'?"), std::string::npos)
+      << a->context_last_error(ctx);
+  EXPECT_EQ(a->network_connect(n, "ball", "particles", "n", "particle"), LODESTONE_ERROR_NOT_FOUND);
+  EXPECT_EQ(a->network_connect(n, "ferro", "material", "force", "particles"), LODESTONE_ERROR_INVALID_ARGUMENT);
 
   ok(a->network_cook(n, "force"));
   const nlohmann::json field = nlohmann::json::parse(outputJson(a, n, "solve", "field"));
@@ -332,6 +338,34 @@ TEST(PluginNodes, ANetworkBuiltThroughTheCAbiGivesConservativeForces) {
   EXPECT_LT(stronger["total_force_N"][2].get<double>(), 1.5 * fz);
   ok(a->network_destroy(n));
   ok(a->context_destroy(ctx));
+}
+
+// Of two alternative parameters the one set last is used: magnetization set
+// after remanence is not ignored, and the other way round.
+TEST(PluginNodes, TheAlternativeSetLastIsUsed) {
+  const auto magnetizationOf = [](const std::vector<std::pair<std::string, double>>& sets) {
+    Network net;
+    net.addNode("magnet", "m");
+    for (const auto& [name, value] : sets) net.setParam("m", name, value);
+    const auto& sources = std::get<std::shared_ptr<const SourcesData>>(net.cook("m").at("sources"));
+    return sources->magnets.at(0).magnet->magnetization({0, 0, -0.05}, 0).z;  // the centre
+  };
+  const double fromBr = 1.0 / (4e-7 * M_PI);
+  EXPECT_NEAR(magnetizationOf({{"remanence", 1.0}}), fromBr, 1e-6 * fromBr);
+  EXPECT_DOUBLE_EQ(magnetizationOf({{"remanence", 1.0}, {"magnetization", 5e5}}), 5e5);
+  EXPECT_NEAR(magnetizationOf({{"magnetization", 5e5}, {"remanence", 1.0}}), fromBr, 1e-6 * fromBr);
+  // Number density after per_cell, for a material.
+  const auto n0Of = [](const std::vector<std::pair<std::string, double>>& sets) {
+    Network net;
+    net.addNode("material", "m");
+    net.setParam("m", "magnetic.law", std::string("linear"));
+    for (const auto& [name, value] : sets) net.setParam("m", name, value);
+    const auto& mat = std::get<std::shared_ptr<const MaterialData>>(net.cook("m").at("material"));
+    return mat->material.magnetic.numberDensity;
+  };
+  EXPECT_DOUBLE_EQ(n0Of({{"magnetic.per_cell", 1e3}, {"magnetic.cell_size", 0.1}}), 1e6);
+  EXPECT_DOUBLE_EQ(n0Of({{"magnetic.per_cell", 1e3}, {"magnetic.cell_size", 0.1}, {"magnetic.number_density", 5e5}}),
+                   5e5);
 }
 
 }  // namespace

@@ -77,7 +77,7 @@ typedef int32_t lodestone_status;
 #define LODESTONE_ERROR_NULL_HANDLE 2      /* a required handle or pointer was NULL */
 #define LODESTONE_ERROR_VERSION 3          /* requested API version not provided */
 #define LODESTONE_ERROR_NOT_BUILT 4        /* the feature needs a component not built (e.g. OpenVDB) */
-#define LODESTONE_ERROR_OUT_OF_MEMORY 5    /* std::bad_alloc inside the call */
+#define LODESTONE_ERROR_OUT_OF_MEMORY 5    /* estimated too large for memory (sized message), or std::bad_alloc */
 #define LODESTONE_ERROR_NOT_READY 6        /* e.g. reading fields of a stage that has not run */
 #define LODESTONE_ERROR_BUFFER_TOO_SMALL 7 /* the caller's buffer cannot hold the result */
 #define LODESTONE_ERROR_NOT_FOUND 8        /* no node type, node, parameter or port of that name */
@@ -145,11 +145,11 @@ typedef struct lodestone_stage_params {
   int32_t law;                   /* LODESTONE_LAW_* */
   double moment;                 /* A*m^2, Langevin micro-particle moment */
   double temperature;            /* K, Langevin */
-  double chi;                    /* linear susceptibility of the bulk material, >= 0 */
+  double chi;                    /* linear susceptibility of the bulk material, >= 0 (checked for every law) */
   double number_density;         /* n0, micro-particles per m^3 of bulk material (0: the paper's) */
   lodestone_grid grid;           /* the stage's grid before padding */
   int32_t padding;               /* cells of free space added on every side (0..64) */
-  double tolerance;              /* relative Newton residual, in [1e-14, 0.1] */
+  double tolerance;              /* relative Newton residual, in [1e-14, 0.1] (default 1e-8) */
   int32_t max_newton_iterations; /* 1..1000 */
   int32_t boundary;              /* LODESTONE_BOUNDARY_* */
   int32_t out_of_grid;           /* LODESTONE_OUT_OF_GRID_* */
