@@ -24,6 +24,7 @@
 #include "lodestone/plugin/errors.h"
 #include "lodestone/plugin/lodestone.h"
 #include "lodestone/plugin/network.h"
+#include "lodestone/plugin/network_json.h"
 #include "lodestone/plugin/node_builders.h"
 #include "lodestone/plugin/node_registry.h"
 #include "lodestone/plugin/json_reader.h"
@@ -1091,6 +1092,55 @@ lodestone_status networkReadPositions(lodestone_network* n, const char* node, co
   });
 }
 
+// ---- since minor 1 --------------------------------------------------------------------
+lodestone_status stageNumberDensity(const lodestone_stage* s, double* n0) {
+  return firewall(ctxOf(s), "stage_number_density", [&] {
+    const Stage& st = stageOf(s);
+    const MagneticMaterial& m = st.stage->material();
+    *need(n0, "n0") = m.law.kind == LawKind::None ? 0.0 : m.numberDensity;
+  });
+}
+
+lodestone_status networkSetParticles(lodestone_network* n, const char* node, const lodestone_particles* p) {
+  return firewall(ctxOf(n), "network_set_particles", [&] {
+    Network& network = net(n);
+    const std::string name = needName(node, "node");
+    checkNode(network, name);
+    const Particles particles = readParticles(p, true);
+    std::vector<double> x(3 * particles.x.size());
+    for (std::size_t k = 0; k < particles.x.size(); ++k)
+      for (int a = 0; a < 3; ++a) x[3 * k + std::size_t(a)] = particles.x[k][a];
+    setParam(n, node, "positions", x);
+    setParam(n, node, "counts", particles.n);
+  });
+}
+
+lodestone_status networkReadForces(lodestone_network* n, const char* node, const char* output,
+                                   lodestone_vec3_out* out, size_t* count) {
+  return firewall(ctxOf(n), "network_read_forces", [&] {
+    const NodeValue& v = cookedOutput(n, node, output);
+    need(count, "count");
+    const auto* f = std::get_if<std::shared_ptr<const ForcesData>>(&v);
+    if (!f)
+      throw AbiError(LODESTONE_ERROR_INVALID_ARGUMENT,
+                     concat("output '", output, "' carries ", toString(typeOf(v)), ", not forces"));
+    *count = (*f)->particleForces.size();
+    writeVectors((*f)->particleForces, out);
+  });
+}
+
+lodestone_status networkCreateFromJson(lodestone_context* c, const char* json, lodestone_network** out) {
+  return firewall(ctxOf(c), "network_create_from_json", [&] {
+    if (out) *out = nullptr;
+    Context& context = contextOf(c);
+    const std::string text = needName(json, "json");
+    need(out, "out");
+    auto network = std::make_unique<NetworkObject>();
+    buildNetworkFromJson(network->network, parseJsonText(text, "network"), "network");
+    *out = adopt<lodestone_network>(context, HandleKind::Network, std::move(network));
+  });
+}
+
 const lodestone_api kApi = {
     sizeof(lodestone_api),
     LODESTONE_API_VERSION_MAJOR,
@@ -1142,6 +1192,10 @@ const lodestone_api kApi = {
     networkCook,
     networkOutputJson,
     networkReadPositions,
+    stageNumberDensity,
+    networkSetParticles,
+    networkReadForces,
+    networkCreateFromJson,
 };
 
 }  // namespace

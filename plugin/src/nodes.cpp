@@ -2,6 +2,7 @@
 // and inputs and calls core (or vdb_io) functions that know nothing of nodes.
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "lodestone/core/base/constants.h"
 #include "lodestone/core/sources/cuboid_magnet.h"
@@ -213,6 +214,54 @@ NodeDecl particleSourceNode() {
                         estimatedParticles(body.shape.volume(), body.emit.cellSize, body.emit.particlesPerCell));
     emitParticles(out.particles, body.shape, body.material.material, 0, body.emit);
     out.materials.push_back(body.material.material);
+    out.bodies.push_back(std::move(body));
+    return CookOutputs{{"particles", value(std::move(out))}};
+  };
+  return d;
+}
+
+// ---- host particles ---------------------------------------------------------
+NodeDecl hostParticlesNode() {
+  NodeDecl d;
+  d.type = "host_particles";
+  d.label = "Host Particles";
+  d.category = "particles";
+  d.help =
+      "A host's own material points: positions and micro-particle counts n_p (C ABI: network_set_particles), "
+      "each with the volume n_p / n0 of its material (or the given volumes) and the mass rho V_p.";
+  auto& q = d.params;
+  q.push_back(floatListParam("positions", "Positions", {}, "m", 0, std::numeric_limits<std::size_t>::max(),
+                             "x, y, z of each point, one after the other (3 numbers a point)."));
+  q.push_back(nonNegative(floatListParam("counts", "Counts", {}, "micro-particles", 0,
+                                         std::numeric_limits<std::size_t>::max(),
+                                         "Micro-particles n_p of each point.")));
+  q.push_back(nonNegative(floatListParam("volumes", "Volumes", {}, "m^3", 0, std::numeric_limits<std::size_t>::max(),
+                                         "Volume V_p of each point; empty: n_p / n0 of a magnetic material.")));
+  q.push_back(stringParam("name", "Name", "host", "Name of the body."));
+  d.inputs = {{"material", PortType::Material, "The points' material (default: a non-magnetic solid).", true, false}};
+  d.outputs = {{"particles", PortType::Particles, "The host's points."}};
+  d.cook = [](const CookContext& c) {
+    const ParamSet& p = c.params();
+    const std::vector<double>& x = p.getFloats("positions");
+    const std::vector<double>& n = p.getFloats("counts");
+    const std::vector<double>& v = p.getFloats("volumes");
+    require(x.size() == 3 * n.size(), "positions holds ", x.size(), " numbers, 3 for each of the ", n.size(),
+            " counts are needed");
+    require(v.empty() || v.size() == n.size(), "volumes holds ", v.size(), " numbers, one for each of the ",
+            n.size(), " counts is needed");
+    const auto material = c.input<MaterialData>("material");
+    ParticlesData out;
+    ParticlesData::Body body;
+    body.name = p.getString("name");
+    body.material = material ? *material : MaterialData{"default", neoHookeanSolid(1e5, 0.3, 1000.0)};
+    const MpmMaterial& m = body.material.material;
+    const double n0 = m.isMagnetic() ? m.magnetic.numberDensity : 0.0;
+    require(!v.empty() || n0 > 0 || n.empty(), "volumes are needed for a non-magnetic material (no n0 to divide by)");
+    for (std::size_t k = 0; k < n.size(); ++k) {
+      const double volume = v.empty() ? n[k] / n0 : v[k];
+      out.particles.add({x[3 * k], x[3 * k + 1], x[3 * k + 2]}, {}, m.density * volume, volume, n[k], 0);
+    }
+    out.materials.push_back(m);
     out.bodies.push_back(std::move(body));
     return CookOutputs{{"particles", value(std::move(out))}};
   };
@@ -528,8 +577,9 @@ NodeDecl vdbExportNode() {
 }  // namespace
 
 std::vector<NodeDecl> buildRegistry() {
-  return {particleSourceNode(), materialNode(),      magnetNode(),    appliedFieldNode(), transferNode(),
-          fieldSolveNode(),     magneticForceNode(), mpmSolverNode(), colliderNode(),     vdbExportNode()};
+  return {particleSourceNode(), hostParticlesNode(), materialNode(),  magnetNode(),
+          appliedFieldNode(),   transferNode(),      fieldSolveNode(), magneticForceNode(),
+          mpmSolverNode(),      colliderNode(),      vdbExportNode()};
 }
 
 }  // namespace lodestone::plugin

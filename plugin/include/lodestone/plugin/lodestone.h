@@ -68,7 +68,7 @@ extern "C" {
 #endif
 
 #define LODESTONE_API_VERSION_MAJOR 1
-#define LODESTONE_API_VERSION_MINOR 0
+#define LODESTONE_API_VERSION_MINOR 1
 
 /* ---- status codes ------------------------------------------------------ */
 typedef int32_t lodestone_status;
@@ -320,6 +320,26 @@ typedef struct lodestone_api {
   /* Positions (m) of a cooked "particles" or "simulation" output; *count gets the number. */
   lodestone_status (*network_read_positions)(lodestone_network* network, const char* node, const char* output,
                                              lodestone_vec3_out* out, size_t* count);
+
+  /* ---- since minor 1 ---- */
+  /* The number density n0 (micro-particles per m^3 of bulk material) of the
+     stage's material, so that a host gives its particles n_p = n0 V_p
+     (0 for LODESTONE_LAW_NONE). */
+  lodestone_status (*stage_number_density)(const lodestone_stage* stage, double* n0);
+  /* The host's own particles (positions, counts) as the parameters
+     `positions` and `counts` of a "host_particles" node, copied; their
+     volumes are n_p / n0 of the node's material unless its `volumes` are set. */
+  lodestone_status (*network_set_particles)(lodestone_network* network, const char* node,
+                                            const lodestone_particles* particles);
+  /* Per-particle forces (N) of a cooked "forces" output (magnetic_force), in
+     the order of its particles; *count gets the number. */
+  lodestone_status (*network_read_forces)(lodestone_network* network, const char* node, const char* output,
+                                          lodestone_vec3_out* out, size_t* count);
+  /* A whole network from JSON text {"nodes": [{"name", "type", "params"}...],
+     "connections": [{"from", "output", "to", "input"}...]} (docs/plugin.md),
+     read as scene files are; on any error no network is made (*out = NULL). */
+  lodestone_status (*network_create_from_json)(lodestone_context* context, const char* json,
+                                               lodestone_network** out);
 } lodestone_api;
 
 /* The one exported symbol. On success *table points to a static table (never
