@@ -11,25 +11,25 @@
 
 #include <nlohmann/json.hpp>
 
-#include "lodestone/core/sources/cuboid_magnet.h"
-#include "lodestone/core/sources/cylinder_magnet.h"
+#include "handle_table.h"
 #include "lodestone/core/base/error.h"
-#include "lodestone/core/sources/field_source_set.h"
-#include "lodestone/core/stage/magnetic_stage.h"
 #include "lodestone/core/field/material.h"
 #include "lodestone/core/mpm/solver.h"
+#include "lodestone/core/sources/cuboid_magnet.h"
+#include "lodestone/core/sources/cylinder_magnet.h"
+#include "lodestone/core/sources/field_source_set.h"
 #include "lodestone/core/sources/point_dipole.h"
 #include "lodestone/core/sources/sphere_magnet.h"
 #include "lodestone/core/sources/uniform_field.h"
+#include "lodestone/core/stage/magnetic_stage.h"
 #include "lodestone/plugin/errors.h"
+#include "lodestone/plugin/json_reader.h"
 #include "lodestone/plugin/lodestone.h"
 #include "lodestone/plugin/network.h"
 #include "lodestone/plugin/network_json.h"
 #include "lodestone/plugin/node_builders.h"
 #include "lodestone/plugin/node_registry.h"
-#include "lodestone/plugin/json_reader.h"
 #include "lodestone/plugin/param_json.h"
-#include "handle_table.h"
 
 using namespace lodestone;
 using namespace lodestone::plugin;
@@ -74,8 +74,7 @@ class AbiError : public std::exception {
   std::string message_;
 };
 
-lodestone_status fail(Context* context, lodestone_status code, const char* function,
-                      const char* message) noexcept {
+lodestone_status fail(Context* context, lodestone_status code, const char* function, const char* message) noexcept {
   try {
     tlsError = std::string(function) + ": " + message;
     if (context) {
@@ -1115,8 +1114,8 @@ lodestone_status networkSetParticles(lodestone_network* n, const char* node, con
   });
 }
 
-lodestone_status networkReadForces(lodestone_network* n, const char* node, const char* output,
-                                   lodestone_vec3_out* out, size_t* count) {
+lodestone_status networkReadForces(lodestone_network* n, const char* node, const char* output, lodestone_vec3_out* out,
+                                   size_t* count) {
   return firewall(ctxOf(n), "network_read_forces", [&] {
     const NodeValue& v = cookedOutput(n, node, output);
     need(count, "count");

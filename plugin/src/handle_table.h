@@ -10,8 +10,8 @@
 // the library never handed out. Lookups are safe on any
 // value: nothing is dereferenced until the id is found live.
 #include <cstdint>
-#include <shared_mutex>
 #include <deque>
+#include <shared_mutex>
 #include <vector>
 
 namespace lodestone::plugin {

@@ -22,7 +22,8 @@ void buildNetworkFromJson(Network& network, const nlohmann::json& doc, const std
     network.addNode(type, name);
     if (node.has("params")) {
       const nlohmann::json& params = node.raw("params");
-      setParamsFromJson(network, name, params, concat(where, ": ", node.pathOf("params"), ": node '", name, "' (", type, ")"));
+      setParamsFromJson(network, name, params,
+                        concat(where, ": ", node.pathOf("params"), ": node '", name, "' (", type, ")"));
     }
     node.finish();
   }

@@ -223,8 +223,9 @@ void requireFitsInMemory(const std::string& what, const double nodes[3], double 
   if (axisTooLong)
     throw TooLarge(concat(what, ": ", subject, " is too large (more than ", kMaxNodesPerAxis,
                           " nodes on an axis; needs about ", need / kGiB, " GiB)"));
-  throw TooLarge(concat(what, ": ", subject, " is too large (needs about ", need / kGiB, " GiB at ", kBytesPerNode,
-                        " B a node and ", kBytesPerParticle, " B a particle; limit ", limitText, ")"));
+  throw TooLarge(concat(what, ": ", subject, nodeCount > 0 ? " is too large" : " are too many", " (needs about ",
+                        need / kGiB, " GiB at ", kBytesPerNode, " B a node and ", kBytesPerParticle,
+                        " B a particle; limit ", limitText, ")"));
 }
 
 double estimatedParticles(double volume, double cellSize, int particlesPerCell) {

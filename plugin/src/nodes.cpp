@@ -5,11 +5,11 @@
 #include <limits>
 
 #include "lodestone/core/base/constants.h"
-#include "lodestone/core/sources/cuboid_magnet.h"
-#include "lodestone/core/sources/cylinder_magnet.h"
 #include "lodestone/core/base/error.h"
 #include "lodestone/core/field/material.h"
 #include "lodestone/core/mpm/solver.h"
+#include "lodestone/core/sources/cuboid_magnet.h"
+#include "lodestone/core/sources/cylinder_magnet.h"
 #include "lodestone/core/sources/point_dipole.h"
 #include "lodestone/core/sources/sphere_magnet.h"
 #include "lodestone/core/sources/uniform_field.h"
@@ -232,9 +232,9 @@ NodeDecl hostParticlesNode() {
   auto& q = d.params;
   q.push_back(floatListParam("positions", "Positions", {}, "m", 0, std::numeric_limits<std::size_t>::max(),
                              "x, y, z of each point, one after the other (3 numbers a point)."));
-  q.push_back(nonNegative(floatListParam("counts", "Counts", {}, "micro-particles", 0,
-                                         std::numeric_limits<std::size_t>::max(),
-                                         "Micro-particles n_p of each point.")));
+  q.push_back(
+      nonNegative(floatListParam("counts", "Counts", {}, "micro-particles", 0, std::numeric_limits<std::size_t>::max(),
+                                 "Micro-particles n_p of each point.")));
   q.push_back(nonNegative(floatListParam("volumes", "Volumes", {}, "m^3", 0, std::numeric_limits<std::size_t>::max(),
                                          "Volume V_p of each point; empty: n_p / n0 of a magnetic material.")));
   q.push_back(stringParam("name", "Name", "host", "Name of the body."));
@@ -247,8 +247,8 @@ NodeDecl hostParticlesNode() {
     const std::vector<double>& v = p.getFloats("volumes");
     require(x.size() == 3 * n.size(), "positions holds ", x.size(), " numbers, 3 for each of the ", n.size(),
             " counts are needed");
-    require(v.empty() || v.size() == n.size(), "volumes holds ", v.size(), " numbers, one for each of the ",
-            n.size(), " counts is needed");
+    require(v.empty() || v.size() == n.size(), "volumes holds ", v.size(), " numbers, one for each of the ", n.size(),
+            " counts is needed");
     const auto material = c.input<MaterialData>("material");
     ParticlesData out;
     ParticlesData::Body body;
@@ -431,8 +431,8 @@ void addSolveParams(std::vector<ParamDecl>& q, const std::string& prefix) {
                     1e-14, 1e-1));
   q.push_back(choiceParam(prefix + "preconditioner", "Preconditioner", {"multigrid", "jacobi"}, "multigrid",
                           "Preconditioner of the inner CG."));
-  q.push_back(intParam(prefix + "max_newton_iterations", "Newton iterations", FieldSolveSettings().maxNewtonIterations, 1,
-                       1000, "Newton iteration cap."));
+  q.push_back(intParam(prefix + "max_newton_iterations", "Newton iterations", FieldSolveSettings().maxNewtonIterations,
+                       1, 1000, "Newton iteration cap."));
 }
 
 NodeDecl fieldSolveNode() {
@@ -577,7 +577,7 @@ NodeDecl vdbExportNode() {
 }  // namespace
 
 std::vector<NodeDecl> buildRegistry() {
-  return {particleSourceNode(), hostParticlesNode(), materialNode(),  magnetNode(),
+  return {particleSourceNode(), hostParticlesNode(), materialNode(),   magnetNode(),
           appliedFieldNode(),   transferNode(),      fieldSolveNode(), magneticForceNode(),
           mpmSolverNode(),      colliderNode(),      vdbExportNode()};
 }

@@ -354,6 +354,14 @@ TEST(PluginAbi, BadSizesStridesAndValuesGiveAStatus) {
   EXPECT_NE(msg.find("GiB"), std::string::npos) << msg;
   msg = tooLarge(2147483647, 10, 4);  // 2.1e11 nodes pass the grid's validation; padded, the count is past INT32_MAX
   EXPECT_NE(msg.find("a grid of 2147483655 x 18 x 18 nodes"), std::string::npos) << msg;
+  // Particles the estimate refuses (2^39 points, 200 TiB), before their arrays are read.
+  {
+    lodestone_particles many = ball.view();
+    many.count = std::size_t(1) << 39;
+    EXPECT_EQ(a->stage_run_particles(f.stage, &many, f.fields, 0, nullptr), LODESTONE_ERROR_OUT_OF_MEMORY);
+    EXPECT_NE(std::string(a->context_last_error(f.ctx)).find("549755813888 particles are too many"), std::string::npos)
+        << a->context_last_error(f.ctx);
+  }
   // A time that is not a number.
   {
     const double x[3] = {0, 0, 0};
