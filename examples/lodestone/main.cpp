@@ -251,10 +251,6 @@ std::optional<int> parseArgs(int argc, char** argv, Args& a) {
 }
 /// Substeps per frame the time step takes: time.dt's, or (CFL) the first
 /// step's, which changes as the material moves.
-double substepsPerFrame(const Scene& scene, const MpmSolver& solver) {
-  return std::ceil(scene.frameDuration() / solver.suggestedDt() - 1e-9);
-}
-
 std::string substepText(const Scene& scene, const MpmSolver& solver) {
   char text[256];
   const double n = substepsPerFrame(scene, solver);
@@ -287,7 +283,11 @@ void printSceneSummary(const Scene& scene, const MpmSolver& solver) {
               scene.settings.fixedDt > 0 ? concat("dt = ", scene.settings.fixedDt, " s").c_str()
                                          : concat("CFL ", scene.settings.cfl, ", dt <= ", scene.settings.dtMax, " s").c_str(),
               scene.settings.magneticSolveInterval == 0
-                  ? "once per frame"
+                  ? (scene.settings.magneticSolveDistance > 0
+                         ? concat("once per frame and whenever material or a magnet moved ",
+                                  scene.settings.magneticSolveDistance, " cells")
+                         : std::string("once per frame"))
+                        .c_str()
                   : concat("every ", scene.settings.magneticSolveInterval, " substeps").c_str());  std::printf("  %s\n", substepText(scene, solver).c_str());
 }
 

@@ -1,5 +1,6 @@
 #include "plan_report.h"
 
+#include <algorithm>
 #include <cmath>
 
 #include "lodestone/core/base/error.h"
@@ -22,6 +23,30 @@ std::vector<StageDecision> mechanicsDecisions(const plugin::Scene& scene, const 
   return d;
 }
 
+double substepsPerFrame(const plugin::Scene& scene, const MpmSolver& solver) {
+  return std::ceil(scene.frameDuration() / solver.suggestedDt() - 1e-9);
+}
+
+namespace {
+// MPM cost per particle and substep (P2G, grid update, G2P), s: measured on
+// the spike scene (13,392 particles, 2.5 ms a substep on 2 cores).
+constexpr double kSecondsPerParticleSubstep = 1.9e-7;
+
+// Smallest half-width (m) of the bounding box of the magnetic material; 0 when there is none.
+double magneticHalfWidth(const MpmSolver& solver) {
+  const MpmParticles& p = solver.particles();
+  Vec3d lo{1e300, 1e300, 1e300}, hi{-1e300, -1e300, -1e300};
+  bool any = false;
+  for (std::size_t q = 0; q < p.size(); ++q) {
+    if (!solver.materials()[p.material[q]].isMagnetic()) continue;
+    any = true;
+    for (int a = 0; a < 3; ++a) lo[a] = std::min(lo[a], p.x[q][a]), hi[a] = std::max(hi[a], p.x[q][a]);
+  }
+  if (!any) return 0;
+  return 0.5 * std::min({hi.x - lo.x, hi.y - lo.y, hi.z - lo.z});
+}
+}  // namespace
+
 void printPlan(const plugin::Scene& scene, const MpmSolver& solver, std::FILE* out) {
   const PlannerSettings& ps = scene.settings.planner;
   std::fprintf(out, "plan (%s):\n",
@@ -30,35 +55,98 @@ void printPlan(const plugin::Scene& scene, const MpmSolver& solver, std::FILE* o
                             "\"accuracy\" in the scene)");
   for (const StageDecision& d : mechanicsDecisions(scene, solver))
     std::fprintf(out, "  %s: %s - %s\n", d.stage.c_str(), d.on ? "on" : "off", d.reason.c_str());
-  const MagneticPlan plan = solver.planMagneticNow();
-  // Solves per frame with the scene's interval and substep.
-  const double dt = scene.settings.fixedDt > 0 ? scene.settings.fixedDt : scene.settings.dtMax;
-  const double substeps = std::ceil(scene.frameDuration() / dt - 1e-9);
+
+  // The magnetic plan over the whole time line: the sources (magnets'
+  // motion, time profiles) sampled at the start of up to 16 frames, the
+  // material where it starts; runs of frames with the same decisions.
+  const int samples = std::min(scene.frames, 16);
+  struct Span {
+    int first, last;
+    MagneticPlan plan;
+  };
+  std::vector<Span> spans;
+  for (int k = 0; k < samples; ++k) {
+    const int frame = samples == 1 ? 1 : 1 + int(std::lround(double(k) * (scene.frames - 1) / (samples - 1)));
+    MagneticPlan plan = solver.planMagneticAt(solver.time() + (frame - 1) * scene.frameDuration());
+    const bool same = !spans.empty() && (ps.enabled ? planSignature(plan) == planSignature(spans.back().plan)
+                                                    : plan.magnetic == spans.back().plan.magnetic);
+    if (same)
+      spans.back().last = frame;
+    else
+      spans.push_back({frame, frame, std::move(plan)});
+  }
+  for (std::size_t s = 0; s + 1 < spans.size(); ++s) spans[s].last = spans[s + 1].first - 1;
+  spans.back().last = scene.frames;
+
+  const double substeps = substepsPerFrame(scene, solver);
   const int interval = scene.settings.magneticSolveInterval;
-  const double solves = interval == 0 ? 1.0 : std::ceil(substeps / interval);
-  if (!ps.enabled) {
-    if (!plan.magnetic) {
-      std::fprintf(out, "  magnetic stages: off - %s\n", plan.decisions.front().reason.c_str());
-      return;
+  const bool automatic = interval == 0 && scene.settings.magneticSolveDistance > 0;
+  const double fewest = interval == 0 ? 1.0 : std::ceil(substeps / interval);
+  const double most = automatic ? substeps : fewest;
+  const GridSpec& mg = scene.settings.magneticGrid ? *scene.settings.magneticGrid : scene.settings.grid;
+  double solveSeconds = PlannerInputs{}.secondsPerNodeSolve * double(mg.nodeCount());
+  bool magnetic = false;
+  for (const Span& span : spans) {
+    const MagneticPlan& plan = span.plan;
+    magnetic = magnetic || plan.magnetic;
+    const std::string frames = spans.size() == 1 ? std::string("all frames")
+                                                 : concat("frames ", span.first, "-", span.last);
+    if (!ps.enabled) {
+      if (!plan.magnetic)
+        std::fprintf(out, "  magnetic stages (%s): off - %s\n", frames.c_str(), plan.decisions.front().reason.c_str());
+      else
+        std::fprintf(out, "  magnetic stages (%s): on (full grid, the material's law) - about %.3g s per solve\n",
+                     frames.c_str(), solveSeconds);
+      continue;
     }
-    const GridSpec& mg = scene.settings.magneticGrid ? *scene.settings.magneticGrid : scene.settings.grid;
-    const double seconds = PlannerInputs{}.secondsPerNodeSolve * double(mg.nodeCount());
-    std::fprintf(out, "  magnetic stages: on (full grid, the material's law, %s) - about %.3g s per solve, %.3g s "
-                      "per frame (up to %.0f solves)\n",
-                 interval == 0 ? "one solve per frame" : concat("a solve every ", interval, " substeps").c_str(),
-                 seconds, seconds * solves, solves);
-    return;
+    std::fprintf(out, "  %s:\n", frames.c_str());
+    std::fputs(plan.summary().c_str(), out);
+    if (plan.magnetic) {
+      for (const StageDecision& d : plan.decisions)
+        if (d.stage == "field solve") solveSeconds = d.estimatedSeconds;
+      std::fprintf(out, "  predicted total deviation %.3g%% (budget %.3g%%)\n", 100 * plan.predictedError,
+                   100 * ps.budget);
+    }
   }
-  std::fputs(plan.summary().c_str(), out);
-  if (plan.magnetic) {
-    double seconds = 0;
-    for (const StageDecision& d : plan.decisions)
-      if (d.stage == "field solve") seconds = d.estimatedSeconds;
-    std::fprintf(out, "  predicted total deviation %.3g%% (budget %.3g%%); field solves: up to %.0f per frame, about "
-                      "%.3g s each%s\n",
-                 100 * plan.predictedError, 100 * ps.budget, solves, seconds,
-                 plan.reuseDistance > 0 ? " (fewer while nothing moves)" : "");
+  if (spans.size() > 1)
+    std::fprintf(out, "  (the decisions change over the time line: each solve plans again for its own time)\n");
+
+  // Run time: the MPM substeps plus the field solves.
+  const double mpmSeconds = kSecondsPerParticleSubstep * double(solver.particles().size()) * substeps;
+  std::fprintf(out, "  %.4g substeps per frame (%s = %.3g s)", substeps,
+               scene.settings.fixedDt > 0 ? "time.dt" : "first CFL step", solver.suggestedDt());
+  if (magnetic) {
+    std::fprintf(out, "; field solves per frame: %s, about %.3g s each",
+                 automatic ? concat(fewest, " to ", most, " (automatic: as often as material and magnets move)").c_str()
+                 : interval == 0 ? "1"
+                                 : concat(fewest).c_str(),
+                 solveSeconds);
   }
+  std::fprintf(out, "\n");
+  const double low = scene.frames * (mpmSeconds + (magnetic ? fewest * solveSeconds : 0));
+  const double high = scene.frames * (mpmSeconds + (magnetic ? most * solveSeconds : 0));
+  if (high > low * 1.01)
+    std::fprintf(out, "  estimated run time: %.3g to %.3g s for %d frames (2 cores)\n", low, high, scene.frames);
+  else
+    std::fprintf(out, "  estimated run time: about %.3g s for %d frames (2 cores)\n", low, scene.frames);
+
+  // Warnings: resolution, and settings that will blow up or lag.
+  const double halfWidth = magneticHalfWidth(solver);
+  if (magnetic && halfWidth > 0 && halfWidth / mg.dx < 6)
+    std::fprintf(out,
+                 "  warning: the magnetic material is %.2g cells across its smallest half-width (dx = %.3g m); forces "
+                 "need at least 6 cells per body radius to be within 1%% (4 cells: 11%% off; "
+                 "docs/accuracy_vs_time.md)\n",
+                 halfWidth / mg.dx, mg.dx);
+  const double stable = solver.stabilityLimitDt();
+  if (scene.settings.fixedDt > 0 && std::isfinite(stable) && scene.settings.fixedDt > stable)
+    std::fprintf(out, "  warning: time.dt = %.3g s is above the stable step %.3g s: the run will shorten it\n",
+                 scene.settings.fixedDt, stable);
+  if (magnetic && interval == 0 && !automatic && substeps > 20)
+    std::fprintf(out,
+                 "  warning: the field is solved once per frame over %.4g substeps: material that moves fast "
+                 "between solves feels a stale force (set time.field_solve_distance, or time.field_solve_every)\n",
+                 substeps);
 }
 
 nlohmann::json decisionsJson(const std::vector<StageDecision>& decisions) {

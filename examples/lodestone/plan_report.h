@@ -17,8 +17,14 @@ namespace lodestone::examples {
 /// colliders, no fluid, no solid) and why; the MPM core is always on.
 std::vector<StageDecision> mechanicsDecisions(const plugin::Scene& scene, const MpmSolver& solver);
 
-/// Prints the plan of `solver` in its current state: every stage, on or
-/// off, the reason, the predicted error and the estimated cost per frame.
+/// Substeps per frame with the scene's first substep (fixed, or the CFL step now).
+double substepsPerFrame(const plugin::Scene& scene, const MpmSolver& solver);
+
+/// Prints the plan of `solver` over the scene's whole time line (the
+/// sources sampled at up to 16 frames, the material where it is now): every
+/// stage, on or off, the reason, the predicted error; substeps and field
+/// solves per frame, the estimated run time, and warnings (resolution, a
+/// time step above the stable one, a field solved once per many substeps).
 void printPlan(const plugin::Scene& scene, const MpmSolver& solver, std::FILE* out);
 
 /// The decisions as JSON (stage, on, choice, reason, predicted_error, estimated_s).

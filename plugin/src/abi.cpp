@@ -11,51 +11,54 @@
 
 #include <nlohmann/json.hpp>
 
-#include "lodestone/core/sources/cuboid_magnet.h"
-#include "lodestone/core/sources/cylinder_magnet.h"
+#include "handle_table.h"
 #include "lodestone/core/base/error.h"
-#include "lodestone/core/sources/field_source_set.h"
-#include "lodestone/core/stage/magnetic_stage.h"
 #include "lodestone/core/field/material.h"
 #include "lodestone/core/mpm/solver.h"
+#include "lodestone/core/sources/cuboid_magnet.h"
+#include "lodestone/core/sources/cylinder_magnet.h"
+#include "lodestone/core/sources/field_source_set.h"
 #include "lodestone/core/sources/point_dipole.h"
 #include "lodestone/core/sources/sphere_magnet.h"
 #include "lodestone/core/sources/uniform_field.h"
+#include "lodestone/core/stage/magnetic_stage.h"
 #include "lodestone/plugin/errors.h"
+#include "lodestone/plugin/json_reader.h"
 #include "lodestone/plugin/lodestone.h"
 #include "lodestone/plugin/network.h"
+#include "lodestone/plugin/network_json.h"
 #include "lodestone/plugin/node_builders.h"
 #include "lodestone/plugin/node_registry.h"
-#include "lodestone/plugin/json_reader.h"
 #include "lodestone/plugin/param_json.h"
 
 using namespace lodestone;
 using namespace lodestone::plugin;
 
-struct lodestone_context {
+namespace {
+
+// The objects behind the handles (handle_table.h: a handle is an id, not an address).
+struct Context {
   std::mutex mutex;
   std::map<std::thread::id, std::string> errors;  // last error per thread
   std::size_t objects = 0;                        // live stages, field sets, networks
 };
 
-struct lodestone_fields {
-  lodestone_context* context = nullptr;
+struct Fields {
+  Context* context = nullptr;
   FieldSourceSet set;
 };
 
-struct lodestone_stage {
-  lodestone_context* context = nullptr;
+struct Stage {
+  Context* context = nullptr;
   std::unique_ptr<MagneticForceStage> stage;
   MagneticStageReport report;
   bool ran = false;
 };
 
-struct lodestone_network {
-  lodestone_context* context = nullptr;
+struct NetworkObject {
+  Context* context = nullptr;
   Network network;
 };
-
-namespace {
 
 thread_local std::string tlsError;
 
@@ -71,8 +74,7 @@ class AbiError : public std::exception {
   std::string message_;
 };
 
-lodestone_status fail(lodestone_context* context, lodestone_status code, const char* function,
-                      const char* message) noexcept {
+lodestone_status fail(Context* context, lodestone_status code, const char* function, const char* message) noexcept {
   try {
     tlsError = std::string(function) + ": " + message;
     if (context) {
@@ -87,7 +89,7 @@ lodestone_status fail(lodestone_context* context, lodestone_status code, const c
 
 /// Runs `body`, mapping every exception to a status (the exception firewall).
 template <typename F>
-lodestone_status firewall(lodestone_context* context, const char* function, F&& body) noexcept {
+lodestone_status firewall(Context* context, const char* function, F&& body) noexcept {
   try {
     body();
     return LODESTONE_OK;
@@ -97,6 +99,8 @@ lodestone_status firewall(lodestone_context* context, const char* function, F&& 
     return fail(context, e.notBuilt() ? LODESTONE_ERROR_NOT_BUILT : LODESTONE_ERROR_COOK_FAILED, function, e.what());
   } catch (const NotBuilt& e) {
     return fail(context, LODESTONE_ERROR_NOT_BUILT, function, e.what());
+  } catch (const TooLarge& e) {
+    return fail(context, LODESTONE_ERROR_OUT_OF_MEMORY, function, e.what());
   } catch (const InvalidArgument& e) {
     return fail(context, LODESTONE_ERROR_INVALID_ARGUMENT, function, e.what());
   } catch (const std::bad_alloc&) {
@@ -121,9 +125,49 @@ void needSize(std::uint32_t given, std::size_t expected, const char* what) {
                           " (set it to sizeof(", what, "))"));
 }
 
-lodestone_context* ctxOf(const lodestone_stage* s) { return s ? s->context : nullptr; }
-lodestone_context* ctxOf(const lodestone_fields* f) { return f ? f->context : nullptr; }
-lodestone_context* ctxOf(const lodestone_network* n) { return n ? n->context : nullptr; }
+// Handles to objects: a NULL handle is LODESTONE_ERROR_NULL_HANDLE, one that
+// is not live (destroyed, of another kind, never handed out)
+// LODESTONE_ERROR_INVALID_HANDLE.
+template <typename Object, typename Handle>
+Object* liveOrNull(const Handle* h, HandleKind kind) noexcept {
+  return static_cast<Object*>(handleTable().find(reinterpret_cast<std::uintptr_t>(h), kind));
+}
+
+template <typename Object, typename Handle>
+Object& live(const Handle* h, HandleKind kind, const char* what) {
+  need(h, what);
+  Object* o = liveOrNull<Object>(h, kind);
+  if (!o)
+    throw AbiError(LODESTONE_ERROR_INVALID_HANDLE,
+                   concat(what, " ", static_cast<const void*>(h),
+                          " is not a live handle (already destroyed, or not one this library handed out)"));
+  return *o;
+}
+
+template <typename Handle>
+Handle* newHandle(HandleKind kind, void* object) {
+  return reinterpret_cast<Handle*>(handleTable().add(kind, object));
+}
+
+Context& contextOf(lodestone_context* h) { return live<Context>(h, HandleKind::Context, "context"); }
+Fields& fieldsOf(const lodestone_fields* h) { return live<Fields>(h, HandleKind::Fields, "fields"); }
+Stage& stageOf(const lodestone_stage* h) { return live<Stage>(h, HandleKind::Stage, "stage"); }
+NetworkObject& networkOf(const lodestone_network* h) { return live<NetworkObject>(h, HandleKind::Network, "network"); }
+
+// The context a failure is also recorded in (null when the handle is not live).
+Context* ctxOf(lodestone_context* h) { return liveOrNull<Context>(h, HandleKind::Context); }
+Context* ctxOf(const lodestone_stage* h) {
+  const Stage* s = liveOrNull<Stage>(h, HandleKind::Stage);
+  return s ? s->context : nullptr;
+}
+Context* ctxOf(const lodestone_fields* h) {
+  const Fields* f = liveOrNull<Fields>(h, HandleKind::Fields);
+  return f ? f->context : nullptr;
+}
+Context* ctxOf(const lodestone_network* h) {
+  const NetworkObject* n = liveOrNull<NetworkObject>(h, HandleKind::Network);
+  return n ? n->context : nullptr;
+}
 
 Vec3d vec(const double* v, const char* what) {
   need(v, what);
@@ -181,6 +225,8 @@ Particles readParticles(const lodestone_particles* p, bool needCounts) {
                    concat("particles: count_stride ", cs, " bytes is smaller than one count (", es, " bytes)"));
   if (p->count > (std::size_t(1) << 40))
     throw AbiError(LODESTONE_ERROR_INVALID_ARGUMENT, concat("particles: count ", p->count, " is implausibly large"));
+  const double noGrid[3] = {0, 0, 0};
+  requireFitsInMemory("particles", noGrid, 0, double(p->count));
   Particles out;
   if (p->count == 0) return out;
   need(p->positions, "particles->positions");
@@ -264,21 +310,42 @@ std::string reportJson(const MagneticStageReport& r) {
   return j.dump();
 }
 
-void addObject(lodestone_context* c) {
+void addObject(Context* c) {
   std::lock_guard<std::mutex> lock(c->mutex);
   ++c->objects;
 }
-void removeObject(lodestone_context* c) {
+void removeObject(Context* c) {
   std::lock_guard<std::mutex> lock(c->mutex);
   --c->objects;
 }
 
-const lodestone_stage& ranStage(const lodestone_stage* s) {
-  need(s, "stage");
-  if (!s->ran)
+/// Creates an object of `context` and its handle.
+template <typename Handle, typename Object>
+Handle* adopt(Context& context, HandleKind kind, std::unique_ptr<Object> object) {
+  object->context = &context;
+  Handle* h = newHandle<Handle>(kind, object.get());
+  addObject(&context);
+  object.release();
+  return h;
+}
+
+/// Ends a handle and deletes its object (NULL: nothing).
+template <typename Object, typename Handle>
+void destroy(const Handle* h, HandleKind kind, const char* what) {
+  if (!h) return;
+  live<Object>(h, kind, what);  // the status of a stale handle
+  auto* o = static_cast<Object*>(handleTable().remove(reinterpret_cast<std::uintptr_t>(h), kind));
+  if (!o) return;
+  removeObject(o->context);
+  delete o;
+}
+
+const Stage& ranStage(const lodestone_stage* h) {
+  const Stage& s = stageOf(h);
+  if (!s.ran)
     throw AbiError(LODESTONE_ERROR_NOT_READY,
                    "the stage has not run yet (call stage_run_particles or stage_run_density)");
-  return *s;
+  return s;
 }
 
 std::string needName(const char* s, const char* what) { return std::string(need(s, what)); }
@@ -312,6 +379,8 @@ const char* statusString(lodestone_status s) {
       return "node cook failed";
     case LODESTONE_ERROR_INTERNAL:
       return "internal error";
+    case LODESTONE_ERROR_INVALID_HANDLE:
+      return "invalid handle";
     default:
       return "unknown status";
   }
@@ -325,27 +394,31 @@ lodestone_status contextCreate(lodestone_context** out) {
   return firewall(nullptr, "context_create", [&] {
     need(out, "out");
     *out = nullptr;
-    *out = new lodestone_context();
+    auto c = std::make_unique<Context>();
+    *out = newHandle<lodestone_context>(HandleKind::Context, c.get());
+    c.release();
   });
 }
 
-lodestone_status contextDestroy(lodestone_context* c) {
-  return firewall(nullptr, "context_destroy", [&] {
-    if (!c) return;
-    std::size_t live;
+lodestone_status contextDestroy(lodestone_context* h) {
+  return firewall(ctxOf(h), "context_destroy", [&] {
+    if (!h) return;
+    Context& c = contextOf(h);
+    std::size_t owned;
     {
-      std::lock_guard<std::mutex> lock(c->mutex);
-      live = c->objects;
+      std::lock_guard<std::mutex> lock(c.mutex);
+      owned = c.objects;
     }
-    if (live)
+    if (owned)
       throw AbiError(
           LODESTONE_ERROR_INVALID_ARGUMENT,
-          concat("the context still owns ", live, " stage(s), field set(s) or network(s); destroy them first"));
-    delete c;
+          concat("the context still owns ", owned, " stage(s), field set(s) or network(s); destroy them first"));
+    delete static_cast<Context*>(handleTable().remove(reinterpret_cast<std::uintptr_t>(h), HandleKind::Context));
   });
 }
 
-const char* contextLastError(lodestone_context* c) {
+const char* contextLastError(lodestone_context* h) {
+  Context* c = ctxOf(h);
   if (!c) return "";
   try {
     std::lock_guard<std::mutex> lock(c->mutex);
@@ -356,38 +429,35 @@ const char* contextLastError(lodestone_context* c) {
   }
 }
 
+void checkTime(double t) {
+  if (!std::isfinite(t)) throw AbiError(LODESTONE_ERROR_INVALID_ARGUMENT, concat("time must be finite, got ", t, " s"));
+}
+
 // ---- fields ------------------------------------------------------------------------
 lodestone_status fieldsCreate(lodestone_context* c, lodestone_fields** out) {
-  return firewall(c, "fields_create", [&] {
-    need(c, "context");
+  return firewall(ctxOf(c), "fields_create", [&] {
+    if (out) *out = nullptr;
+    Context& context = contextOf(c);
     need(out, "out");
-    *out = nullptr;
-    auto f = std::make_unique<lodestone_fields>();
-    f->context = c;
-    addObject(c);
-    *out = f.release();
+    *out = adopt<lodestone_fields>(context, HandleKind::Fields, std::make_unique<Fields>());
   });
 }
 
 lodestone_status fieldsDestroy(lodestone_fields* f) {
-  return firewall(ctxOf(f), "fields_destroy", [&] {
-    if (!f) return;
-    removeObject(f->context);
-    delete f;
-  });
+  return firewall(ctxOf(f), "fields_destroy", [&] { destroy<Fields>(f, HandleKind::Fields, "fields"); });
 }
 
 lodestone_status fieldsAddUniform(lodestone_fields* f, const double H[3]) {
   return firewall(ctxOf(f), "fields_add_uniform", [&] {
-    need(f, "fields");
-    f->set.add(std::make_unique<UniformField>(vec(H, "H")));
+    Fields& fs = fieldsOf(f);
+    fs.set.add(std::make_unique<UniformField>(vec(H, "H")));
   });
 }
 
 lodestone_status fieldsAddDipole(lodestone_fields* f, const double position[3], const double moment[3]) {
   return firewall(ctxOf(f), "fields_add_dipole", [&] {
-    need(f, "fields");
-    f->set.add(std::make_unique<PointDipole>(vec(position, "position"), vec(moment, "moment")));
+    Fields& fs = fieldsOf(f);
+    fs.set.add(std::make_unique<PointDipole>(vec(position, "position"), vec(moment, "moment")));
   });
 }
 
@@ -405,36 +475,36 @@ void checkMagnetization(double M) {
 lodestone_status fieldsAddSphere(lodestone_fields* f, const double center[3], const double axis[3], double radius,
                                  double M) {
   return firewall(ctxOf(f), "fields_add_sphere_magnet", [&] {
-    need(f, "fields");
+    Fields& fs = fieldsOf(f);
     checkMagnetization(M);
-    f->set.add(std::make_unique<SphereMagnet>(magnetPose(center, axis), radius, Vec3d{0, 0, M}));
+    fs.set.add(std::make_unique<SphereMagnet>(magnetPose(center, axis), radius, Vec3d{0, 0, M}));
   });
 }
 
 lodestone_status fieldsAddBox(lodestone_fields* f, const double center[3], const double axis[3],
                               const double halfSize[3], double M) {
   return firewall(ctxOf(f), "fields_add_box_magnet", [&] {
-    need(f, "fields");
+    Fields& fs = fieldsOf(f);
     checkMagnetization(M);
-    f->set.add(std::make_unique<CuboidMagnet>(magnetPose(center, axis), vec(halfSize, "half_size"), Vec3d{0, 0, M}));
+    fs.set.add(std::make_unique<CuboidMagnet>(magnetPose(center, axis), vec(halfSize, "half_size"), Vec3d{0, 0, M}));
   });
 }
 
 lodestone_status fieldsAddCylinder(lodestone_fields* f, const double center[3], const double axis[3], double radius,
                                    double halfLength, double M) {
   return firewall(ctxOf(f), "fields_add_cylinder_magnet", [&] {
-    need(f, "fields");
+    Fields& fs = fieldsOf(f);
     checkMagnetization(M);
-    f->set.add(std::make_unique<CylinderMagnet>(magnetPose(center, axis), radius, halfLength, Vec3d{0, 0, M}));
+    fs.set.add(std::make_unique<CylinderMagnet>(magnetPose(center, axis), radius, halfLength, Vec3d{0, 0, M}));
   });
 }
 
 lodestone_status fieldsAddVdb(lodestone_fields* f, const char* path, const char* grid) {
   return firewall(ctxOf(f), "fields_add_vdb", [&] {
-    need(f, "fields");
+    Fields& fs = fieldsOf(f);
     const std::string file = needName(path, "path"), name = needName(grid, "grid_name");
     try {
-      addVdbField(f->set, file, name);
+      addVdbField(fs.set, file, name);
     } catch (const InvalidArgument& e) {
       throw AbiError(LODESTONE_ERROR_IO, e.what());
     }
@@ -443,16 +513,17 @@ lodestone_status fieldsAddVdb(lodestone_fields* f, const char* path, const char*
 
 lodestone_status fieldsCount(const lodestone_fields* f, uint32_t* out) {
   return firewall(ctxOf(f), "fields_count", [&] {
-    need(f, "fields");
-    *need(out, "out") = uint32_t(f->set.size());
+    Fields& fs = fieldsOf(f);
+    *need(out, "out") = uint32_t(fs.set.size());
   });
 }
 
 lodestone_status fieldsEvaluate(const lodestone_fields* f, const double x[3], double t, double H[3]) {
   return firewall(ctxOf(f), "fields_evaluate", [&] {
-    need(f, "fields");
+    Fields& fs = fieldsOf(f);
     need(H, "H_out");
-    const Vec3d h = f->set.field(vec(x, "x"), t);
+    checkTime(t);
+    const Vec3d h = fs.set.field(vec(x, "x"), t);
     for (int a = 0; a < 3; ++a) H[a] = h[a];
   });
 }
@@ -476,8 +547,9 @@ lodestone_status stageParamsDefault(lodestone_stage_params* p) {
       p->grid.dims[a] = 21;
     }
     p->padding = 0;
-    p->tolerance = 1e-6;
-    p->max_newton_iterations = 40;
+    const FieldSolveSettings solve;  // the library's one set of defaults
+    p->tolerance = solve.tolerance;
+    p->max_newton_iterations = solve.maxNewtonIterations;
     p->boundary = LODESTONE_BOUNDARY_OPEN;
     p->out_of_grid = LODESTONE_OUT_OF_GRID_THROW;
     p->warm_start = 1;
@@ -485,12 +557,20 @@ lodestone_status stageParamsDefault(lodestone_stage_params* p) {
 }
 
 lodestone_status stageCreate(lodestone_context* c, const lodestone_stage_params* p, lodestone_stage** out) {
-  return firewall(c, "stage_create", [&] {
-    need(c, "context");
+  return firewall(ctxOf(c), "stage_create", [&] {
+    if (out) *out = nullptr;
+    Context& context = contextOf(c);
     need(p, "params");
     need(out, "out");
-    *out = nullptr;
     needSize(p->struct_size, sizeof(lodestone_stage_params), "lodestone_stage_params");
+    // Every field is checked whatever the law (a value the law does not use
+    // is still a host's mistake when it is out of its range).
+    require(std::isfinite(p->chi) && p->chi >= 0, "chi must be a finite susceptibility >= 0, got ", p->chi);
+    require(std::isfinite(p->moment) && p->moment > 0, "moment must be a finite moment > 0 A*m^2, got ", p->moment);
+    require(std::isfinite(p->temperature) && p->temperature > 0, "temperature must be finite and > 0 K, got ",
+            p->temperature);
+    require(std::isfinite(p->number_density) && p->number_density >= 0,
+            "number_density must be finite and >= 0 1/m^3 (0: the paper's), got ", p->number_density);
     const double n0 = p->number_density == 0 ? paperMaterial().numberDensity : p->number_density;
     MagneticMaterial material;
     switch (p->law) {
@@ -524,35 +604,34 @@ lodestone_status stageCreate(lodestone_context* c, const lodestone_stage_params*
     g.dims = {p->grid.dims[0], p->grid.dims[1], p->grid.dims[2]};
     g.validate("params.grid");
     const int pad = p->padding;
+    // The padded node counts, in 64 bits: dims near INT32_MAX must be named, not wrapped.
+    const std::int64_t padded[3] = {std::int64_t(g.dims.i) + 2 * pad, std::int64_t(g.dims.j) + 2 * pad,
+                                    std::int64_t(g.dims.k) + 2 * pad};
+    const double nodes[3] = {double(padded[0]), double(padded[1]), double(padded[2])};
+    requireFitsInMemory("params.grid (padded)", nodes, g.dx, 0);
     g.origin = g.origin - double(pad) * Vec3d{g.dx, g.dx, g.dx};
-    g.dims = {g.dims.i + 2 * pad, g.dims.j + 2 * pad, g.dims.k + 2 * pad};
+    g.dims = {int(padded[0]), int(padded[1]), int(padded[2])};
     MagneticStageSettings s;
     s.boundary = p->boundary == LODESTONE_BOUNDARY_OPEN ? BoundaryKind::Open : BoundaryKind::Shield;
     s.solve.tolerance = p->tolerance;
     s.solve.maxNewtonIterations = p->max_newton_iterations;
     s.outOfGrid = p->out_of_grid == LODESTONE_OUT_OF_GRID_SKIP ? OutOfGridPolicy::Skip : OutOfGridPolicy::Throw;
     s.warmStart = p->warm_start != 0;
-    auto stage = std::make_unique<lodestone_stage>();
-    stage->context = c;
+    auto stage = std::make_unique<Stage>();
     stage->stage = std::make_unique<MagneticForceStage>(g, material, s);
-    addObject(c);
-    *out = stage.release();
+    *out = adopt<lodestone_stage>(context, HandleKind::Stage, std::move(stage));
   });
 }
 
 lodestone_status stageDestroy(lodestone_stage* s) {
-  return firewall(ctxOf(s), "stage_destroy", [&] {
-    if (!s) return;
-    removeObject(s->context);
-    delete s;
-  });
+  return firewall(ctxOf(s), "stage_destroy", [&] { destroy<Stage>(s, HandleKind::Stage, "stage"); });
 }
 
 lodestone_status stageGrid(const lodestone_stage* s, lodestone_grid* out) {
   return firewall(ctxOf(s), "stage_grid", [&] {
-    need(s, "stage");
+    Stage& st = stageOf(s);
     need(out, "out");
-    const GridSpec& g = s->stage->grid();
+    const GridSpec& g = st.stage->grid();
     for (int a = 0; a < 3; ++a) {
       out->origin[a] = g.origin[a];
       out->dims[a] = g.dims[a];
@@ -563,36 +642,32 @@ lodestone_status stageGrid(const lodestone_stage* s, lodestone_grid* out) {
 
 const FieldSource& sourcesOf(const lodestone_fields* f) {
   static const FieldSourceSet kNone;
-  return f ? static_cast<const FieldSource&>(f->set) : kNone;
-}
-
-void checkTime(double t) {
-  if (!std::isfinite(t)) throw AbiError(LODESTONE_ERROR_INVALID_ARGUMENT, concat("time must be finite, got ", t, " s"));
+  return f ? static_cast<const FieldSource&>(fieldsOf(f).set) : kNone;
 }
 
 lodestone_status stageRunParticles(lodestone_stage* s, const lodestone_particles* p, const lodestone_fields* f,
                                    double t, lodestone_report* report) {
   return firewall(ctxOf(s), "stage_run_particles", [&] {
-    need(s, "stage");
+    Stage& st = stageOf(s);
     checkTime(t);
     if (report) needSize(report->struct_size, sizeof(lodestone_report), "lodestone_report");
     const Particles particles = readParticles(p, true);
-    s->ran = false;
-    s->report = s->stage->run(particles.view(), sourcesOf(f), t);
-    s->ran = true;
-    if (report) fillReport(s->report, report);
+    st.ran = false;
+    st.report = st.stage->run(particles.view(), sourcesOf(f), t);
+    st.ran = true;
+    if (report) fillReport(st.report, report);
   });
 }
 
 lodestone_status stageRunDensity(lodestone_stage* s, const lodestone_grid* grid, const double* density,
                                  const lodestone_fields* f, double t, lodestone_report* report) {
   return firewall(ctxOf(s), "stage_run_density", [&] {
-    need(s, "stage");
+    Stage& st = stageOf(s);
     need(grid, "grid");
     need(density, "density");
     checkTime(t);
     if (report) needSize(report->struct_size, sizeof(lodestone_report), "lodestone_report");
-    const GridSpec& g = s->stage->grid();
+    const GridSpec& g = st.stage->grid();
     GridSpec h;
     h.origin = {grid->origin[0], grid->origin[1], grid->origin[2]};
     h.dx = grid->dx;
@@ -602,17 +677,17 @@ lodestone_status stageRunDensity(lodestone_stage* s, const lodestone_grid* grid,
                      concat("the density's grid (origin ", h.origin.x, ", ", h.origin.y, ", ", h.origin.z, " m, dx ",
                             h.dx, " m, ", h.dims.i, " x ", h.dims.j, " x ", h.dims.k,
                             " nodes) is not the stage's grid (stage_grid); give particles instead"));
-    s->ran = false;
-    s->report = s->stage->runOnDensity({density, g}, sourcesOf(f), t);
-    s->ran = true;
-    if (report) fillReport(s->report, report);
+    st.ran = false;
+    st.report = st.stage->runOnDensity({density, g}, sourcesOf(f), t);
+    st.ran = true;
+    if (report) fillReport(st.report, report);
   });
 }
 
 lodestone_status stageParticleForces(const lodestone_stage* s, const lodestone_particles* p,
                                      lodestone_vec3_out* forces) {
   return firewall(ctxOf(s), "stage_particle_forces", [&] {
-    const lodestone_stage& st = ranStage(s);
+    const Stage& st = ranStage(s);
     const Particles particles = readParticles(p, true);
     need(forces, "forces");
     needSize(forces->struct_size, sizeof(lodestone_vec3_out), "lodestone_vec3_out");
@@ -628,7 +703,7 @@ lodestone_status stageParticleForces(const lodestone_stage* s, const lodestone_p
 lodestone_status stageSample(const lodestone_stage* s, lodestone_field_kind kind, const lodestone_particles* points,
                              lodestone_vec3_out* out) {
   return firewall(ctxOf(s), "stage_sample", [&] {
-    const lodestone_stage& st = ranStage(s);
+    const Stage& st = ranStage(s);
     if (kind != LODESTONE_FIELD_H && kind != LODESTONE_FIELD_FORCE_DENSITY)
       throw AbiError(
           LODESTONE_ERROR_INVALID_ARGUMENT,
@@ -651,7 +726,7 @@ lodestone_status stageSample(const lodestone_stage* s, lodestone_field_kind kind
 lodestone_status stageReadField(const lodestone_stage* s, lodestone_field_kind kind, lodestone_scalar_type type,
                                 void* out, size_t count) {
   return firewall(ctxOf(s), "stage_read_field", [&] {
-    const lodestone_stage& st = ranStage(s);
+    const Stage& st = ranStage(s);
     const std::size_t es = scalarSize(type, "stage_read_field");
     const MagneticForceStage& stage = *st.stage;
     const std::size_t nodes = stage.grid().nodeCount();
@@ -701,21 +776,21 @@ lodestone_status stageReadField(const lodestone_stage* s, lodestone_field_kind k
 
 lodestone_status stageReport(const lodestone_stage* s, lodestone_report* out) {
   return firewall(ctxOf(s), "stage_report", [&] {
-    const lodestone_stage& st = ranStage(s);
+    const Stage& st = ranStage(s);
     fillReport(st.report, need(out, "out"));
   });
 }
 
 lodestone_status stageReportJson(const lodestone_stage* s, char* buffer, size_t capacity, size_t* needed) {
   return firewall(ctxOf(s), "stage_report_json", [&] {
-    const lodestone_stage& st = ranStage(s);
+    const Stage& st = ranStage(s);
     copyText(reportJson(st.report), buffer, capacity, needed);
   });
 }
 
 lodestone_status stageExportVdb(const lodestone_stage* s, const char* path) {
   return firewall(ctxOf(s), "stage_export_vdb", [&] {
-    const lodestone_stage& st = ranStage(s);
+    const Stage& st = ranStage(s);
     const std::string file = needName(path, "path");
     try {
       writeStageVdb(file, *st.stage, st.report.summary());
@@ -843,26 +918,19 @@ lodestone_status nodeOutputInfo(const char* type, uint32_t index, lodestone_port
 
 // ---- networks ------------------------------------------------------------------------
 lodestone_status networkCreate(lodestone_context* c, lodestone_network** out) {
-  return firewall(c, "network_create", [&] {
-    need(c, "context");
+  return firewall(ctxOf(c), "network_create", [&] {
+    if (out) *out = nullptr;
+    Context& context = contextOf(c);
     need(out, "out");
-    *out = nullptr;
-    auto n = std::make_unique<lodestone_network>();
-    n->context = c;
-    addObject(c);
-    *out = n.release();
+    *out = adopt<lodestone_network>(context, HandleKind::Network, std::make_unique<NetworkObject>());
   });
 }
 
 lodestone_status networkDestroy(lodestone_network* n) {
-  return firewall(ctxOf(n), "network_destroy", [&] {
-    if (!n) return;
-    removeObject(n->context);
-    delete n;
-  });
+  return firewall(ctxOf(n), "network_destroy", [&] { destroy<NetworkObject>(n, HandleKind::Network, "network"); });
 }
 
-Network& net(lodestone_network* n) { return need(n, "network")->network; }
+Network& net(lodestone_network* n) { return networkOf(n).network; }
 
 void checkNode(Network& network, const std::string& node) {
   if (!network.hasNode(node)) throw AbiError(LODESTONE_ERROR_NOT_FOUND, concat("no node named '", node, "'"));
@@ -926,6 +994,13 @@ lodestone_status networkConnect(lodestone_network* n, const char* from, const ch
                       i = needName(input, "input");
     checkNode(network, f);
     checkNode(network, t);
+    if (!network.declOf(f).output(o) || !network.declOf(t).input(i)) {
+      try {
+        network.connect(f, o, t, i);  // throws, naming the port and the closest declared one
+      } catch (const InvalidArgument& e) {
+        throw AbiError(LODESTONE_ERROR_NOT_FOUND, e.what());
+      }
+    }
     network.connect(f, o, t, i);
   });
 }
@@ -1016,6 +1091,55 @@ lodestone_status networkReadPositions(lodestone_network* n, const char* node, co
   });
 }
 
+// ---- since minor 1 --------------------------------------------------------------------
+lodestone_status stageNumberDensity(const lodestone_stage* s, double* n0) {
+  return firewall(ctxOf(s), "stage_number_density", [&] {
+    const Stage& st = stageOf(s);
+    const MagneticMaterial& m = st.stage->material();
+    *need(n0, "n0") = m.law.kind == LawKind::None ? 0.0 : m.numberDensity;
+  });
+}
+
+lodestone_status networkSetParticles(lodestone_network* n, const char* node, const lodestone_particles* p) {
+  return firewall(ctxOf(n), "network_set_particles", [&] {
+    Network& network = net(n);
+    const std::string name = needName(node, "node");
+    checkNode(network, name);
+    const Particles particles = readParticles(p, true);
+    std::vector<double> x(3 * particles.x.size());
+    for (std::size_t k = 0; k < particles.x.size(); ++k)
+      for (int a = 0; a < 3; ++a) x[3 * k + std::size_t(a)] = particles.x[k][a];
+    setParam(n, node, "positions", x);
+    setParam(n, node, "counts", particles.n);
+  });
+}
+
+lodestone_status networkReadForces(lodestone_network* n, const char* node, const char* output, lodestone_vec3_out* out,
+                                   size_t* count) {
+  return firewall(ctxOf(n), "network_read_forces", [&] {
+    const NodeValue& v = cookedOutput(n, node, output);
+    need(count, "count");
+    const auto* f = std::get_if<std::shared_ptr<const ForcesData>>(&v);
+    if (!f)
+      throw AbiError(LODESTONE_ERROR_INVALID_ARGUMENT,
+                     concat("output '", output, "' carries ", toString(typeOf(v)), ", not forces"));
+    *count = (*f)->particleForces.size();
+    writeVectors((*f)->particleForces, out);
+  });
+}
+
+lodestone_status networkCreateFromJson(lodestone_context* c, const char* json, lodestone_network** out) {
+  return firewall(ctxOf(c), "network_create_from_json", [&] {
+    if (out) *out = nullptr;
+    Context& context = contextOf(c);
+    const std::string text = needName(json, "json");
+    need(out, "out");
+    auto network = std::make_unique<NetworkObject>();
+    buildNetworkFromJson(network->network, parseJsonText(text, "network"), "network");
+    *out = adopt<lodestone_network>(context, HandleKind::Network, std::move(network));
+  });
+}
+
 const lodestone_api kApi = {
     sizeof(lodestone_api),
     LODESTONE_API_VERSION_MAJOR,
@@ -1067,6 +1191,10 @@ const lodestone_api kApi = {
     networkCook,
     networkOutputJson,
     networkReadPositions,
+    stageNumberDensity,
+    networkSetParticles,
+    networkReadForces,
+    networkCreateFromJson,
 };
 
 }  // namespace

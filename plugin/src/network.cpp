@@ -51,6 +51,10 @@ void Network::setParam(const std::string& node, const std::string& param, const 
         concat(where(node), ": unknown parameter '", param, "'", didYouMean(param, inst.decl->paramNames())));
   inst.params.set(param, decl->check(value, where(node)));
   inst.params.markGiven(param);
+  // Of two alternatives (ParamDecl::replaces) the one set last is used.
+  for (const ParamDecl& other : inst.decl->params)
+    if (other.name != param && (other.replaces == param || decl->replaces == other.name))
+      inst.params.clearGiven(other.name);
   markDirty(node);
 }
 

@@ -3,6 +3,12 @@
 #include <algorithm>
 #include <cstdio>
 #include <cmath>
+#include <cstdlib>
+#include <string>
+
+#if __has_include(<unistd.h>)
+#include <unistd.h>
+#endif
 
 #include "lodestone/core/base/constants.h"
 #include "lodestone/core/base/error.h"
@@ -163,16 +169,71 @@ MagneticStageSettings solveSettingsFrom(const ParamSet& p, const std::string& pr
 }
 
 namespace {
-// Memory the simulation needs per grid node, bytes: the MPM grid (mass,
+// Memory a simulation needs per grid node, bytes: the MPM grid (mass,
 // momentum, velocity, binning) and the magnetic stage's padded grid (n, phi,
 // H_ext, H, M, B, t, f, the solver's vectors and multigrid hierarchy), about
-// 600 B together; the estimate refuses grids that cannot fit before any
-// allocation.
+// 600 B together. Per material point: position, velocity, F, C, J, mass,
+// volume, count and material (about 200 B), the sorted copy and the stage's
+// transfer weights, about 400 B together.
 constexpr double kBytesPerNode = 600;
-constexpr double kMaxGridGiB = 25;
+constexpr double kBytesPerParticle = 400;
+constexpr double kMaxNodesPerAxis = 1 << 20;
+constexpr double kGiB = 1024.0 * 1024.0 * 1024.0;
+constexpr const char* kLimitVariable = "LODESTONE_MEMORY_LIMIT_GIB";
+
+/// A count as a whole number while doubles hold it exactly (2.14748e+09 says too little).
+std::string countText(double n) { return n < 9e15 ? std::to_string(std::int64_t(n)) : concat(n); }
+
+/// A positive number of GiB in the environment variable, or 0.
+double limitOverrideGiB() {
+  const char* text = std::getenv(kLimitVariable);
+  if (!text || !*text) return 0;
+  char* end = nullptr;
+  const double gib = std::strtod(text, &end);
+  require(end && *end == '\0' && std::isfinite(gib) && gib > 0, kLimitVariable,
+          " must be a positive number of GiB, got '", text, "'");
+  return gib;
+}
 }  // namespace
 
-MpmSettings mpmSettingsFrom(const ParamSet& p) {
+double estimatedMemoryBytes(double nodes, double particles) {
+  return nodes * kBytesPerNode + particles * kBytesPerParticle;
+}
+
+double memoryLimitBytes() {
+  if (const double gib = limitOverrideGiB(); gib > 0) return gib * kGiB;
+#if defined(_SC_PHYS_PAGES) && defined(_SC_PAGE_SIZE)
+  const long pages = sysconf(_SC_PHYS_PAGES), pageSize = sysconf(_SC_PAGE_SIZE);
+  if (pages > 0 && pageSize > 0) return double(pages) * double(pageSize);
+#endif
+  return 16 * kGiB;  // unknown: a modest machine
+}
+
+void requireFitsInMemory(const std::string& what, const double nodes[3], double dx, double particles) {
+  const double nodeCount = nodes[0] * nodes[1] * nodes[2];
+  const double need = estimatedMemoryBytes(nodeCount, particles), limit = memoryLimitBytes();
+  const bool axisTooLong = std::max(nodes[0], std::max(nodes[1], nodes[2])) > kMaxNodesPerAxis;
+  if (need <= limit && !axisTooLong) return;
+  std::string subject;
+  if (nodeCount > 0)
+    subject = concat("a grid of ", countText(nodes[0]), " x ", countText(nodes[1]), " x ", countText(nodes[2]),
+                     " nodes at dx = ", dx, " m");
+  if (particles > 0) subject += concat(subject.empty() ? "" : " and ", countText(particles), " particles");
+  const std::string limitText = limitOverrideGiB() > 0 ? concat(kLimitVariable, " = ", limit / kGiB, " GiB")
+                                                       : concat("this machine's memory, ", limit / kGiB, " GiB");
+  if (axisTooLong)
+    throw TooLarge(concat(what, ": ", subject, " is too large (more than ", kMaxNodesPerAxis,
+                          " nodes on an axis; needs about ", need / kGiB, " GiB)"));
+  throw TooLarge(concat(what, ": ", subject, nodeCount > 0 ? " is too large" : " are too many", " (needs about ",
+                        need / kGiB, " GiB at ", kBytesPerNode, " B a node and ", kBytesPerParticle,
+                        " B a particle; limit ", limitText, ")"));
+}
+
+double estimatedParticles(double volume, double cellSize, int particlesPerCell) {
+  return volume / (cellSize * cellSize * cellSize) * particlesPerCell;
+}
+
+MpmSettings mpmSettingsFrom(const ParamSet& p, double particles) {
   MpmSettings s;
   const Vec3d lo = p.getVec3("domain.min"), hi = p.getVec3("domain.max");
   for (int a = 0; a < 3; ++a)
@@ -182,10 +243,7 @@ MpmSettings mpmSettingsFrom(const ParamSet& p) {
   // Node counts in double first: a tiny dx must be refused, not overflow an int.
   double n[3];
   for (int a = 0; a < 3; ++a) n[a] = std::ceil((hi[a] - lo[a]) / dx - 1e-9) + 1;
-  const double gib = n[0] * n[1] * n[2] * kBytesPerNode / (1024.0 * 1024.0 * 1024.0);
-  require(gib <= kMaxGridGiB && std::max(n[0], std::max(n[1], n[2])) <= 1 << 20, "domain: a grid of ", n[0], " x ",
-          n[1], " x ", n[2], " nodes at dx = ", dx, " m is too large (needs about ", gib, " GiB, limit ", kMaxGridGiB,
-          " GiB)");
+  requireFitsInMemory("domain", n, dx, particles);
   GridSpec g;
   g.origin = lo;
   g.dx = dx;
@@ -196,6 +254,7 @@ MpmSettings mpmSettingsFrom(const ParamSet& p) {
   s.cfl = p.getFloat("time.cfl");
   s.dtMax = p.getFloat("time.dt_max");
   s.magneticSolveInterval = int(p.getInt("time.field_solve_every"));
+  s.magneticSolveDistance = p.getFloat("time.field_solve_distance");
   s.gravity = p.getVec3("gravity");
   s.magnetic = solveSettingsFrom(p, "magnetic.");
   const int padding = int(p.getInt("magnetic.padding"));

@@ -2,13 +2,14 @@
 // and inputs and calls core (or vdb_io) functions that know nothing of nodes.
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "lodestone/core/base/constants.h"
-#include "lodestone/core/sources/cuboid_magnet.h"
-#include "lodestone/core/sources/cylinder_magnet.h"
 #include "lodestone/core/base/error.h"
 #include "lodestone/core/field/material.h"
 #include "lodestone/core/mpm/solver.h"
+#include "lodestone/core/sources/cuboid_magnet.h"
+#include "lodestone/core/sources/cylinder_magnet.h"
 #include "lodestone/core/sources/point_dipole.h"
 #include "lodestone/core/sources/sphere_magnet.h"
 #include "lodestone/core/sources/uniform_field.h"
@@ -137,6 +138,7 @@ NodeDecl materialNode() {
                                        "Micro-particles per filled cell of size cell_size; with cell_size, "
                                        "replaces number_density.")),
                    "magnetic.law", {"langevin", "linear"}));
+  q.back().replaces = "magnetic.number_density";
   q.push_back(when(positive(floatParam("magnetic.cell_size", "Cell size", 7.8e-3, "m", "Cell size of per_cell.")),
                    "magnetic.law", {"langevin", "linear"}));
   d.outputs = {{"material", PortType::Material, "The material."}};
@@ -214,8 +216,59 @@ NodeDecl particleSourceNode() {
     body.material = material ? *material : MaterialData{"default", neoHookeanSolid(1e5, 0.3, 1000.0)};
     body.shape = shapeFrom(p);
     body.emit = emitterSettingsFrom(p);
+    const double none[3] = {0, 0, 0};
+    requireFitsInMemory(body.name, none, 0,
+                        estimatedParticles(body.shape.volume(), body.emit.cellSize, body.emit.particlesPerCell));
     emitParticles(out.particles, body.shape, body.material.material, 0, body.emit);
     out.materials.push_back(body.material.material);
+    out.bodies.push_back(std::move(body));
+    return CookOutputs{{"particles", value(std::move(out))}};
+  };
+  return d;
+}
+
+// ---- host particles ---------------------------------------------------------
+NodeDecl hostParticlesNode() {
+  NodeDecl d;
+  d.type = "host_particles";
+  d.label = "Host Particles";
+  d.category = "particles";
+  d.help =
+      "A host's own material points: positions and micro-particle counts n_p (C ABI: network_set_particles), "
+      "each with the volume n_p / n0 of its material (or the given volumes) and the mass rho V_p.";
+  auto& q = d.params;
+  q.push_back(floatListParam("positions", "Positions", {}, "m", 0, std::numeric_limits<std::size_t>::max(),
+                             "x, y, z of each point, one after the other (3 numbers a point)."));
+  q.push_back(
+      nonNegative(floatListParam("counts", "Counts", {}, "micro-particles", 0, std::numeric_limits<std::size_t>::max(),
+                                 "Micro-particles n_p of each point.")));
+  q.push_back(nonNegative(floatListParam("volumes", "Volumes", {}, "m^3", 0, std::numeric_limits<std::size_t>::max(),
+                                         "Volume V_p of each point; empty: n_p / n0 of a magnetic material.")));
+  q.push_back(stringParam("name", "Name", "host", "Name of the body."));
+  d.inputs = {{"material", PortType::Material, "The points' material (default: a non-magnetic solid).", true, false}};
+  d.outputs = {{"particles", PortType::Particles, "The host's points."}};
+  d.cook = [](const CookContext& c) {
+    const ParamSet& p = c.params();
+    const std::vector<double>& x = p.getFloats("positions");
+    const std::vector<double>& n = p.getFloats("counts");
+    const std::vector<double>& v = p.getFloats("volumes");
+    require(x.size() == 3 * n.size(), "positions holds ", x.size(), " numbers, 3 for each of the ", n.size(),
+            " counts are needed");
+    require(v.empty() || v.size() == n.size(), "volumes holds ", v.size(), " numbers, one for each of the ", n.size(),
+            " counts is needed");
+    const auto material = c.input<MaterialData>("material");
+    ParticlesData out;
+    ParticlesData::Body body;
+    body.name = p.getString("name");
+    body.material = material ? *material : MaterialData{"default", neoHookeanSolid(1e5, 0.3, 1000.0)};
+    const MpmMaterial& m = body.material.material;
+    const double n0 = m.isMagnetic() ? m.magnetic.numberDensity : 0.0;
+    require(!v.empty() || n0 > 0 || n.empty(), "volumes are needed for a non-magnetic material (no n0 to divide by)");
+    for (std::size_t k = 0; k < n.size(); ++k) {
+      const double volume = v.empty() ? n[k] / n0 : v[k];
+      out.particles.add({x[3 * k], x[3 * k + 1], x[3 * k + 2]}, {}, m.density * volume, volume, n[k], 0);
+    }
+    out.materials.push_back(m);
     out.bodies.push_back(std::move(body));
     return CookOutputs{{"particles", value(std::move(out))}};
   };
@@ -240,6 +293,7 @@ NodeDecl magnetNode() {
   q.push_back(range(floatParam("remanence", "Remanence", 1.2, "T",
                                "Remanent induction Br; when given, replaces magnetization (M = Br/mu0)."),
                     -3, 3));
+  q.back().replaces = "magnetization";
   q.push_back(when(required(positive(floatParam("radius", "Radius", 0.02, "m", "Sphere or cylinder radius."))), "shape",
                    {"sphere", "cylinder"}));
   q.push_back(when(required(positive(vec3Param("half_size", "Half size", {0.02, 0.02, 0.02}, "m", "Box half-sizes."))),
@@ -382,11 +436,13 @@ NodeDecl transferNode() {
 void addSolveParams(std::vector<ParamDecl>& q, const std::string& prefix) {
   q.push_back(choiceParam(prefix + "boundary", "Field boundary", {"open", "shield"}, "open",
                           "open: far-field potential on the outer nodes; shield: the paper's Neumann wall."));
-  q.push_back(range(floatParam(prefix + "tolerance", "Tolerance", 1e-6, "", "Relative Newton residual to reach."),
+  q.push_back(range(floatParam(prefix + "tolerance", "Tolerance", FieldSolveSettings().tolerance, "",
+                               "Relative Newton residual to reach."),
                     1e-14, 1e-1));
   q.push_back(choiceParam(prefix + "preconditioner", "Preconditioner", {"multigrid", "jacobi"}, "multigrid",
                           "Preconditioner of the inner CG."));
-  q.push_back(intParam(prefix + "max_newton_iterations", "Newton iterations", 40, 1, 1000, "Newton iteration cap."));
+  q.push_back(intParam(prefix + "max_newton_iterations", "Newton iterations", FieldSolveSettings().maxNewtonIterations,
+                       1, 1000, "Newton iteration cap."));
 }
 
 NodeDecl fieldSolveNode() {
@@ -461,7 +517,11 @@ NodeDecl mpmSolverNode() {
   q.push_back(range(floatParam("time.cfl", "CFL", 0.4, "", "Fraction of a cell crossed per substep."), 0.01, 1));
   q.push_back(positive(floatParam("time.dt_max", "Largest step", 1e-3, "s", "Largest CFL substep.")));
   q.push_back(intParam("time.field_solve_every", "Solve interval", 0, 0, 1000000,
-                       "Substeps between field solves; 0: once per frame."));
+                       "Substeps between field solves; 0: automatic (see time.field_solve_distance)."));
+  q.push_back(range(floatParam("time.field_solve_distance", "Solve distance", 0.25, "cells",
+                               "With field_solve_every 0: solve again when material or a magnet moved this far "
+                               "since the last solve (and once per frame); 0: once per frame."),
+                    0, 100));
   q.push_back(vec3Param("gravity", "Gravity", {0, 0, -9.81}, "m/s^2", "Gravitational acceleration."));
   addSolveParams(q, "magnetic.");
   q.push_back(intParam("magnetic.padding", "Field padding", 4, 0, 64,
@@ -472,9 +532,9 @@ NodeDecl mpmSolverNode() {
   d.outputs = {{"simulation", PortType::Simulation, "The solver after the frames, with per-frame statistics."}};
   d.cook = [](const CookContext& c) {
     const ParamSet& p = c.params();
-    MpmSettings s = mpmSettingsFrom(p);
-    auto solver = std::make_shared<MpmSolver>(s);
     const ParticlesData all = mergeParticles(c.inputs("particles"));
+    MpmSettings s = mpmSettingsFrom(p, double(all.particles.size()));
+    auto solver = std::make_shared<MpmSolver>(s);
     for (const MpmMaterial& m : all.materials) solver->addMaterial(m);
     solver->particles() = all.particles;
     const SourcesData sources = mergeSources(c.inputs("sources"));
@@ -531,8 +591,9 @@ NodeDecl vdbExportNode() {
 }  // namespace
 
 std::vector<NodeDecl> buildRegistry() {
-  return {particleSourceNode(), materialNode(),      magnetNode(),    appliedFieldNode(), transferNode(),
-          fieldSolveNode(),     magneticForceNode(), mpmSolverNode(), colliderNode(),     vdbExportNode()};
+  return {particleSourceNode(), hostParticlesNode(), materialNode(),   magnetNode(),
+          appliedFieldNode(),   transferNode(),      fieldSolveNode(), magneticForceNode(),
+          mpmSolverNode(),      colliderNode(),      vdbExportNode()};
 }
 
 }  // namespace lodestone::plugin

@@ -167,6 +167,16 @@ Scene sceneFromJson(const nlohmann::json& doc, const std::string& sourceName, co
     b.finish();
     scene.bodies.push_back(std::move(body));
   }
+  // The domain's grid was checked alone above; with the bodies' points too
+  // (estimated from their volumes) before any is emitted.
+  double particles = 0;
+  for (const SceneBody& b : scene.bodies)
+    particles += estimatedParticles(b.shape.volume(), b.emit.cellSize, b.emit.particlesPerCell);
+  try {
+    mpmSettingsFrom(solverParams, particles);
+  } catch (const InvalidArgument& e) {
+    throw InvalidArgument(concat(sourceName, ": ", e.what()));
+  }
 
   // Permanent magnets (field sources, and colliders unless told otherwise):
   // `magnet` nodes; `motion` may also hold keyframes.

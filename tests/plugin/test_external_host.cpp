@@ -54,7 +54,8 @@ std::vector<Vec3d> reference(const nlohmann::json& s, const GridSpec& mpmGrid, b
   settings.gravity = {0, 0, 0};
   settings.walls = {BoundaryMode::Sticky, 0.0};
   settings.fixedDt = s["dt_s"].get<double>();
-  settings.magneticSolveInterval = 0;  // once per frame, as the host
+  settings.magneticSolveInterval = 0;
+  settings.magneticSolveDistance = 0;  // exactly once per frame, as the host
   if (!sameAsStage) settings.magneticGrid = stageGrid(s);
   settings.magnetic.solve.tolerance = s["tolerance"].get<double>();
   MpmSolver solver(settings);

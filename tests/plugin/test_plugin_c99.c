@@ -37,7 +37,10 @@ int main(void) {
   CHECK(api->fields_add_uniform(NULL, H) == LODESTONE_ERROR_NULL_HANDLE);
   CHECK(strstr(api->thread_last_error(), "fields") != NULL);
   CHECK(api->fields_destroy(fields) == LODESTONE_OK);
+  CHECK(api->fields_destroy(fields) == LODESTONE_ERROR_INVALID_HANDLE); /* destroyed twice: a status, no crash */
+  CHECK(api->minor >= 1 && api->network_create_from_json != NULL);
   CHECK(api->context_destroy(ctx) == LODESTONE_OK);
+  CHECK(api->context_destroy(ctx) == LODESTONE_ERROR_INVALID_HANDLE);
   if (failures == 0) printf("C99 host: ok\n");
   return failures == 0 ? 0 : 1;
 }

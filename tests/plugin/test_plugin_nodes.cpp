@@ -14,9 +14,11 @@
 
 #include <nlohmann/json.hpp>
 
+#include "lodestone/core/field/material.h"
 #include "lodestone/plugin/errors.h"
 #include "lodestone/plugin/lodestone.h"
 #include "lodestone/plugin/network.h"
+#include "lodestone/plugin/param_json.h"
 #include "lodestone/plugin/node_registry.h"
 
 using namespace lodestone;
@@ -321,6 +323,12 @@ TEST(PluginNodes, ANetworkBuiltThroughTheCAbiGivesConservativeForces) {
   EXPECT_NE(jsonError("ferro", R"({"density": 1200, "viscosity": "thick"})").find("viscosity: expected a number"),
             std::string::npos);
   EXPECT_EQ(a->network_add_node(n, "nonsense", "x"), LODESTONE_ERROR_NOT_FOUND);
+  // Ports that do not exist are NOT_FOUND, as the header says, with a suggestion.
+  EXPECT_EQ(a->network_connect(n, "ball", "particle", "n", "particles"), LODESTONE_ERROR_NOT_FOUND);
+  EXPECT_NE(std::string(a->context_last_error(ctx)).find("did you mean 'particles'?"), std::string::npos)
+      << a->context_last_error(ctx);
+  EXPECT_EQ(a->network_connect(n, "ball", "particles", "n", "particle"), LODESTONE_ERROR_NOT_FOUND);
+  EXPECT_EQ(a->network_connect(n, "ferro", "material", "force", "particles"), LODESTONE_ERROR_INVALID_ARGUMENT);
 
   ok(a->network_cook(n, "force"));
   const nlohmann::json field = nlohmann::json::parse(outputJson(a, n, "solve", "field"));
@@ -354,6 +362,140 @@ TEST(PluginNodes, ANetworkBuiltThroughTheCAbiGivesConservativeForces) {
   EXPECT_LT(stronger["total_force_N"][2].get<double>(), 1.5 * fz);
   ok(a->network_destroy(n));
   ok(a->context_destroy(ctx));
+}
+
+// Of two alternative parameters the one set last is used: magnetization set
+// after remanence is not ignored, and the other way round.
+TEST(PluginNodes, TheAlternativeSetLastIsUsed) {
+  const auto magnetizationOf = [](const std::vector<std::pair<std::string, double>>& sets) {
+    Network net;
+    net.addNode("magnet", "m");
+    for (const auto& [name, value] : sets) net.setParam("m", name, value);
+    const auto& sources = std::get<std::shared_ptr<const SourcesData>>(net.cook("m").at("sources"));
+    return sources->magnets.at(0).magnet->magnetization({0, 0, -0.05}, 0).z;  // the centre
+  };
+  const double fromBr = 1.0 / (4e-7 * M_PI);
+  EXPECT_NEAR(magnetizationOf({{"remanence", 1.0}}), fromBr, 1e-6 * fromBr);
+  EXPECT_DOUBLE_EQ(magnetizationOf({{"remanence", 1.0}, {"magnetization", 5e5}}), 5e5);
+  EXPECT_NEAR(magnetizationOf({{"magnetization", 5e5}, {"remanence", 1.0}}), fromBr, 1e-6 * fromBr);
+  // Number density after per_cell, for a material.
+  const auto n0Of = [](const std::vector<std::pair<std::string, double>>& sets) {
+    Network net;
+    net.addNode("material", "m");
+    net.setParam("m", "magnetic.law", std::string("linear"));
+    for (const auto& [name, value] : sets) net.setParam("m", name, value);
+    const auto& mat = std::get<std::shared_ptr<const MaterialData>>(net.cook("m").at("material"));
+    return mat->material.magnetic.numberDensity;
+  };
+  EXPECT_DOUBLE_EQ(n0Of({{"magnetic.per_cell", 1e3}, {"magnetic.cell_size", 0.1}}), 1e6);
+  EXPECT_DOUBLE_EQ(n0Of({{"magnetic.per_cell", 1e3}, {"magnetic.cell_size", 0.1}, {"magnetic.number_density", 5e5}}),
+                   5e5);
+}
+
+// A host builds a whole network from JSON, feeds its own particles in and
+// reads the per-particle forces out: the forces of the same points emitted by
+// a particle_source node, bit for bit.
+TEST(PluginNodes, AHostNetworkFromJsonTakesTheHostsParticlesAndGivesTheirForces) {
+  const char* magnet = R"({"shape": "cylinder", "center": [0, 0, -0.03], "radius": 0.02, "half_length": 0.01,
+                           "magnetization": 8e5})";
+  // The reference: points emitted by a particle_source.
+  Network ref;
+  ref.addNode("material", "ferro");
+  setParamsFromJson(ref, "ferro", nlohmann::json::parse(R"({"magnetic": {"law": "paper"}})"), "ferro");
+  ref.addNode("particle_source", "ball");
+  setParamsFromJson(ref, "ball",
+                    nlohmann::json::parse(R"({"shape": "sphere", "radius": 0.015, "center": [0, 0, 0.02],
+                                              "cell_size": 0.006})"),
+                    "ball");
+  ref.connect("ferro", "material", "ball", "material");
+  ref.addNode("magnet", "magnet");
+  setParamsFromJson(ref, "magnet", nlohmann::json::parse(magnet), "magnet");
+  ref.addNode("magnetization_transfer", "n");
+  ref.addNode("field_solve", "solve");
+  ref.addNode("magnetic_force", "force");
+  ref.connect("ball", "particles", "n", "particles");
+  ref.connect("n", "density", "solve", "density");
+  ref.connect("magnet", "sources", "solve", "sources");
+  ref.connect("solve", "field", "force", "field");
+  ref.connect("ball", "particles", "force", "particles");
+  const auto& refForces = std::get<std::shared_ptr<const ForcesData>>(ref.cook("force").at("forces"))->particleForces;
+  const MpmParticles& pts = std::get<std::shared_ptr<const ParticlesData>>(ref.cook("ball").at("particles"))->particles;
+  ASSERT_GT(pts.size(), 100u);
+
+  const lodestone_api* a = nullptr;
+  ASSERT_EQ(lodestone_get_api(1, 1, &a), LODESTONE_OK);
+  lodestone_context* ctx = nullptr;
+  ASSERT_EQ(a->context_create(&ctx), LODESTONE_OK);
+  const std::string json = std::string(R"({"nodes": [
+      {"name": "ferro", "type": "material", "params": {"magnetic": {"law": "paper"}}},
+      {"name": "host", "type": "host_particles"},
+      {"name": "magnet", "type": "magnet", "params": )") + magnet + R"(},
+      {"name": "n", "type": "magnetization_transfer"},
+      {"name": "solve", "type": "field_solve"},
+      {"name": "force", "type": "magnetic_force"}],
+    "connections": [
+      {"from": "ferro", "output": "material", "to": "host", "input": "material"},
+      {"from": "host", "output": "particles", "to": "n", "input": "particles"},
+      {"from": "n", "output": "density", "to": "solve", "input": "density"},
+      {"from": "magnet", "output": "sources", "to": "solve", "input": "sources"},
+      {"from": "solve", "output": "field", "to": "force", "input": "field"},
+      {"from": "host", "output": "particles", "to": "force", "input": "particles"}]})";
+  lodestone_network* n = nullptr;
+  ASSERT_EQ(a->network_create_from_json(ctx, json.c_str(), &n), LODESTONE_OK) << a->context_last_error(ctx);
+  lodestone_particles view{};
+  view.struct_size = sizeof view;
+  view.type = LODESTONE_FLOAT64;
+  view.count = pts.size();
+  view.positions = pts.x.data();
+  view.counts = pts.count.data();
+  ASSERT_EQ(a->network_set_particles(n, "host", &view), LODESTONE_OK) << a->context_last_error(ctx);
+  ASSERT_EQ(a->network_cook(n, "force"), LODESTONE_OK) << a->context_last_error(ctx);
+  std::vector<double> forces(3 * pts.size());
+  lodestone_vec3_out out{sizeof(lodestone_vec3_out), LODESTONE_FLOAT64, forces.data(), 0, pts.size()};
+  size_t count = 0;
+  ASSERT_EQ(a->network_read_forces(n, "force", "forces", &out, &count), LODESTONE_OK) << a->context_last_error(ctx);
+  EXPECT_EQ(count, pts.size());
+  for (std::size_t k = 0; k < pts.size(); ++k)
+    for (int d = 0; d < 3; ++d) EXPECT_EQ(forces[3 * k + d], refForces[k][d]) << k;
+  EXPECT_EQ(a->network_read_forces(n, "host", "particles", &out, &count), LODESTONE_ERROR_INVALID_ARGUMENT);
+  // A node that takes no particles.
+  EXPECT_EQ(a->network_set_particles(n, "solve", &view), LODESTONE_ERROR_NOT_FOUND);
+  EXPECT_EQ(a->network_destroy(n), LODESTONE_OK);
+
+  // Errors name the path; no network is made.
+  const auto refused = [&](const std::string& text, const std::string& expected) {
+    lodestone_network* m = reinterpret_cast<lodestone_network*>(&view);
+    EXPECT_EQ(a->network_create_from_json(ctx, text.c_str(), &m), LODESTONE_ERROR_INVALID_ARGUMENT) << text;
+    EXPECT_EQ(m, nullptr);
+    EXPECT_NE(std::string(a->context_last_error(ctx)).find(expected), std::string::npos) << a->context_last_error(ctx);
+  };
+  refused(R"({"nodes": [{"name": "a", "type": "materal"}]})", "nodes[0].type");
+  refused(R"({"nodes": [{"name": "a", "type": "material", "params": {"densty": 1}}]})", "did you mean 'density'?");
+  refused(R"({"nodes": [{"name": "a", "type": "material"}], "conections": []})", "did you mean 'connections'?");
+  refused(R"({"nodes": [{"name": "a", "type": "material"}, {"name": "b", "type": "particle_source"}],
+              "connections": [{"from": "a", "output": "material", "to": "b", "input": "materal"}]})",
+          "connections[0]: node 'b' (particle_source): no input named 'materal'; did you mean 'material'?");
+  refused("{\"nodes\": [}", "network:1:");
+
+  // The stage's n0, for the host's counts.
+  lodestone_stage_params params{};
+  params.struct_size = sizeof params;
+  ASSERT_EQ(a->stage_params_default(&params), LODESTONE_OK);
+  params.grid.dims[0] = params.grid.dims[1] = params.grid.dims[2] = 4;
+  const std::pair<int32_t, double> laws[] = {{LODESTONE_LAW_PAPER, paperMaterial().numberDensity},
+                                             {LODESTONE_LAW_LINEAR, 2.5e20},
+                                             {LODESTONE_LAW_NONE, 0.0}};
+  for (const auto& [law, n0] : laws) {
+    params.law = law;
+    params.number_density = law == LODESTONE_LAW_LINEAR ? 2.5e20 : 0.0;
+    lodestone_stage* stage = nullptr;
+    ASSERT_EQ(a->stage_create(ctx, &params, &stage), LODESTONE_OK) << a->context_last_error(ctx);
+    double got = -1;
+    EXPECT_EQ(a->stage_number_density(stage, &got), LODESTONE_OK);
+    EXPECT_EQ(got, n0) << law;
+    EXPECT_EQ(a->stage_destroy(stage), LODESTONE_OK);
+  }
+  EXPECT_EQ(a->context_destroy(ctx), LODESTONE_OK);
 }
 
 }  // namespace

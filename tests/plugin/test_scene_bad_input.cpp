@@ -4,11 +4,15 @@
 // valid key for a misspelt one, GiB and node counts for a grid too large),
 // never a crash, a silent default or an int overflow.
 #include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <cstdlib>
 
 #include <string>
 #include <vector>
 
 #include "lodestone/core/base/error.h"
+#include "lodestone/plugin/node_builders.h"
 #include "lodestone/plugin/scene.h"
 
 using namespace lodestone;
@@ -103,12 +107,32 @@ TEST(SceneBadInput, EachIsRefusedWithWhereAndWhat) {
 }
 
 TEST(SceneBadInput, GridEstimateIsInGibibytesAndAcceptsTheLargestThatFits) {
+  // Against a limit of 25 GiB (the machine's memory otherwise).
+  ASSERT_EQ(setenv("LODESTONE_MEMORY_LIMIT_GIB", "25", 1), 0);
   // 257^3 nodes x 600 B = 9.48 GiB: accepted (nothing is allocated by parsing).
   EXPECT_EQ(errorOf(replaced(kScene, "\"dx\": 0.02", "\"dx\": 0.00078125")), "");
-  // 401^3 x 600 B = 36.03 GiB: refused, naming the estimate.
+  // 401^3 x 600 B = 36.03 GiB: refused, naming the estimate and the limit.
   const std::string err = errorOf(replaced(kScene, "\"dx\": 0.02", "\"dx\": 0.0005"));
   EXPECT_NE(err.find("401 x 401 x 401 nodes"), std::string::npos) << err;
   EXPECT_NE(err.find("36.03"), std::string::npos) << err;
+  EXPECT_NE(err.find("LODESTONE_MEMORY_LIMIT_GIB = 25 GiB"), std::string::npos) << err;
+  // A body of too many points is refused too, before it is emitted: the grid
+  // fits (201^3 nodes, 4.5 GiB), its 1.1e8 points (42 GiB) do not.
+  const std::string dense = errorOf(replaced(replaced(kScene, "\"dx\": 0.02", "\"dx\": 0.001"),
+                                             "\"radius\": 0.03", "\"radius\": 0.03, \"particles_per_cell\": 1000"));
+  EXPECT_NE(dense.find("particles is too large"), std::string::npos) << dense;
+  ASSERT_EQ(unsetenv("LODESTONE_MEMORY_LIMIT_GIB"), 0);
+}
+
+// Without an override the limit is this machine's physical memory.
+TEST(SceneBadInput, MemoryLimitIsThePhysicalMemory) {
+  const double bytes = double(sysconf(_SC_PHYS_PAGES)) * double(sysconf(_SC_PAGE_SIZE));
+  EXPECT_EQ(memoryLimitBytes(), bytes);
+  ASSERT_EQ(setenv("LODESTONE_MEMORY_LIMIT_GIB", "0.5", 1), 0);
+  EXPECT_EQ(memoryLimitBytes(), 0.5 * 1024 * 1024 * 1024);
+  ASSERT_EQ(setenv("LODESTONE_MEMORY_LIMIT_GIB", "lots", 1), 0);
+  EXPECT_THROW(memoryLimitBytes(), InvalidArgument);
+  ASSERT_EQ(unsetenv("LODESTONE_MEMORY_LIMIT_GIB"), 0);
 }
 
 TEST(SceneBadInput, AGridTooCoarseForTheWallsIsSaidInTheDomainsTerms) {

@@ -211,7 +211,7 @@ TEST(Stability, AppliedFieldsFrom1e3To1e7) {
     std::unique_ptr<MpmSolver> s;
     const Outcome o = fluidBallInField(H, paperMaterial(), 3, s);
     expectStable(*s, o, concat("field ", H, " A/m"));
-    EXPECT_EQ(o.solves, 3);
+    EXPECT_GE(o.solves, 3);  // once per frame, and more where the strong fields move the ball fast
   }
 }
 

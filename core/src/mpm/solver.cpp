@@ -133,8 +133,10 @@ void MpmSettings::validate() const {
           "MPM settings: dtMin must be a positive finite time in s, at most dtMax = ", dtMax, " s, got ", dtMin);
   require(reorderInterval >= 0, "MPM settings: reorderInterval must be >= 0 substeps, got ", reorderInterval);
   require(magneticSolveInterval >= 0,
-          "MPM settings: magneticSolveInterval must be >= 0 substeps (0 = once per frame), got ",
-          magneticSolveInterval);
+          "MPM settings: magneticSolveInterval must be >= 0 substeps (0 = automatic), got ", magneticSolveInterval);
+  require(std::isfinite(magneticSolveDistance) && magneticSolveDistance >= 0,
+          "MPM settings: magneticSolveDistance must be finite and >= 0 cells (0 = once per frame), got ",
+          magneticSolveDistance);
   if (magneticGrid) magneticGrid->validate("magnetic stage grid");
   magnetic.validate();
   planner.validate();
@@ -381,12 +383,28 @@ const MagneticMaterial* MpmSolver::magneticLaw() const {
   return nullptr;
 }
 
+const ColliderMotion& MpmSolver::magnetMotion(std::size_t m) const {
+  return magnetCollider_[m] == kNoCollider ? magnetMotion_[m] : colliders_[magnetCollider_[m]].motion();
+}
+
 void MpmSolver::poseMagnetsAt(double t) const {
+  for (std::size_t m = 0; m < magnets_.size(); ++m) magnets_[m]->setPose(magnetMotion(m).poseAt(t));
+}
+
+bool MpmSolver::movedSinceSolve() const {
+  if (!(settings_.magneticSolveDistance > 0)) return false;
+  const double d = settings_.magneticSolveDistance * magneticGrid_.dx;
+  const auto magnetic = [this](std::size_t p) { return isMagneticPoint(p); };
+  if (!reuse_.pointsWithin(particles_.x, magnetic, d)) return true;
+  // Magnets: posed at the last solve (or the planner's last reuse test).
   for (std::size_t m = 0; m < magnets_.size(); ++m) {
-    const ColliderMotion& motion =
-        magnetCollider_[m] == kNoCollider ? magnetMotion_[m] : colliders_[magnetCollider_[m]].motion();
-    magnets_[m]->setPose(motion.poseAt(t));
+    const Pose now = magnetMotion(m).poseAt(time_), & then = magnets_[m]->pose();
+    double turn = 0;  // Frobenius norm of the rotation's change
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 3; ++c) turn += std::pow(now.rotation.m[r][c] - then.rotation.m[r][c], 2);
+    if (norm(now.position - then.position) + std::cbrt(magnets_[m]->volume()) * std::sqrt(turn) > d) return true;
   }
+  return false;
 }
 
 bool MpmSolver::lastSolveHolds() {
@@ -400,13 +418,19 @@ bool MpmSolver::lastSolveHolds() {
   return reuse_.fieldWithin(*scene_, time_, lastPlan_.reuseFieldChange);
 }
 
-MagneticPlan MpmSolver::planMagneticNow() const {
+MagneticPlan MpmSolver::planMagneticNow() const { return planMagneticAt(time_); }
+
+MagneticPlan MpmSolver::planMagneticAt(double t) const {
   std::vector<Vec3d> positions;
   const MagneticMaterial* law = magneticLaw();
   for (std::size_t p = 0; p < particles_.size(); ++p)
     if (isMagneticPoint(p)) positions.push_back(particles_.x[p]);
+  poseMagnetsAt(t);
+  PlannerInputs in = plannerInputs(positions, law ? *law : nonMagneticMaterial());
+  in.time = t;
+  MagneticPlan plan = planMagnetic(settings_.planner, in);
   poseMagnetsAt(time_);
-  return planMagnetic(settings_.planner, plannerInputs(positions, law ? *law : nonMagneticMaterial()));
+  return plan;
 }
 
 PlannerInputs MpmSolver::plannerInputs(const std::vector<Vec3d>& positions, const MagneticMaterial& law) const {
@@ -487,9 +511,9 @@ void MpmSolver::solveMagnetic(MpmStepReport& rep) {
     stage_->setMaterial(lastPlan_.linearLaw ? linearized(*law) : *law);
     sameGrid_ = solveGrid == settings_.grid;
     if (sameGrid_ && !(magneticForce_.spec() == settings_.grid)) magneticForce_.reset(settings_.grid, Vec3d{});
-    // What the reuse test compares against.
-    reuse_.record(particles_.x, index, *scene_, time_);
   }
+  // What the reuse test and the automatic solve frequency compare against.
+  reuse_.record(particles_.x, index, *scene_, time_);
   if (!stage_) stage_ = std::make_unique<MagneticForceStage>(magneticGrid_, *law, settings_.magnetic);
   const ParticleView view{positions.data(), counts.data(), positions.size()};
   rep.magnetic = stage_->run(view, *scene_, time_);
@@ -697,7 +721,8 @@ void MpmSolver::enforceDomainOfHandedOut(MpmStepReport& rep) {
 void MpmSolver::updateMagneticForce(MpmStepReport& rep) {
   const bool magneticScene = !scene_->empty() && anyMagneticParticles();
   if (magneticScene) {
-    bool due = settings_.magneticSolveInterval > 0 ? stepsSinceSolve_ >= settings_.magneticSolveInterval : frameStart_;
+    bool due = settings_.magneticSolveInterval > 0 ? stepsSinceSolve_ >= settings_.magneticSolveInterval
+                                                   : frameStart_ || movedSinceSolve();
     if (due && lastSolveHolds()) {
       due = false;  // nothing moved or changed enough: the last solve still holds
       rep.magneticReused = true;

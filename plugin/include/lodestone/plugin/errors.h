@@ -10,6 +10,13 @@ class NotBuilt : public Error {
   using Error::Error;
 };
 
+/// A grid or a particle set estimated too large for memory, refused before
+/// anything is allocated (the C ABI: LODESTONE_ERROR_OUT_OF_MEMORY).
+class TooLarge : public InvalidArgument {
+ public:
+  using InvalidArgument::InvalidArgument;
+};
+
 /// A node's cook failed; the message names the node and the cause.
 class CookFailed : public Error {
  public:

@@ -18,6 +18,11 @@
  * Handles. lodestone_context, lodestone_stage, lodestone_fields and
  * lodestone_network are opaque. Every object is created by a *_create function
  * and released by the matching *_destroy (destroying NULL is a no-op).
+ * A handle is an id, not the object's address: a handle that is no longer
+ * live (destroyed once already, say), one of another kind and a value the
+ * library never handed out are told apart from live handles and refused with
+ * LODESTONE_ERROR_INVALID_HANDLE by every function, *_destroy included, even
+ * after the library has created new objects meanwhile.
  * A stage, a field set or a network belongs to the context it was created in
  * and must be destroyed before it. Pointers passed in (particles, grids,
  * strings) are only read during the call; nothing keeps them. Buffers a
@@ -63,7 +68,7 @@ extern "C" {
 #endif
 
 #define LODESTONE_API_VERSION_MAJOR 1
-#define LODESTONE_API_VERSION_MINOR 0
+#define LODESTONE_API_VERSION_MINOR 1
 
 /* ---- status codes ------------------------------------------------------ */
 typedef int32_t lodestone_status;
@@ -72,13 +77,14 @@ typedef int32_t lodestone_status;
 #define LODESTONE_ERROR_NULL_HANDLE 2      /* a required handle or pointer was NULL */
 #define LODESTONE_ERROR_VERSION 3          /* requested API version not provided */
 #define LODESTONE_ERROR_NOT_BUILT 4        /* the feature needs a component not built (e.g. OpenVDB) */
-#define LODESTONE_ERROR_OUT_OF_MEMORY 5    /* std::bad_alloc inside the call */
+#define LODESTONE_ERROR_OUT_OF_MEMORY 5    /* estimated too large for memory (sized message), or std::bad_alloc */
 #define LODESTONE_ERROR_NOT_READY 6        /* e.g. reading fields of a stage that has not run */
 #define LODESTONE_ERROR_BUFFER_TOO_SMALL 7 /* the caller's buffer cannot hold the result */
 #define LODESTONE_ERROR_NOT_FOUND 8        /* no node type, node, parameter or port of that name */
 #define LODESTONE_ERROR_IO 9               /* a file could not be read or written */
 #define LODESTONE_ERROR_COOK_FAILED 10     /* a node's cook threw: the message names the node */
 #define LODESTONE_ERROR_INTERNAL 11        /* any other failure inside the library */
+#define LODESTONE_ERROR_INVALID_HANDLE 12  /* a handle already destroyed, of another kind, or never handed out */
 
 /* ---- plain types --------------------------------------------------------- */
 typedef struct lodestone_context lodestone_context;
@@ -139,11 +145,11 @@ typedef struct lodestone_stage_params {
   int32_t law;                   /* LODESTONE_LAW_* */
   double moment;                 /* A*m^2, Langevin micro-particle moment */
   double temperature;            /* K, Langevin */
-  double chi;                    /* linear susceptibility of the bulk material, >= 0 */
+  double chi;                    /* linear susceptibility of the bulk material, >= 0 (checked for every law) */
   double number_density;         /* n0, micro-particles per m^3 of bulk material (0: the paper's) */
   lodestone_grid grid;           /* the stage's grid before padding */
   int32_t padding;               /* cells of free space added on every side (0..64) */
-  double tolerance;              /* relative Newton residual, in [1e-14, 0.1] */
+  double tolerance;              /* relative Newton residual, in [1e-14, 0.1] (default 1e-8) */
   int32_t max_newton_iterations; /* 1..1000 */
   int32_t boundary;              /* LODESTONE_BOUNDARY_* */
   int32_t out_of_grid;           /* LODESTONE_OUT_OF_GRID_* */
@@ -314,6 +320,26 @@ typedef struct lodestone_api {
   /* Positions (m) of a cooked "particles" or "simulation" output; *count gets the number. */
   lodestone_status (*network_read_positions)(lodestone_network* network, const char* node, const char* output,
                                              lodestone_vec3_out* out, size_t* count);
+
+  /* ---- since minor 1 ---- */
+  /* The number density n0 (micro-particles per m^3 of bulk material) of the
+     stage's material, so that a host gives its particles n_p = n0 V_p
+     (0 for LODESTONE_LAW_NONE). */
+  lodestone_status (*stage_number_density)(const lodestone_stage* stage, double* n0);
+  /* The host's own particles (positions, counts) as the parameters
+     `positions` and `counts` of a "host_particles" node, copied; their
+     volumes are n_p / n0 of the node's material unless its `volumes` are set. */
+  lodestone_status (*network_set_particles)(lodestone_network* network, const char* node,
+                                            const lodestone_particles* particles);
+  /* Per-particle forces (N) of a cooked "forces" output (magnetic_force), in
+     the order of its particles; *count gets the number. */
+  lodestone_status (*network_read_forces)(lodestone_network* network, const char* node, const char* output,
+                                          lodestone_vec3_out* out, size_t* count);
+  /* A whole network from JSON text {"nodes": [{"name", "type", "params"}...],
+     "connections": [{"from", "output", "to", "input"}...]} (docs/plugin.md),
+     read as scene files are; on any error no network is made (*out = NULL). */
+  lodestone_status (*network_create_from_json)(lodestone_context* context, const char* json,
+                                               lodestone_network** out);
 } lodestone_api;
 
 /* The one exported symbol. On success *table points to a static table (never

@@ -67,14 +67,35 @@ ColliderMotion motionFrom(const ParamSet& params, const Pose& rest);
 /// goes to `restPose` when given.
 SourcesData::Magnet magnetFrom(const ParamSet& params, Pose* restPose = nullptr);
 
+/// Memory a simulation (or a magnetic stage) needs, bytes, estimated before
+/// anything is allocated: about 600 per grid node (the MPM grid and the
+/// field solve's padded grid with the solver's vectors and multigrid levels)
+/// and 400 per material point.
+double estimatedMemoryBytes(double nodes, double particles);
+
+/// What the estimate is compared with, bytes: the machine's physical memory,
+/// or the environment variable LODESTONE_MEMORY_LIMIT_GIB when it is set (a
+/// positive number of GiB; anything else throws InvalidArgument).
+double memoryLimitBytes();
+
+/// Throws TooLarge "<what>: a grid of a x b x c nodes at dx = h m [and N
+/// particles] is too large (needs about G GiB ...; limit ...)" when the
+/// estimate exceeds memoryLimitBytes() or an axis has more than 2^20 nodes.
+/// Node counts are doubles, so a tiny dx or a huge count is named rather
+/// than overflowing; a zero count leaves the grid out of the message.
+void requireFitsInMemory(const std::string& what, const double nodes[3], double dx, double particles);
+
+/// The material points a body of `volume` (m^3) gets at `particlesPerCell`
+/// in cells of `cellSize` (m): the estimate before emission.
+double estimatedParticles(double volume, double cellSize, int particlesPerCell);
+
 /// MPM settings of mpm_solver parameters (domain.*, time.*, gravity, magnetic.*):
 /// the grid covers [domain.min, domain.max] at domain.dx, the field solve's
 /// grid adds magnetic.padding cells of free space on every side. Throws
-/// InvalidArgument "domain: ..." for an empty box or a grid too large for
-/// memory (about 600 bytes per node, at most 25 GiB and 2^20 nodes an axis;
-/// counted in double, so a tiny dx is refused rather than overflowing), and
-/// MpmSettings::validate's errors.
-MpmSettings mpmSettingsFrom(const ParamSet& params);
+/// InvalidArgument "domain: ..." for an empty box, TooLarge when the grid and
+/// `particles` material points do not fit in memory (requireFitsInMemory),
+/// and MpmSettings::validate's errors.
+MpmSettings mpmSettingsFrom(const ParamSet& params, double particles = 0);
 
 /// Adds the applied fields, the magnets (field sources, and colliders where
 /// `collider` is set) and the colliders to `solver`, in that order.

@@ -51,6 +51,10 @@ struct ParamDecl {
   std::vector<std::string> choices;  ///< Choice: the allowed values
   bool required = false;             ///< scene files must give it (networks start from the default)
   ParamCondition when;
+  /// Another parameter this one replaces when given (remanence replaces
+  /// magnetization): the two are alternatives, and setting either on a
+  /// network makes it the one used.
+  std::string replaces;
   std::size_t minCount = 0, maxCount = std::numeric_limits<std::size_t>::max();  ///< FloatList lengths
 
   /// "> 0", "in [0, 1]", "" (numbers); for choices "one of a, b".
@@ -106,6 +110,7 @@ class ParamSet {
   /// as `remanence` or `magnetization`.
   bool given(const std::string& name) const { return given_.count(name) != 0; }
   void markGiven(const std::string& name) { given_[name] = true; }
+  void clearGiven(const std::string& name) { given_.erase(name); }
 
  private:
   std::map<std::string, ParamValue> values_;

@@ -99,7 +99,13 @@ struct MpmSettings {
   int reorderInterval = 20;  ///< substeps between sorts of the particles by grid cell, for memory locality in P2G
                              ///< (0 = never: indices stay stable; MpmParticles::id survives either way)
 
-  int magneticSolveInterval = 0;         ///< substeps between field solves; 0 = once per frame
+  int magneticSolveInterval = 0;         ///< substeps between field solves; 0 = automatic (below)
+  /// With magneticSolveInterval == 0: the field is solved at the first
+  /// substep of each frame and again as soon as a magnetic point or a
+  /// magnet (its centre, or its rotation times its size) has moved this many
+  /// magnetic-grid cells since the last solve, so the solve frequency follows
+  /// the motion, not the frame rate. 0: exactly once per frame.
+  double magneticSolveDistance = 0.25;
   std::optional<GridSpec> magneticGrid;  ///< grid of the magnetic stage; empty = the MPM grid (a grid not covering
                                          ///< every magnetic particle needs magnetic.outOfGrid = Skip)
   MagneticStageSettings magnetic;        ///< settings of the magnetic stage
@@ -276,6 +282,10 @@ class MpmSolver {
   /// The effects planner's decisions for the magnetic stages in the current
   /// state (what the next field solve would do), without solving.
   MagneticPlan planMagneticNow() const;
+  /// The plan with the material where it is now and the sources (magnets'
+  /// motion, time profiles) at time t (s): what a solve at t would do if
+  /// the material had not moved. The magnets are posed back afterwards.
+  MagneticPlan planMagneticAt(double t) const;
   /// The plan of the last field solve (empty decisions before the first, or
   /// when the planner is off).
   const MagneticPlan& lastMagneticPlan() const { return lastPlan_; }
@@ -299,7 +309,10 @@ class MpmSolver {
   bool lastSolveHolds();  // the planner's reuse test (field_reuse.h); poses the magnets when it samples the field
   bool isMagneticPoint(std::size_t p) const;    // a particle with n_p > 0 of a magnetic material
   const MagneticMaterial* magneticLaw() const;  // the (shared) law of the magnetic materials, or null
-  void poseMagnetsAt(double t) const;           // move the magnets to their motion's pose at t (s)
+  void poseMagnetsAt(double t) const;
+  const ColliderMotion& magnetMotion(std::size_t m) const;
+  /// Whether a magnetic point or a magnet moved magneticSolveDistance cells since the last solve.
+  bool movedSinceSolve() const;           // move the magnets to their motion's pose at t (s)
   PlannerInputs plannerInputs(const std::vector<Vec3d>& positions, const MagneticMaterial& law) const;
 
   MpmSettings settings_;
