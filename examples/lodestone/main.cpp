@@ -193,12 +193,27 @@ std::optional<int> parseArgs(int argc, char** argv, Args& a) {
   CLI::App& validate = *app.add_subcommand("validate", "check a scene file and print what it builds");
   addScene(validate);
   addResolution(validate);
+  validate.footer(
+      "Reads SCENE, builds everything it describes (grid, particles, materials, magnets,\n"
+      "colliders, applied fields) without simulating, prints a summary (grid size and dx,\n"
+      "particle count, each material's parameters, frames, time step and substeps per frame)\n"
+      "and ends with \"SCENE: valid\". A bad scene is refused with a message naming the key\n"
+      "and the value. Writes no file.\n"
+      "Exit codes: 0 valid; 1 error.");
 
   CLI::App& plan = *app.add_subcommand(
       "plan", "print which stages would run, why, at what predicted error and cost (the effects planner), "
               "without running");
   addScene(plan);
   addResolution(plan);
+  plan.footer(
+      "Builds SCENE as validate does and prints, for each stage (gravity, colliders, fluid\n"
+      "and elastic stress, the magnetic stages), whether lodestone run would run it and why.\n"
+      "With the effects planner on (the scene's \"accuracy\" or \"planner\"), also the choice\n"
+      "made for each magnetic stage, its predicted deviation from full physics against the\n"
+      "accuracy budget and its estimated cost per field solve; off, every configured stage\n"
+      "runs. Simulates nothing and writes no file (docs/planner.md).\n"
+      "Exit codes: 0 done; 1 error.");
 
   CLI::App& exportFields = *app.add_subcommand(
       "export-fields", "field solve of the state at frame N, written as OpenVDB grids n, phi, H, M, B, force");

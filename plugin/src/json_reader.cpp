@@ -12,6 +12,7 @@
 #include <utility>
 
 #include "lodestone/core/base/error.h"
+#include "lodestone/core/base/number_text.h"
 
 namespace lodestone::plugin {
 namespace {
@@ -31,10 +32,7 @@ std::string formatNumber(double v) {
   if (std::isnan(v)) return "nan";
   if (std::isinf(v)) return v > 0 ? "inf" : "-inf";
   char buf[40];
-  for (int precision = 6; precision <= 17; ++precision) {
-    std::snprintf(buf, sizeof buf, "%.*g", precision, v);
-    if (std::strtod(buf, nullptr) == v) break;
-  }
+  std::snprintf(buf, sizeof buf, "%.*g", std::max(6, roundTripDigits(v)), v);
   return buf;
 }
 

@@ -153,9 +153,16 @@ NodeDecl materialNode() {
 
 // ---- particle source -------------------------------------------------------
 void addShapeParams(std::vector<ParamDecl>& q, const std::vector<std::string>& shapes, const std::string& def) {
-  q.push_back(required(choiceParam("shape", "Shape", shapes, def,
-                                   "Shape of the body; level_set and mesh are read from a file (need OpenVDB).")));
+  const bool fileShapes = std::find(shapes.begin(), shapes.end(), "level_set") != shapes.end();
+  q.push_back(required(choiceParam(
+      "shape", "Shape", shapes, def,
+      fileShapes ? "Shape of the body; level_set and mesh are read from a file (need OpenVDB)." : "Shape of the body.")));
 }
+
+// The help of `center`, which scene files also read for the file shapes.
+constexpr const char* kFileShapeCenterHelp =
+    "Centre of the shape. Scene files: also for level_set and mesh, where the file's origin is placed (default the "
+    "world origin).";
 
 void addFileShapeParams(std::vector<ParamDecl>& q) {
   q.push_back(when(required(stringParam("file", "File", "shape.vdb",
@@ -179,7 +186,7 @@ NodeDecl particleSourceNode() {
   auto& q = d.params;
   q.push_back(stringParam("name", "Name", "body", "Name of the body."));
   addShapeParams(q, {"box", "sphere", "cylinder", "level_set", "mesh"}, "box");
-  q.push_back(when(required(vec3Param("center", "Center", {}, "m", "Centre of the shape.")), "shape",
+  q.push_back(when(required(vec3Param("center", "Center", {}, "m", kFileShapeCenterHelp)), "shape",
                    {"box", "sphere", "cylinder"}));
   q.push_back(directionParam("axis", "Axis", {0, 0, 1},
                              "Body z axis (the cylinder's axis); a file shape's z axis is turned onto it."));
@@ -351,9 +358,12 @@ NodeDecl colliderNode() {
       when(required(vec3Param("point", "Point", {0, 0, -0.08}, "m", "A point of the plane.")), "shape", {"plane"}));
   q.push_back(when(required(directionParam("normal", "Normal", {0, 0, 1}, "Plane normal (into the free side).")),
                    "shape", {"plane"}));
-  q.push_back(when(required(vec3Param("center", "Center", {}, "m", "Centre of the shape.")), "shape",
+  q.push_back(when(required(vec3Param("center", "Center", {}, "m", kFileShapeCenterHelp)), "shape",
                    {"box", "sphere", "cylinder"}));
-  q.push_back(when(directionParam("axis", "Axis", {0, 0, 1}, "Body z axis."), "shape", {"box", "sphere", "cylinder"}));
+  q.push_back(when(directionParam("axis", "Axis", {0, 0, 1},
+                                  "Body z axis. Scene files: also for level_set and mesh, the direction the file's z "
+                                  "axis is turned onto."),
+                   "shape", {"box", "sphere", "cylinder"}));
   addFileShapeParams(q);
   q.push_back(when(required(positive(vec3Param("half_size", "Half size", {0.05, 0.05, 0.05}, "m", "Box half-sizes."))),
                    "shape", {"box"}));

@@ -4,6 +4,7 @@
 // stage's numbers.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <functional>
@@ -216,6 +217,27 @@ TEST(PluginNodes, DocsNodesMdIsUpToDate) {
   ss << in.rdbuf();
   EXPECT_TRUE(ss.str() == nodesMarkdown()) << "docs/nodes.md differs from the node declarations; regenerate it with "
                                               "`lodestone nodes --markdown > docs/nodes.md`";
+}
+
+// A shape's help names only shapes its node offers, and the help of
+// `center` says that scene files read it for the file shapes too.
+TEST(PluginNodes, ShapeHelpNamesOnlyTheOfferedShapes) {
+  const std::vector<std::string> allShapes = {"plane", "box", "sphere", "cylinder", "level_set", "mesh"};
+  for (const NodeDecl& d : nodeRegistry()) {
+    const ParamDecl* shape = d.param("shape");
+    if (!shape) continue;
+    for (const std::string& s : allShapes) {
+      const bool offered = std::find(shape->choices.begin(), shape->choices.end(), s) != shape->choices.end();
+      if (!offered) {
+        EXPECT_EQ(shape->help.find(s), std::string::npos) << d.type << ": " << shape->help;
+      }
+    }
+    const ParamDecl* center = d.param("center");
+    const bool fileShapes = std::find(shape->choices.begin(), shape->choices.end(), "mesh") != shape->choices.end();
+    if (center && fileShapes) {
+      EXPECT_NE(center->help.find("level_set and mesh"), std::string::npos) << d.type << ": " << center->help;
+    }
+  }
 }
 
 std::string outputJson(const lodestone_api* a, lodestone_network* n, const char* node, const char* out) {

@@ -67,10 +67,13 @@ double magnetizationFromRemanence(double remanence) {
 std::string MagneticMaterial::describe() const {
   switch (law.kind) {
     case LawKind::Langevin:
-      return concat("Langevin: m = ", law.moment, " A*m^2, k2 = ", law.k2, " m/A, n0 = ", numberDensity,
-                    " 1/m^3, Ms = ", saturation(), " A/m, chi0 = ", lowFieldSusceptibility());
+      // Six significant digits: k2, Ms and chi0 are derived (a person reads them).
+      return concat("Langevin: m = ", numberText(law.moment, 6), " A*m^2, k2 = ", numberText(law.k2, 6),
+                    " m/A, n0 = ", numberText(numberDensity, 6), " 1/m^3, Ms = ", numberText(saturation(), 6),
+                    " A/m, chi0 = ", numberText(lowFieldSusceptibility(), 6));
     case LawKind::Linear:
-      return concat("linear: chi = ", lowFieldSusceptibility(), " at n0 = ", numberDensity, " 1/m^3");
+      return concat("linear: chi = ", numberText(lowFieldSusceptibility(), 6), " at n0 = ", numberText(numberDensity, 6),
+                    " 1/m^3");
     default:
       return "non-magnetic";
   }

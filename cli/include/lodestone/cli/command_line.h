@@ -9,6 +9,8 @@
 // arguments (parse()).
 #include <CLI/CLI.hpp>
 
+#include "lodestone/core/base/number_text.h"
+
 #include <climits>
 #include <cmath>
 #include <cstdlib>
@@ -35,12 +37,8 @@ inline std::optional<double> toNumber(const std::string& text) {
 /// whole number as digits unless the exponent form is shorter).
 inline std::string formatNumber(double v) {
   std::ostringstream s;
-  for (int digits = 1; digits <= std::numeric_limits<double>::max_digits10; ++digits) {
-    s.str("");
-    s.precision(digits);
-    s << v;
-    if (std::strtod(s.str().c_str(), nullptr) == v) break;
-  }
+  s.precision(roundTripDigits(v));
+  s << v;
   // The exponent without '+' and leading zeros: "1e+04" -> "1e4", "1e-08" -> "1e-8".
   std::string text = s.str();
   const std::size_t e = text.find('e');

@@ -5,6 +5,8 @@
 #include <stdexcept>
 #include <string>
 
+#include "lodestone/core/base/number_text.h"
+
 namespace lodestone {
 
 /// Base of every Lodestone exception.
@@ -20,15 +22,23 @@ class InvalidArgument : public Error {
 };
 
 namespace detail {
+template <typename T>
+void appendOne(std::ostringstream& os, const T& v) {
+  os << v;
+}
+inline void appendOne(std::ostringstream& os, double v) { os << numberText(v); }
+inline void appendOne(std::ostringstream& os, float v) { os << numberText(v); }
 inline void appendAll(std::ostringstream&) {}
 template <typename Head, typename... Tail>
 void appendAll(std::ostringstream& os, const Head& h, const Tail&... t) {
-  os << h;
+  appendOne(os, h);
   appendAll(os, t...);
 }
 }  // namespace detail
 
-/// Concatenates the arguments with operator<< (full double precision).
+/// Concatenates the arguments with operator<<; a double or float as the
+/// shortest text that reads back as the same value (numberText: "0.4", not
+/// "0.40000000000000002").
 template <typename... Args>
 std::string concat(const Args&... args) {
   std::ostringstream os;
