@@ -302,24 +302,47 @@ TEST(MpmMagnetic, DefaultSolveFrequencyFollowsTheMotionNotTheFrameRate) {
   EXPECT_GT(fine, 20);
 }
 
+namespace {
+// A cube of the paper's material above a small sphere magnet moving
+// sideways at 0.5 m/s, as a collider or not; `index` is the magnet's
+// collider index (collides) or magnet index.
+struct MovingMagnetScene {
+  std::unique_ptr<MpmSolver> solver;
+  SphereMagnet magnet;
+  Vec3d velocity{0.5, 0, 0};  // m/s
+  std::size_t index = 0;
+};
+
+MovingMagnetScene movingMagnetScene(bool collides) {
+  MpmSettings s;
+  s.grid.dx = kDx;
+  s.grid.dims = {24, 24, 24};
+  s.gravity = {0, 0, 0};
+  const double c = 0.5 * 23 * kDx;
+  MovingMagnetScene sc{std::make_unique<MpmSolver>(s),
+                       SphereMagnet(Pose::at({c, c, 0.03}), 0.015, {0, 0, magnetizationFromRemanence(1.2)})};
+  MpmSolver& solver = *sc.solver;
+  const std::uint32_t mag = solver.addMaterial(neoHookeanSolid(1e5, 0.3, 2500, paperMaterial()));
+  const ColliderMotion motion = ColliderMotion::constantVelocity(sc.magnet.pose(), sc.velocity, {});
+  sc.index = collides ? solver.addMagnet(sc.magnet, motion) : solver.addNonCollidingMagnet(sc.magnet, motion);
+  solver.emit(EmitterShape::box(Pose::at({c, c, 0.1}), {kHalf, kHalf, kHalf}), mag, {});
+  return sc;
+}
+
+}  // namespace
+
 TEST(MpmMagnetic, MagnetThatIsNotAColliderStillMovesItsField) {
   // A magnet that material passes through (no collider) follows its motion
   // too: its field is evaluated where the motion puts it at every solve
   // (it was added as a static source, its motion dropped and its field
   // reused every frame).
-  MpmSettings s;
-  s.grid.dx = kDx;
-  s.grid.dims = {24, 24, 24};
-  s.gravity = {0, 0, 0};
-  MpmSolver solver(s);
-  const std::uint32_t mag = solver.addMaterial(neoHookeanSolid(1e5, 0.3, 2500, paperMaterial()));
-  const double c = 0.5 * 23 * kDx;
-  const SphereMagnet magnet(Pose::at({c, c, 0.03}), 0.015, {0, 0, magnetizationFromRemanence(1.2)});
-  const Vec3d velocity{0.5, 0, 0};  // m/s
-  EXPECT_EQ(solver.addNonCollidingMagnet(magnet, ColliderMotion::constantVelocity(magnet.pose(), velocity, {})), 0u);
+  MovingMagnetScene sc = movingMagnetScene(false);
+  MpmSolver& solver = *sc.solver;
+  const SphereMagnet& magnet = sc.magnet;
+  const Vec3d velocity = sc.velocity;
+  EXPECT_EQ(sc.index, 0u);
   EXPECT_EQ(solver.magnetCount(), 1u);
   EXPECT_EQ(solver.colliderCount(), 0u);
-  solver.emit(EmitterShape::box(Pose::at({c, c, 0.1}), {kHalf, kHalf, kHalf}), mag, {});
   for (int f = 0; f < 3; ++f) {
     const MpmFrameReport r = solver.advanceFrame(0.002);
     ASSERT_EQ(r.magneticReports.size(), 1u);
@@ -333,17 +356,11 @@ TEST(MpmMagnetic, MagnetThatIsNotAColliderStillMovesItsField) {
 TEST(MpmMagnetic, MovingMagnetMovesItsFieldAndItsCollider) {
   // A magnet moving at constant velocity: before each solve the field source
   // is placed where the collider is, so both move together.
-  MpmSettings s;
-  s.grid.dx = kDx;
-  s.grid.dims = {24, 24, 24};
-  s.gravity = {0, 0, 0};
-  MpmSolver solver(s);
-  const std::uint32_t mag = solver.addMaterial(neoHookeanSolid(1e5, 0.3, 2500, paperMaterial()));
-  const double c = 0.5 * 23 * kDx;
-  const SphereMagnet magnet(Pose::at({c, c, 0.03}), 0.015, {0, 0, magnetizationFromRemanence(1.2)});
-  const Vec3d velocity{0.5, 0, 0};  // m/s
-  const std::size_t ci = solver.addMagnet(magnet, ColliderMotion::constantVelocity(magnet.pose(), velocity, {}));
-  solver.emit(EmitterShape::box(Pose::at({c, c, 0.1}), {kHalf, kHalf, kHalf}), mag, {});
+  MovingMagnetScene sc = movingMagnetScene(true);
+  MpmSolver& solver = *sc.solver;
+  const SphereMagnet& magnet = sc.magnet;
+  const Vec3d velocity = sc.velocity;
+  const std::size_t ci = sc.index;
   Vec3d impulse{};  // N*s, of the magnetic force on the cube
   for (int f = 0; f < 3; ++f) {
     const MpmFrameReport r = solver.advanceFrame(0.002);
