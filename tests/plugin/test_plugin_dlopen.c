@@ -14,15 +14,7 @@
 
 #include "lodestone/plugin/lodestone.h"
 
-static int failures = 0;
-
-#define CHECK(cond)                                                      \
-  do {                                                                   \
-    if (!(cond)) {                                                       \
-      fprintf(stderr, "%s:%d: failed: %s\n", __FILE__, __LINE__, #cond); \
-      ++failures;                                                        \
-    }                                                                    \
-  } while (0)
+#include "c_check.h"
 
 int main(int argc, char** argv) {
   void* lib = NULL;
