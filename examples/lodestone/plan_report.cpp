@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "lodestone/core/base/error.h"
+#include "lodestone/plugin/node_builders.h"
 
 namespace lodestone::examples {
 
@@ -129,6 +130,13 @@ void printPlan(const plugin::Scene& scene, const MpmSolver& solver, std::FILE* o
     std::fprintf(out, "  estimated run time: %.3g to %.3g s for %d frames (2 cores)\n", low, high, scene.frames);
   else
     std::fprintf(out, "  estimated run time: about %.3g s for %d frames (2 cores)\n", low, scene.frames);
+
+  // Memory: the estimate the scene was checked against before building.
+  const double nodes = double(scene.settings.grid.nodeCount()) + (mg == scene.settings.grid ? 0.0 : double(mg.nodeCount()));
+  const double gib = double(std::size_t(1) << 30);
+  std::fprintf(out, "  estimated memory: %.3g GiB (%.4g grid nodes, %zu particles) of %.3g GiB\n",
+               plugin::estimatedMemoryBytes(nodes, double(solver.particles().size())) / gib, nodes,
+               solver.particles().size(), plugin::memoryLimitBytes() / gib);
 
   // Warnings: resolution, and settings that will blow up or lag.
   const double halfWidth = magneticHalfWidth(solver);

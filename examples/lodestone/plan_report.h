@@ -23,7 +23,7 @@ double substepsPerFrame(const plugin::Scene& scene, const MpmSolver& solver);
 /// Prints the plan of `solver` over the scene's whole time line (the
 /// sources sampled at up to 16 frames, the material where it is now): every
 /// stage, on or off, the reason, the predicted error; substeps and field
-/// solves per frame, the estimated run time, and warnings (resolution, a
+/// solves per frame, the estimated run time and memory, and warnings (resolution, a
 /// time step above the stable one, a field solved once per many substeps).
 void printPlan(const plugin::Scene& scene, const MpmSolver& solver, std::FILE* out);
 
