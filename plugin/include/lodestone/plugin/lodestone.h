@@ -175,10 +175,11 @@ typedef struct lodestone_report {
 typedef int32_t lodestone_field_kind;
 #define LODESTONE_FIELD_DENSITY 0       /* n, 1/m^3 (scalar) */
 #define LODESTONE_FIELD_POTENTIAL 1     /* phi, A (scalar) */
-#define LODESTONE_FIELD_APPLIED 2       /* H_ext, A/m */
-#define LODESTONE_FIELD_H 3             /* H, A/m */
-#define LODESTONE_FIELD_M 4             /* M, A/m */
-#define LODESTONE_FIELD_B 5             /* B, T */
+#define LODESTONE_FIELD_APPLIED 2       /* H_ext, A/m, as the material sees it: inside a magnet,
+                                           the field outside continued through its nearest face */
+#define LODESTONE_FIELD_H 3             /* H, A/m (the true field, inside magnets too) */
+#define LODESTONE_FIELD_M 4             /* M, A/m: the material's plus permanent magnets' own */
+#define LODESTONE_FIELD_B 5             /* B = mu0 (H + M), T */
 #define LODESTONE_FIELD_FORCE_DENSITY 6 /* t = div T, N/m^3 */
 #define LODESTONE_FIELD_NODAL_FORCE 7   /* f, N */
 
