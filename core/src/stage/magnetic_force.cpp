@@ -115,8 +115,8 @@ void stressDivergence(GridView<const Vec3d> H, GridView<const Vec3d> B, GridView
             const Vec3d cUp = applied->exteriorContinuation(x + d, time),
                         cDn = applied->exteriorContinuation(x - d, time);
             Vec3d dH;  // derivative along M / |M|, A/m^2
-            if (cUp == cDn) {
-              dH = (seen(x + d) - seen(x - d)) / (2 * h);
+            if (cUp == cDn) {  // the continuation cancels
+              dH = (applied->field(x + d, time) - applied->field(x - d, time)) / (2 * h);
             } else {
               const double side = norm2(cUp) < norm2(cDn) ? 1.0 : -1.0;
               const Vec3d e = side * d;
