@@ -16,6 +16,20 @@
 
 #include "c_check.h"
 
+/* dlopens the plugin at `path` into *lib and returns its lodestone_get_api
+   (NULL, with a message, when either fails). */
+static lodestone_get_api_fn openPlugin(const char* path, void** lib) {
+  lodestone_get_api_fn get = NULL;
+  *lib = dlopen(path, RTLD_NOW | RTLD_LOCAL);
+  if (!*lib) {
+    fprintf(stderr, "dlopen: %s\n", dlerror());
+    return NULL;
+  }
+  *(void**)&get = dlsym(*lib, "lodestone_get_api");
+  CHECK(get != NULL);
+  return get;
+}
+
 int main(int argc, char** argv) {
   void* lib = NULL;
   lodestone_get_api_fn get = NULL;
@@ -30,13 +44,7 @@ int main(int argc, char** argv) {
     return 2;
   }
   /* Success only, then unloaded. */
-  lib = dlopen(argv[1], RTLD_NOW | RTLD_LOCAL);
-  if (!lib) {
-    fprintf(stderr, "dlopen: %s\n", dlerror());
-    return 1;
-  }
-  *(void**)&get = dlsym(lib, "lodestone_get_api");
-  CHECK(get != NULL);
+  get = openPlugin(argv[1], &lib);
   if (!get) return 1;
   CHECK(get(LODESTONE_API_VERSION_MAJOR, LODESTONE_API_VERSION_MINOR, &api) == LODESTONE_OK);
   if (!api) return 1;
@@ -62,13 +70,7 @@ int main(int argc, char** argv) {
   }
 
   /* Error paths. */
-  lib = dlopen(argv[1], RTLD_NOW | RTLD_LOCAL);
-  if (!lib) {
-    fprintf(stderr, "dlopen: %s\n", dlerror());
-    return 1;
-  }
-  *(void**)&get = dlsym(lib, "lodestone_get_api");
-  CHECK(get != NULL);
+  get = openPlugin(argv[1], &lib);
   if (!get) return 1;
 
   CHECK(get(LODESTONE_API_VERSION_MAJOR + 1, 0, &api) == LODESTONE_ERROR_VERSION && api == NULL);
