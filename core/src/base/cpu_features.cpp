@@ -1,6 +1,7 @@
 #include "lodestone/core/base/cpu_features.h"
 
 namespace lodestone {
+inline namespace base {
 
 bool cpuHasAvx2Fma() {
 #if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
@@ -14,4 +15,5 @@ bool cpuHasAvx2Fma() {
 #endif
 }
 
+}  // namespace base
 }  // namespace lodestone

@@ -5,6 +5,7 @@
 #include "lodestone/core/base/error.h"
 
 namespace lodestone {
+inline namespace base {
 
 Pose Pose::fromQuaternion(const Vec3d& position, double w, double x, double y, double z) {
   require(isFinite(position), "pose: position must be finite");
@@ -30,4 +31,5 @@ Pose Pose::fromAxisAngle(const Vec3d& position, const Vec3d& axis, double angle)
   return fromQuaternion(position, std::cos(0.5 * angle), axis.x * s, axis.y * s, axis.z * s);
 }
 
+}  // namespace base
 }  // namespace lodestone

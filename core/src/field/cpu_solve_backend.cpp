@@ -10,6 +10,7 @@
 #include "lodestone/core/base/parallel.h"
 
 namespace lodestone {
+inline namespace field {
 
 namespace {
 template <typename Fn>
@@ -204,4 +205,5 @@ double CpuSolveBackend::wallDot(WallVec a, WallVec b) { return deterministicDot(
 void CpuSolveBackend::copyWall(WallVec from, WallVec to) { w(to) = w(from); }
 void CpuSolveBackend::swapWall(WallVec a, WallVec b) { w(a).swap(w(b)); }
 
+}  // namespace field
 }  // namespace lodestone

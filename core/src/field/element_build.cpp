@@ -9,6 +9,7 @@
 #endif
 
 namespace lodestone {
+inline namespace field {
 
 namespace {
 constexpr q1::Tables kQ1 = q1::makeTables();
@@ -117,4 +118,5 @@ void buildElementMatrix(double dx, const ResponseBatch& r, double E[36]) {
   if (!buildElementMatrixVector(dx, r, E)) buildElementMatrixScalar(dx, r, E);
 }
 
+}  // namespace field
 }  // namespace lodestone

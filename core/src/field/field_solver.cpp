@@ -1,6 +1,7 @@
 #include "lodestone/core/field/field_solver.h"
 
 namespace lodestone {
+inline namespace field {
 
 FieldSolveReport solveField(MagnetostaticProblem& problem, std::vector<double>& phi,
                             const FieldSolveSettings& settings, const SolveProgress& progress,
@@ -11,4 +12,5 @@ FieldSolveReport solveField(MagnetostaticProblem& problem, std::vector<double>& 
   return NewtonSolver(backend, settings, progress).solve();
 }
 
+}  // namespace field
 }  // namespace lodestone

@@ -9,6 +9,7 @@
 #include "lodestone/core/base/error.h"
 
 namespace lodestone {
+inline namespace field {
 
 template <typename T>
 void HullStencil<T>::build(const GridSpec& grid, const std::size_t* cellBase, std::size_t cells) {
@@ -176,4 +177,5 @@ template void HullStencil<float>::assignConverted<double>(const HullStencil<doub
 template void HullStencil<double>::assignConverted<double>(const HullStencil<double>&);
 template void HullStencil<float>::addDiagonal<float>(float*) const;
 
+}  // namespace field
 }  // namespace lodestone

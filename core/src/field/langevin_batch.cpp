@@ -10,6 +10,7 @@
 #endif
 
 namespace lodestone {
+inline namespace field {
 
 void respondBatchScalar(const MagnetizationLaw<double>& law, const double n[8], const Vec3d H[8],
                         ResponseBatch& out) {
@@ -35,7 +36,7 @@ extern "C" __attribute__((target("avx2"))) __m256d _ZGVdN4v_log(__m256d);
 extern "C" __attribute__((target("avx2"))) __m256d _ZGVdN4v_log1p(__m256d);
 
 namespace {
-// The series coefficients of langevin.h (detail::seriesP/Q/S, double).
+// The series coefficients of langevin.h (langevin_series::seriesP/Q/S, double).
 constexpr double kP[12] = {0.3333333333333333,     0.03333333333333333,    0.0011904761904761906,
                            2.2045855379188714e-05, 2.505210838544172e-07,  1.9270852604185937e-09,
                            1.0706029224547743e-11, 4.498331606952833e-14,  1.4797143443923793e-16,
@@ -136,4 +137,5 @@ void respondBatch(const MagnetizationLaw<double>& law, const double n[8], const 
   if (!respondBatchVector(law, n, H, out)) respondBatchScalar(law, n, H, out);
 }
 
+}  // namespace field
 }  // namespace lodestone

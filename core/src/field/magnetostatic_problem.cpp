@@ -17,6 +17,7 @@
 #include "lodestone/core/field/q1_stencil.h"
 
 namespace lodestone {
+inline namespace field {
 
 namespace {
 constexpr q1::Tables kQ1 = q1::makeTables();
@@ -611,4 +612,5 @@ void MagnetostaticProblem::addWallCoupling(const double* v, double* out) const {
   });
 }
 
+}  // namespace field
 }  // namespace lodestone

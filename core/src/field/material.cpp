@@ -6,6 +6,7 @@
 #include "lodestone/core/base/error.h"
 
 namespace lodestone {
+inline namespace field {
 
 MagnetizationLaw<double> langevinLaw(double moment, double temperature) {
   require(std::isfinite(moment) && moment > 0,
@@ -79,4 +80,5 @@ std::string MagneticMaterial::describe() const {
   }
 }
 
+}  // namespace field
 }  // namespace lodestone

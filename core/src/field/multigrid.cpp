@@ -20,6 +20,7 @@
 #include "lodestone/core/field/q1_stencil.h"
 
 namespace lodestone {
+inline namespace field {
 
 namespace {
 
@@ -943,4 +944,5 @@ int MultigridPreconditioner::levelCount() const {
   return double_ ? double_->levelCount() : 0;
 }
 
+}  // namespace field
 }  // namespace lodestone

@@ -10,6 +10,7 @@
 #endif
 
 namespace lodestone {
+inline namespace field {
 
 namespace {
 
@@ -79,4 +80,5 @@ double multipoleSum(const MultipoleArrays& blocks, const Vec3d& x) {
   return sumPortable(blocks, x);
 }
 
+}  // namespace field
 }  // namespace lodestone

@@ -13,6 +13,7 @@
 // so that gpu/ compiles this file into its standalone build.
 
 namespace lodestone {
+inline namespace field {
 
 namespace {
 // Predicted-wall steps that did not help (rejected, or accepted with less
@@ -430,4 +431,5 @@ FieldSolveReport NewtonSolver::finish() {
   return std::move(rep_);
 }
 
+}  // namespace field
 }  // namespace lodestone

@@ -10,6 +10,7 @@
 #include "lodestone/core/field/pcg_iteration.h"
 
 namespace lodestone {
+inline namespace field {
 
 namespace {
 template <typename Fn>
@@ -127,4 +128,5 @@ PcgResult solvePcg(std::size_t n, const std::function<void(const double*, double
   return pcgIterate(ops, relTol, maxIterations);
 }
 
+}  // namespace field
 }  // namespace lodestone

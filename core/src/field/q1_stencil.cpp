@@ -9,6 +9,7 @@
 #include <tbb/parallel_for.h>
 
 namespace lodestone {
+inline namespace field {
 
 const char* toString(BoundaryKind kind) {
   switch (kind) {
@@ -139,4 +140,5 @@ void setFixedNodes(const GridSpec& grid, BoundaryKind boundary, float value, flo
   setFixedNodesT(grid, boundary, value, v);
 }
 
+}  // namespace field
 }  // namespace lodestone

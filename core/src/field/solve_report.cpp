@@ -3,6 +3,7 @@
 // Portable: compiled into gpu/'s standalone build as well.
 
 namespace lodestone {
+inline namespace field {
 
 const char* toString(SolveStatus status) {
   switch (status) {
@@ -17,4 +18,5 @@ const char* toString(SolveStatus status) {
   return "unknown";
 }
 
+}  // namespace field
 }  // namespace lodestone

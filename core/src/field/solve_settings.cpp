@@ -7,6 +7,7 @@
 // Portable: compiled into gpu/'s standalone build as well.
 
 namespace lodestone {
+inline namespace field {
 
 const char* toString(PreconditionerKind kind) {
   switch (kind) {
@@ -46,4 +47,5 @@ void FieldSolveSettings::validate() const {
   multigrid.validate();
 }
 
+}  // namespace field
 }  // namespace lodestone

@@ -9,6 +9,7 @@
 #include "lodestone/core/base/hash.h"
 
 namespace lodestone {
+inline namespace mpm {
 
 namespace {
 
@@ -421,4 +422,5 @@ MpmCheckpointInfo restoreMpmCheckpoint(MpmSolver& solver, const std::uint8_t* da
   return MpmCheckpointAccess::restore(solver, data, size, expectedTag);
 }
 
+}  // namespace mpm
 }  // namespace lodestone

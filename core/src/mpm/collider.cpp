@@ -9,6 +9,7 @@
 #include "lodestone/core/sources/magnet_source.h"
 
 namespace lodestone {
+inline namespace mpm {
 
 namespace {
 
@@ -336,4 +337,5 @@ Vec3d MpmCollider::velocity(const Vec3d& x, double t) const {
 
 Vec3d MpmCollider::apply(const Vec3d& x, const Vec3d& v, double t) const { return apply(stateAt(t), x, v); }
 
+}  // namespace mpm
 }  // namespace lodestone

@@ -8,6 +8,7 @@
 #include "lodestone/core/sources/magnet_source.h"
 
 namespace lodestone {
+inline namespace mpm {
 
 namespace {
 
@@ -234,4 +235,5 @@ EmitReport emitParticles(MpmParticles& particles, const EmitterShape& shape, con
   return rep;
 }
 
+}  // namespace mpm
 }  // namespace lodestone

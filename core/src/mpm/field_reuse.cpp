@@ -8,6 +8,7 @@
 #include "lodestone/core/planner/effects_planner.h"
 
 namespace lodestone {
+inline namespace mpm {
 
 void FieldReuse::record(const std::vector<Vec3d>& positions, const std::vector<std::uint32_t>& magneticPoints,
                         const FieldSource& applied, double t) {
@@ -43,4 +44,5 @@ void FieldReuse::restore(std::vector<Vec3d> positions, std::vector<std::uint32_t
   fields_ = std::move(fields);
 }
 
+}  // namespace mpm
 }  // namespace lodestone

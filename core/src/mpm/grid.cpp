@@ -20,6 +20,7 @@
 #include "lodestone/core/mpm/constitutive.h"
 
 namespace lodestone {
+inline namespace mpm {
 
 namespace {
 
@@ -473,4 +474,5 @@ GridToParticleReport MpmGrid::gridToParticle(MpmParticles& particles, const std:
   return rep;
 }
 
+}  // namespace mpm
 }  // namespace lodestone

@@ -5,6 +5,7 @@
 #include "lodestone/core/base/error.h"
 
 namespace lodestone {
+inline namespace mpm {
 
 const char* toString(MpmModel model) {
   switch (model) {
@@ -105,4 +106,5 @@ MpmMaterial viscousFluid(double viscosity, double bulkModulus, double density, c
   return m;
 }
 
+}  // namespace mpm
 }  // namespace lodestone

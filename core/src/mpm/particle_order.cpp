@@ -2,6 +2,7 @@
 #include "lodestone/core/mpm/particle_order.h"
 
 namespace lodestone {
+inline namespace mpm {
 
 bool particleReorderDue(int interval, long long substeps) { return interval > 0 && substeps % interval == 0; }
 
@@ -12,4 +13,5 @@ bool reorderParticles(const std::vector<std::uint32_t>& order, MpmParticles& par
   return true;
 }
 
+}  // namespace mpm
 }  // namespace lodestone

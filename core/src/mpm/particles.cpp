@@ -9,6 +9,7 @@
 #include "lodestone/core/base/parallel.h"
 
 namespace lodestone {
+inline namespace mpm {
 
 namespace {
 template <typename V>
@@ -158,4 +159,5 @@ Vec3d MpmParticles::centreOfMass() const {
   return deterministicSum<Vec3d>(size(), [&](std::size_t p) { return mass[p] * x[p]; }) / m;
 }
 
+}  // namespace mpm
 }  // namespace lodestone

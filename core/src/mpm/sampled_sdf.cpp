@@ -7,6 +7,7 @@
 #include "lodestone/core/base/error.h"
 
 namespace lodestone {
+inline namespace mpm {
 
 SampledSdf::SampledSdf(const GridSpec& spec, std::vector<float> values, std::string description)
     : spec_(spec), values_(std::move(values)), description_(std::move(description)) {
@@ -54,4 +55,5 @@ void SampledSdf::interiorBounds(Vec3d& lo, Vec3d& hi) const {
   hi = interiorHi_;
 }
 
+}  // namespace mpm
 }  // namespace lodestone

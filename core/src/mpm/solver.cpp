@@ -22,6 +22,7 @@
 #include "lodestone/core/sources/sphere_magnet.h"
 
 namespace lodestone {
+inline namespace mpm {
 
 namespace {
 using Clock = std::chrono::steady_clock;
@@ -875,4 +876,5 @@ MpmEnergies MpmSolver::energies() const {
   return e;
 }
 
+}  // namespace mpm
 }  // namespace lodestone

@@ -3,6 +3,7 @@
 #include "lodestone/core/base/error.h"
 
 namespace lodestone {
+inline namespace planner {
 
 const char* toString(AccuracyPreset preset) {
   switch (preset) {
@@ -48,4 +49,5 @@ AccuracyPreset parseAccuracyPreset(const std::string& name) {
   throw InvalidArgument(concat("accuracy preset '", name, "' is not one of draft, preview, final"));
 }
 
+}  // namespace planner
 }  // namespace lodestone

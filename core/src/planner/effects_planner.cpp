@@ -8,6 +8,7 @@
 #include "lodestone/core/field/magnetization_law.h"
 
 namespace lodestone {
+inline namespace planner {
 
 namespace {
 constexpr double kShare = 0.25;            // each decision's share of the budget
@@ -197,4 +198,5 @@ MagneticPlan planMagnetic(const PlannerSettings& settings, const PlannerInputs& 
   return plan;
 }
 
+}  // namespace planner
 }  // namespace lodestone

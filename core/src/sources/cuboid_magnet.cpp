@@ -8,6 +8,7 @@
 #include "lodestone/core/base/error.h"
 
 namespace lodestone {
+inline namespace sources {
 
 namespace {
 
@@ -145,4 +146,5 @@ std::unique_ptr<FieldSource> CuboidMagnet::clone() const {
   return std::make_unique<CuboidMagnet>(*this);
 }
 
+}  // namespace sources
 }  // namespace lodestone

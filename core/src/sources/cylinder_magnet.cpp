@@ -9,6 +9,7 @@
 #include "lodestone/core/base/error.h"
 
 namespace lodestone {
+inline namespace sources {
 
 namespace {
 
@@ -118,4 +119,5 @@ std::unique_ptr<FieldSource> CylinderMagnet::clone() const {
   return std::make_unique<CylinderMagnet>(*this);
 }
 
+}  // namespace sources
 }  // namespace lodestone

@@ -3,6 +3,7 @@
 #include <atomic>
 
 namespace lodestone {
+inline namespace sources {
 
 namespace {
 std::uint64_t nextInstanceId() {
@@ -20,4 +21,5 @@ FieldSource& FieldSource::operator=(const FieldSource&) {
   return *this;
 }
 
+}  // namespace sources
 }  // namespace lodestone

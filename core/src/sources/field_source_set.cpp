@@ -5,6 +5,7 @@
 #include "lodestone/core/base/error.h"
 
 namespace lodestone {
+inline namespace sources {
 
 FieldSourceSet::FieldSourceSet(const FieldSourceSet& other) : FieldSource(other) {
   sources_.reserve(other.sources_.size());
@@ -83,4 +84,5 @@ std::unique_ptr<FieldSource> FieldSourceSet::clone() const {
   return std::make_unique<FieldSourceSet>(*this);
 }
 
+}  // namespace sources
 }  // namespace lodestone

@@ -8,6 +8,7 @@
 #include "lodestone/core/sources/point_dipole.h"
 
 namespace lodestone {
+inline namespace sources {
 
 void validatePose(const Pose& pose, const char* who) {
   const Vec3d& p = pose.position;
@@ -118,4 +119,5 @@ Vec3d symmetricMagnetFarField(const Vec3d& M, double volume, const Vec3d& second
   return isFinite(H) ? H : Vec3d{};
 }
 
+}  // namespace sources
 }  // namespace lodestone

@@ -7,6 +7,7 @@
 #include "lodestone/core/base/error.h"
 
 namespace lodestone {
+inline namespace sources {
 
 Vec3d dipoleField(const Vec3d& moment, const Vec3d& r) {
   const double d = norm(r);  // rescaled, so no overflow for huge |r|
@@ -52,4 +53,5 @@ std::unique_ptr<FieldSource> PointDipole::clone() const {
   return std::make_unique<PointDipole>(*this);
 }
 
+}  // namespace sources
 }  // namespace lodestone

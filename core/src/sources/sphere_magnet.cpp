@@ -8,6 +8,7 @@
 #include "lodestone/core/sources/point_dipole.h"
 
 namespace lodestone {
+inline namespace sources {
 
 namespace {
 double checkedRadius(double radius) {
@@ -50,4 +51,5 @@ std::unique_ptr<FieldSource> SphereMagnet::clone() const {
   return std::make_unique<SphereMagnet>(*this);
 }
 
+}  // namespace sources
 }  // namespace lodestone

@@ -9,6 +9,7 @@
 #include "lodestone/core/base/error.h"
 
 namespace lodestone {
+inline namespace sources {
 
 TimeProfile TimeProfile::constant(double value) {
   require(std::isfinite(value), "time profile: constant factor must be finite, got ", value);
@@ -113,4 +114,5 @@ std::string TimeProfile::describe() const {
   return "unknown";
 }
 
+}  // namespace sources
 }  // namespace lodestone

@@ -5,6 +5,7 @@
 #include "lodestone/core/base/error.h"
 
 namespace lodestone {
+inline namespace sources {
 
 UniformField::UniformField(const Vec3d& H, TimeProfile scale) : H_(H), scale_(std::move(scale)) {
   require(isFinite(H), "uniform field: H must be finite (A/m), got (", H.x, ", ", H.y, ", ", H.z,
@@ -34,4 +35,5 @@ std::unique_ptr<FieldSource> UniformField::clone() const {
   return std::make_unique<UniformField>(*this);
 }
 
+}  // namespace sources
 }  // namespace lodestone

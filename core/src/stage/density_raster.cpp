@@ -8,6 +8,7 @@
 #include "lodestone/core/base/error.h"
 
 namespace lodestone {
+inline namespace stage {
 
 namespace {
 
@@ -69,4 +70,5 @@ DenseGrid<double> rasterizeDensityFromDistance(const GridSpec& grid, double n0,
       });
 }
 
+}  // namespace stage
 }  // namespace lodestone

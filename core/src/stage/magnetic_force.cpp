@@ -14,6 +14,7 @@
 #include "lodestone/core/sources/field_source.h"
 
 namespace lodestone {
+inline namespace stage {
 
 const char* toString(ForceMask mask) {
   switch (mask) {
@@ -291,4 +292,5 @@ Vec3d gatherToSupport(GridView<const Vec3d> f, GridView<const double> n, GridVie
   return lost;
 }
 
+}  // namespace stage
 }  // namespace lodestone

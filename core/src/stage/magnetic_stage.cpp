@@ -17,6 +17,7 @@
 #include "lodestone/core/base/parallel.h"
 
 namespace lodestone {
+inline namespace stage {
 
 namespace {
 using Clock = std::chrono::steady_clock;
@@ -262,4 +263,5 @@ TransferReport MagneticForceStage::sampleField(const Vec3d* positions, std::size
   return sampleToParticles(h_.view(), positions, count, out, settings_.outOfGrid);
 }
 
+}  // namespace stage
 }  // namespace lodestone

@@ -8,6 +8,7 @@
 #include "lodestone/core/base/error.h"
 
 namespace lodestone {
+inline namespace stage {
 
 namespace {
 // Node (i,j,k) index arithmetic along one axis.
@@ -107,4 +108,5 @@ void recoverNodalFields(GridView<const double> phi, GridView<const Vec3d> Hext, 
   });
 }
 
+}  // namespace stage
 }  // namespace lodestone

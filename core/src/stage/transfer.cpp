@@ -20,6 +20,7 @@
 #include "lodestone/core/base/error.h"
 
 namespace lodestone {
+inline namespace stage {
 namespace {
 
 using Clock = std::chrono::steady_clock;
@@ -419,4 +420,5 @@ TransferReport sampleToParticles(GridView<const double> field, const Vec3d* posi
   return sampleImpl<double>(field, positions, count, out, policy, "sampleToParticles");
 }
 
+}  // namespace stage
 }  // namespace lodestone

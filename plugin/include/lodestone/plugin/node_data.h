@@ -16,8 +16,10 @@
 #include "lodestone/core/mpm/particles.h"
 
 namespace lodestone {
+inline namespace mpm {
 class MpmSolver;
-}
+}  // namespace mpm
+}  // namespace lodestone
 
 namespace lodestone::plugin {
 

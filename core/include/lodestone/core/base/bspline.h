@@ -28,6 +28,7 @@
 #include "lodestone/core/base/hostdev.h"
 
 namespace lodestone {
+inline namespace base {
 
 /// One axis of a quadratic B-spline stencil.
 template <typename T>
@@ -82,4 +83,5 @@ LODESTONE_HOSTDEV inline QuadraticWeights<T> quadraticWeights(T u, T invDx = T(1
   return quadraticWeightsAt(u, static_cast<int>(quadraticBaseFloor(u)), invDx);
 }
 
+}  // namespace base
 }  // namespace lodestone

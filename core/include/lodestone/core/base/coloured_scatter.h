@@ -12,6 +12,7 @@
 #include "lodestone/core/base/grid.h"
 
 namespace lodestone {
+inline namespace base {
 
 /// Colour 0..7 of the cell with base node (i, j, k).
 inline int cellColour(int i, int j, int k) { return (i & 1) | ((j & 1) << 1) | ((k & 1) << 2); }
@@ -39,4 +40,5 @@ void scatterByColour(const std::size_t* base, const std::size_t colourStart[9], 
   }
 }
 
+}  // namespace base
 }  // namespace lodestone

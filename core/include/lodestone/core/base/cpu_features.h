@@ -3,8 +3,10 @@
 // build and choose a vector path at run time.
 
 namespace lodestone {
+inline namespace base {
 
 /// True on an x86-64 CPU with AVX2 and FMA (checked once); false elsewhere.
 bool cpuHasAvx2Fma();
 
+}  // namespace base
 }  // namespace lodestone

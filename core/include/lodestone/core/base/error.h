@@ -8,6 +8,7 @@
 #include "lodestone/core/base/number_text.h"
 
 namespace lodestone {
+inline namespace base {
 
 /// Base of every Lodestone exception.
 class Error : public std::runtime_error {
@@ -21,7 +22,7 @@ class InvalidArgument : public Error {
   using Error::Error;
 };
 
-namespace detail {
+namespace concat_parts {
 template <typename T>
 void appendOne(std::ostringstream& os, const T& v) {
   os << v;
@@ -34,7 +35,7 @@ void appendAll(std::ostringstream& os, const Head& h, const Tail&... t) {
   appendOne(os, h);
   appendAll(os, t...);
 }
-}  // namespace detail
+}  // namespace concat_parts
 
 /// Concatenates the arguments with operator<<; a double or float as the
 /// shortest text that reads back as the same value (numberText: "0.4", not
@@ -43,7 +44,7 @@ template <typename... Args>
 std::string concat(const Args&... args) {
   std::ostringstream os;
   os.precision(17);
-  detail::appendAll(os, args...);
+  concat_parts::appendAll(os, args...);
   return os.str();
 }
 
@@ -53,4 +54,5 @@ void require(bool ok, const Args&... args) {
   if (!ok) throw InvalidArgument(concat(args...));
 }
 
+}  // namespace base
 }  // namespace lodestone

@@ -15,6 +15,7 @@
 #include "lodestone/core/base/vec3.h"
 
 namespace lodestone {
+inline namespace base {
 
 struct Index3 {
   int i = 0, j = 0, k = 0;
@@ -114,4 +115,5 @@ class DenseGrid {
   std::vector<T> data_;
 };
 
+}  // namespace base
 }  // namespace lodestone

@@ -9,10 +9,12 @@
 #include "lodestone/core/base/vec3.h"
 
 namespace lodestone {
+inline namespace base {
 
 struct GridScratch {
   std::vector<double> scalar0, scalar1;
   std::vector<Vec3d> vector0;
 };
 
+}  // namespace base
 }  // namespace lodestone

@@ -7,6 +7,7 @@
 #include <string>
 
 namespace lodestone {
+inline namespace base {
 
 inline constexpr std::uint64_t kFnv1a64Offset = 0xcbf29ce484222325ull;
 inline constexpr std::uint64_t kFnv1a64Prime = 0x100000001b3ull;
@@ -33,4 +34,5 @@ inline std::string hashHex(std::uint64_t hash) {
   return text;
 }
 
+}  // namespace base
 }  // namespace lodestone

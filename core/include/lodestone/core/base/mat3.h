@@ -5,6 +5,7 @@
 #include "lodestone/core/base/vec3.h"
 
 namespace lodestone {
+inline namespace base {
 
 template <typename T>
 struct Mat3 {
@@ -89,4 +90,5 @@ struct SymMat3 {
 
 using SymMat3d = SymMat3<double>;
 
+}  // namespace base
 }  // namespace lodestone

@@ -9,6 +9,7 @@
 #include <string>
 
 namespace lodestone {
+inline namespace base {
 
 /// The fewest significant digits (1..17) with which printf's %g of `v`
 /// reads back (strtod) as `v`.
@@ -57,4 +58,5 @@ inline std::string numberText(float v) {
   return text;
 }
 
+}  // namespace base
 }  // namespace lodestone

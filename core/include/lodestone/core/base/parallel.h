@@ -10,6 +10,7 @@
 #include <tbb/parallel_reduce.h>
 
 namespace lodestone {
+inline namespace base {
 
 constexpr std::size_t kReduceGrain = 4096;
 
@@ -39,4 +40,5 @@ inline double deterministicDot(const double* a, const double* b, std::size_t cou
   return deterministicSum<double>(count, [&](std::size_t n) { return a[n] * b[n]; });
 }
 
+}  // namespace base
 }  // namespace lodestone

@@ -4,6 +4,7 @@
 #include "lodestone/core/base/vec3.h"
 
 namespace lodestone {
+inline namespace base {
 
 struct Pose {
   Vec3d position;                          ///< m
@@ -21,4 +22,5 @@ struct Pose {
   Vec3d vectorToWorld(const Vec3d& v) const { return rotation * v; }
 };
 
+}  // namespace base
 }  // namespace lodestone

@@ -3,6 +3,7 @@
 #include <chrono>
 
 namespace lodestone {
+inline namespace base {
 
 using SteadyClock = std::chrono::steady_clock;
 
@@ -11,4 +12,5 @@ inline double secondsSince(SteadyClock::time_point t0) {
   return std::chrono::duration<double>(SteadyClock::now() - t0).count();
 }
 
+}  // namespace base
 }  // namespace lodestone

@@ -6,6 +6,7 @@
 #include "lodestone/core/base/hostdev.h"
 
 namespace lodestone {
+inline namespace base {
 
 template <typename T>
 struct Vec3 {
@@ -93,4 +94,5 @@ LODESTONE_HOSTDEV inline bool isFinite(const Vec3<T>& a) {
   return isfinite(a.x) && isfinite(a.y) && isfinite(a.z);
 }
 
+}  // namespace base
 }  // namespace lodestone

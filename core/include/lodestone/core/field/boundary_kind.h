@@ -2,6 +2,7 @@
 // What the outer layer of grid nodes means to the field solve.
 
 namespace lodestone {
+inline namespace field {
 
 enum class BoundaryKind : int {
   Open = 0,   ///< far-field (free-space) potential of the magnetization on the outer nodes
@@ -9,4 +10,5 @@ enum class BoundaryKind : int {
 };
 const char* toString(BoundaryKind kind);
 
+}  // namespace field
 }  // namespace lodestone

@@ -15,6 +15,7 @@
 #include "lodestone/core/field/solve_settings.h"
 
 namespace lodestone {
+inline namespace field {
 
 /// Storage a caller can keep between solves (the magnetic stage does): the
 /// Newton and CG vectors and the preconditioner, whose multigrid hierarchy
@@ -96,4 +97,5 @@ class CpuSolveBackend final : public FieldSolveBackend {
   std::function<void(double*)> project_;
 };
 
+}  // namespace field
 }  // namespace lodestone

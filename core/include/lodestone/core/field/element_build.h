@@ -12,6 +12,7 @@
 #include "lodestone/core/field/langevin_batch.h"
 
 namespace lodestone {
+inline namespace field {
 
 /// E (36 values) for a cell of spacing dx (m) from its Gauss-point
 /// responses (iso, rank1 and h of `r`); fastest path on this CPU.
@@ -22,4 +23,5 @@ void buildElementMatrixScalar(double dx, const ResponseBatch& r, double E[36]);
 /// build has none.
 bool buildElementMatrixVector(double dx, const ResponseBatch& r, double E[36]);
 
+}  // namespace field
 }  // namespace lodestone

@@ -18,6 +18,7 @@
 #include "lodestone/core/field/solve_settings.h"
 
 namespace lodestone {
+inline namespace field {
 
 /// Solves for phi in place (phi holds the warm start on entry: one value per
 /// node; pass zeros for a cold start). Never leaves non-finite values in phi.
@@ -30,4 +31,5 @@ FieldSolveReport solveField(MagnetostaticProblem& problem, std::vector<double>& 
                             const FieldSolveSettings& settings, const SolveProgress& progress = {},
                             FieldSolveWorkspace* workspace = nullptr);
 
+}  // namespace field
 }  // namespace lodestone

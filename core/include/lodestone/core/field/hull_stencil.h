@@ -20,6 +20,7 @@
 #include "lodestone/core/base/grid.h"
 
 namespace lodestone {
+inline namespace field {
 
 template <typename T>
 class HullStencil {
@@ -125,4 +126,5 @@ void HullStencil<T>::addRow(int j, int k, int from, int to, const V* v, V* out) 
   }
 }
 
+}  // namespace field
 }  // namespace lodestone

@@ -24,7 +24,8 @@
 #include "lodestone/core/base/hostdev.h"
 
 namespace lodestone {
-namespace detail {
+inline namespace field {
+namespace langevin_series {
 
 template <typename T>
 LODESTONE_HOSTDEV constexpr T horner(T /*x*/, T c0) {
@@ -77,7 +78,7 @@ LODESTONE_HOSTDEV constexpr T seriesS(T x) {
   }
 }
 
-}  // namespace detail
+}  // namespace langevin_series
 
 /// g(a) = L(a)/a, the secant slope of the Langevin function; g(0) = 1/3.
 template <typename T>
@@ -88,7 +89,7 @@ LODESTONE_HOSTDEV inline T langevinOverArg(T a) {
   const T b = abs(a);
   if (b < T(1)) {
     const T x = b * b;
-    return detail::seriesP(x) / (T(1) + x * detail::seriesQ(x));
+    return langevin_series::seriesP(x) / (T(1) + x * langevin_series::seriesQ(x));
   }
   // coth(b) - 1/b = 1 - 1/b + 2/expm1(2b); expm1 saturates to +inf, 2/inf = 0.
   return (T(1) - T(1) / b + T(2) / expm1(T(2) * b)) / b;
@@ -116,7 +117,7 @@ LODESTONE_HOSTDEV inline T langevinDerivative(T a) {
   const T b = abs(a);
   if (b < T(1)) {
     const T x = b * b;
-    const T s = detail::seriesS(x);
+    const T s = langevin_series::seriesS(x);
     return s / (T(1) + x * s);
   }
   const T e = exp(T(-2) * b);  // underflows to 0 for large b: no overflow anywhere
@@ -135,7 +136,7 @@ LODESTONE_HOSTDEV inline T logSinhOverArg(T a) {
   const T b = abs(a);
   if (b < T(1)) {
     const T x = b * b;
-    return log1p(x * detail::seriesQ(x));
+    return log1p(x * langevin_series::seriesQ(x));
   }
   if (b > T(1e30)) return b;  // ln(sinh b / b) = b to working precision; also keeps inf finite-safe
   // ln(sinh b / b) = b - ln 2 - ln b + ln(1 - e^{-2b}); ln 2 + ln b, not ln(2b),
@@ -164,9 +165,9 @@ LODESTONE_HOSTDEV inline LangevinTriple<T> langevinTriple(T a) {
   LangevinTriple<T> r;
   if (b < T(1)) {
     const T x = b * b;
-    const T q = x * detail::seriesQ(x);
-    const T sv = detail::seriesS(x);
-    r.overArg = detail::seriesP(x) / (T(1) + q);
+    const T q = x * langevin_series::seriesQ(x);
+    const T sv = langevin_series::seriesS(x);
+    r.overArg = langevin_series::seriesP(x) / (T(1) + q);
     r.derivative = sv / (T(1) + x * sv);
     r.logSinhc = log1p(q);
     return r;
@@ -183,4 +184,5 @@ LODESTONE_HOSTDEV inline LangevinTriple<T> langevinTriple(T a) {
   return r;
 }
 
+}  // namespace field
 }  // namespace lodestone

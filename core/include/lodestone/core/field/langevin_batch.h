@@ -15,6 +15,7 @@
 #include "lodestone/core/base/vec3.h"
 
 namespace lodestone {
+inline namespace field {
 
 /// Responses at 8 points, as arrays (one entry per point).
 struct ResponseBatch {
@@ -37,4 +38,5 @@ void respondBatchScalar(const MagnetizationLaw<double>& law, const double n[8], 
 bool respondBatchVector(const MagnetizationLaw<double>& law, const double n[8], const Vec3d H[8],
                         ResponseBatch& out);
 
+}  // namespace field
 }  // namespace lodestone

@@ -6,6 +6,7 @@
 #include <cmath>
 
 namespace lodestone {
+inline namespace field {
 
 /// Next step length after `lambda` was rejected: the minimizer of the
 /// quadratic through E(0), the slope g0 < 0 and the change dE at lambda,
@@ -20,4 +21,5 @@ inline double backtrackedStep(double dE, double g0, double lambda) {
   return std::clamp(next, 0.1 * lambda, 0.5 * lambda);
 }
 
+}  // namespace field
 }  // namespace lodestone

@@ -12,6 +12,7 @@
 #include "lodestone/core/base/vec3.h"
 
 namespace lodestone {
+inline namespace field {
 
 enum class LawKind : int {
   None = 0,     ///< not magnetizable: M = 0
@@ -119,4 +120,5 @@ LODESTONE_HOSTDEV inline MagnetizationResponse<T> respond(const MagnetizationLaw
   return r;
 }
 
+}  // namespace field
 }  // namespace lodestone

@@ -35,6 +35,7 @@
 #include "lodestone/core/base/vec3.h"
 
 namespace lodestone {
+inline namespace field {
 
 /// Fills H[0..count) (A/m) with the applied field at x[0..count) (m).
 /// Called from several threads at once on disjoint ranges.
@@ -191,4 +192,5 @@ class MagnetostaticProblem {
   double totalCount_ = 0;
 };
 
+}  // namespace field
 }  // namespace lodestone

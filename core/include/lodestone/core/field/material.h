@@ -7,6 +7,7 @@
 #include "lodestone/core/field/magnetization_law.h"
 
 namespace lodestone {
+inline namespace field {
 
 struct MagneticMaterial {
   MagnetizationLaw<double> law;
@@ -47,4 +48,5 @@ MagnetizationLaw<double> linearLaw(double chi, double numberDensity);
 /// Magnetization (A/m) of a permanent magnet of remanence Br (T): M = Br / mu0.
 double magnetizationFromRemanence(double remanence);
 
+}  // namespace field
 }  // namespace lodestone

@@ -33,6 +33,7 @@
 #include "lodestone/core/field/solve_settings.h"
 
 namespace lodestone {
+inline namespace field {
 
 class MultigridPreconditioner final : public Preconditioner {
  public:
@@ -57,4 +58,5 @@ class MultigridPreconditioner final : public Preconditioner {
   std::unique_ptr<Hierarchy<double>> double_;
 };
 
+}  // namespace field
 }  // namespace lodestone

@@ -11,6 +11,7 @@
 #include "lodestone/core/base/vec3.h"
 
 namespace lodestone {
+inline namespace field {
 
 struct Multipole {
   Vec3d centre;              ///< expansion centre, m
@@ -58,4 +59,5 @@ struct MultipoleArrays {
 /// a square root; elsewhere the portable loop runs.
 double multipoleSum(const MultipoleArrays& blocks, const Vec3d& x);
 
+}  // namespace field
 }  // namespace lodestone

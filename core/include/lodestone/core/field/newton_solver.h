@@ -29,6 +29,7 @@
 #include "lodestone/core/field/solve_settings.h"
 
 namespace lodestone {
+inline namespace field {
 
 class NewtonSolver {
  public:
@@ -84,4 +85,5 @@ class NewtonSolver {
   int wallUpdates_ = 0;            ///< far-field updates so far (relaxation)
 };
 
+}  // namespace field
 }  // namespace lodestone

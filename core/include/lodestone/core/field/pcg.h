@@ -9,6 +9,7 @@
 #include <vector>
 
 namespace lodestone {
+inline namespace field {
 
 class MagnetostaticProblem;
 
@@ -59,4 +60,5 @@ PcgResult solvePcg(std::size_t size, const std::function<void(const double*, dou
                    PcgWorkspace* workspace = nullptr,
                    const std::function<double(const double*, double*)>& applyADot = {});
 
+}  // namespace field
 }  // namespace lodestone

@@ -18,6 +18,7 @@
 #include "lodestone/core/field/pcg.h"
 
 namespace lodestone {
+inline namespace field {
 
 /// Solves A x = b from x = 0 until ||r|| <= relTol ||b|| or maxIterations.
 template <typename Ops>
@@ -55,4 +56,5 @@ PcgResult pcgIterate(Ops& ops, double relTol, int maxIterations) {
   return res;
 }
 
+}  // namespace field
 }  // namespace lodestone

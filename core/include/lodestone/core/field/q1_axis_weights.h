@@ -8,6 +8,7 @@
 #include "lodestone/core/base/hostdev.h"
 
 namespace lodestone {
+inline namespace field {
 namespace q1 {
 
 /// The 1D factors of node p of an axis of `count` nodes (offsets -1, 0, +1).
@@ -58,4 +59,5 @@ LODESTONE_HOSTDEV inline double laplacianRow(int nx, int ny, int nz, double dx, 
 }
 
 }  // namespace q1
+}  // namespace field
 }  // namespace lodestone

@@ -12,6 +12,7 @@
 #include "lodestone/core/base/vec3.h"
 
 namespace lodestone {
+inline namespace field {
 namespace q1 {
 
 constexpr int kCorners = 8;
@@ -155,4 +156,5 @@ LODESTONE_HOSTDEV inline void gradientProducts(const Tables& t, int c, int d, do
 }
 
 }  // namespace q1
+}  // namespace field
 }  // namespace lodestone

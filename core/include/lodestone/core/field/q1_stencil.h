@@ -9,6 +9,7 @@
 #include "lodestone/core/base/grid.h"
 
 namespace lodestone {
+inline namespace field {
 
 /// out = K v on free rows (all rows for Shield; interior rows for Open, whose
 /// wall rows are set to 0). Values of v on wall nodes enter the rows next to them.
@@ -39,4 +40,5 @@ void zeroFixedNodes(const GridSpec& grid, BoundaryKind boundary, float* v);
 void setFixedNodes(const GridSpec& grid, BoundaryKind boundary, double value, double* v);
 void setFixedNodes(const GridSpec& grid, BoundaryKind boundary, float value, float* v);
 
+}  // namespace field
 }  // namespace lodestone

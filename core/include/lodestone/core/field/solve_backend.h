@@ -22,6 +22,7 @@
 #include "lodestone/core/field/pcg.h"
 
 namespace lodestone {
+inline namespace field {
 
 /// The node vectors of a solve, by role.
 enum class NodeVec : int {
@@ -149,4 +150,5 @@ class FieldSolveBackend {
   virtual void swapWall(WallVec a, WallVec b) = 0;
 };
 
+}  // namespace field
 }  // namespace lodestone

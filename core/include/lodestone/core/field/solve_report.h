@@ -8,6 +8,7 @@
 #include <vector>
 
 namespace lodestone {
+inline namespace field {
 
 enum class SolveStatus : int {
   Converged = 0,           ///< relative residual <= tolerance
@@ -78,4 +79,5 @@ struct FieldSolveReport {
 /// Called after each Newton iteration; return false to cancel the solve.
 using SolveProgress = std::function<bool(const NewtonIterationRecord&)>;
 
+}  // namespace field
 }  // namespace lodestone

@@ -6,6 +6,7 @@
 // and the CUDA backend of gpu/.
 
 namespace lodestone {
+inline namespace field {
 
 enum class PreconditionerKind : int {
   Jacobi = 0,    ///< diagonal scaling: cheap set-up, iterations grow with resolution
@@ -57,4 +58,5 @@ struct FieldSolveSettings {
   void validate() const;
 };
 
+}  // namespace field
 }  // namespace lodestone

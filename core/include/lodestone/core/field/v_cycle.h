@@ -15,6 +15,7 @@
 // symmetric positive definite operator, as CG requires.
 
 namespace lodestone {
+inline namespace field {
 
 template <typename Ops>
 void vCycle(Ops& ops, int level, int preSmoothing, int postSmoothing) {
@@ -30,4 +31,5 @@ void vCycle(Ops& ops, int level, int preSmoothing, int postSmoothing) {
   for (int s = 0; s < postSmoothing; ++s) ops.smooth(level, s + 1 == postSmoothing);
 }
 
+}  // namespace field
 }  // namespace lodestone

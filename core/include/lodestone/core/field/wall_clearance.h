@@ -8,6 +8,7 @@
 #include "lodestone/core/base/grid.h"
 
 namespace lodestone {
+inline namespace field {
 
 /// Smallest number of cells between a material cell and the wall (0: a
 /// material cell touches it), over the cells whose base nodes (lowest
@@ -24,4 +25,5 @@ inline int materialWallClearance(const GridSpec& grid, const std::size_t* cellBa
   return clearance;
 }
 
+}  // namespace field
 }  // namespace lodestone

@@ -14,6 +14,7 @@
 #include "lodestone/core/base/vec3.h"
 
 namespace lodestone {
+inline namespace mpm {
 
 /// `vel`: the nodal velocities (m/s) of a grid of nx x ny nodes; u: the
 /// particle's grid coordinates (cells, (x - origin) / dx) and b the stencil's
@@ -51,4 +52,5 @@ LODESTONE_HOSTDEV inline void gatherApic(const Vec3d* vel, std::size_t nx, std::
   }
 }
 
+}  // namespace mpm
 }  // namespace lodestone

@@ -36,6 +36,7 @@
 #include "lodestone/core/mpm/solver.h"
 
 namespace lodestone {
+inline namespace mpm {
 
 inline constexpr std::uint32_t kMpmCheckpointVersion = 1;
 
@@ -64,4 +65,5 @@ MpmCheckpointInfo readMpmCheckpointInfo(const std::uint8_t* data, std::size_t si
 MpmCheckpointInfo restoreMpmCheckpoint(MpmSolver& solver, const std::uint8_t* data, std::size_t size,
                                        const std::string& expectedTag = {});
 
+}  // namespace mpm
 }  // namespace lodestone

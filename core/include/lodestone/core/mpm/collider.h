@@ -37,6 +37,7 @@
 #include "lodestone/core/base/vec3.h"
 
 namespace lodestone {
+inline namespace mpm {
 
 enum class BoundaryMode : int { Sticky = 0, Slip = 1, Separate = 2 };
 const char* toString(BoundaryMode mode);
@@ -279,4 +280,5 @@ class MpmCollider {
   BoundaryCondition boundary_;
 };
 
+}  // namespace mpm
 }  // namespace lodestone

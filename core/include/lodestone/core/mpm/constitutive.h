@@ -29,6 +29,7 @@
 #include "lodestone/core/base/mat3.h"
 
 namespace lodestone {
+inline namespace mpm {
 
 /// Smallest volume ratio used inside ln J and 1/J (dimensionless).
 inline constexpr double kMinVolumeRatio = 1e-6;
@@ -112,4 +113,5 @@ LODESTONE_HOSTDEV inline T fluidEnergyDensity(T J, T bulkModulus) {
   return T(0.5) * bulkModulus * (J - T(1)) * (J - T(1));
 }
 
+}  // namespace mpm
 }  // namespace lodestone

@@ -31,6 +31,7 @@
 #include "lodestone/core/mpm/sampled_sdf.h"
 
 namespace lodestone {
+inline namespace mpm {
 
 enum class EmitterShapeKind : int { Box = 0, Sphere = 1, Cylinder = 2, LevelSet = 3 };
 
@@ -81,4 +82,5 @@ struct EmitReport {
 EmitReport emitParticles(MpmParticles& particles, const EmitterShape& shape, const MpmMaterial& material,
                          std::uint32_t materialIndex, const EmitterSettings& settings);
 
+}  // namespace mpm
 }  // namespace lodestone

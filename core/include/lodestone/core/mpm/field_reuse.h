@@ -29,6 +29,7 @@
 #include "lodestone/core/sources/field_source.h"
 
 namespace lodestone {
+inline namespace mpm {
 
 class FieldReuse {
  public:
@@ -80,4 +81,5 @@ class FieldReuse {
   std::vector<Vec3d> fields_;           // applied field at those samples at the last solve, A/m
 };
 
+}  // namespace mpm
 }  // namespace lodestone

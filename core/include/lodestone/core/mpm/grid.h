@@ -47,6 +47,7 @@
 #include "lodestone/core/mpm/particles.h"
 
 namespace lodestone {
+inline namespace mpm {
 
 /// One node during P2G: mass (kg) and momentum (kg*m/s).
 struct MpmNode {
@@ -143,4 +144,5 @@ class MpmGrid {
   double binningSeconds_ = 0;
 };
 
+}  // namespace mpm
 }  // namespace lodestone

@@ -9,6 +9,7 @@
 #include "lodestone/core/field/material.h"
 
 namespace lodestone {
+inline namespace mpm {
 
 enum class MpmModel : int {
   NeoHookeanSolid = 0,  ///< tracks the deformation gradient F (Eq. 18)
@@ -53,4 +54,5 @@ MpmMaterial viscousFluid(double viscosity, double bulkModulus, double density,
 /// and a positive finite n0 (1/m^3).
 void validateMagneticMaterial(const MagneticMaterial& magnetic, const char* who);
 
+}  // namespace mpm
 }  // namespace lodestone

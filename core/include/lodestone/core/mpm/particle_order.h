@@ -17,6 +17,7 @@
 #include "lodestone/core/mpm/particles.h"
 
 namespace lodestone {
+inline namespace mpm {
 
 /// Whether the particles are sorted once `substeps` substeps have been taken
 /// (counting the one just finished): every `interval` substeps, never when
@@ -31,4 +32,5 @@ bool particleReorderDue(int interval, long long substeps);
 /// a permutation.
 bool reorderParticles(const std::vector<std::uint32_t>& order, MpmParticles& particles, FieldReuse& reuse);
 
+}  // namespace mpm
 }  // namespace lodestone

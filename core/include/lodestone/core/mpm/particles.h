@@ -17,6 +17,7 @@
 #include "lodestone/core/base/vec3.h"
 
 namespace lodestone {
+inline namespace mpm {
 
 struct MpmParticles {
   std::vector<Vec3d> x;                 ///< position, m
@@ -69,4 +70,5 @@ struct MpmParticles {
   Vec3d centreOfMass() const;
 };
 
+}  // namespace mpm
 }  // namespace lodestone

@@ -26,6 +26,7 @@
 #include "lodestone/core/base/vec3.h"
 
 namespace lodestone {
+inline namespace mpm {
 
 class SampledSdf {
  public:
@@ -125,4 +126,5 @@ inline Vec3d SampledSdf::normal(const Vec3d& xb) const {
   return n > 0 ? g / n : Vec3d{0, 0, 1};
 }
 
+}  // namespace mpm
 }  // namespace lodestone

@@ -77,6 +77,7 @@
 #include "lodestone/core/mpm/particles.h"
 
 namespace lodestone {
+inline namespace mpm {
 
 /// What to do with a particle that leaves the domain (see the header comment).
 enum class OutOfDomainPolicy : int {
@@ -291,7 +292,7 @@ class MpmSolver {
   const MagneticPlan& lastMagneticPlan() const { return lastPlan_; }
 
  private:
-  friend struct MpmCheckpointAccess;  // mpm_checkpoint.cpp reads and restores the private state
+  friend struct MpmCheckpointAccess;  // checkpoint.cpp reads and restores the private state
   void checkFiniteParticles(const char* where) const;
   double cflDt(double cfl, bool bound) const;
   void checkFiniteGrid(const char* where) const;
@@ -341,4 +342,5 @@ class MpmSolver {
   double time_ = 0;
 };
 
+}  // namespace mpm
 }  // namespace lodestone

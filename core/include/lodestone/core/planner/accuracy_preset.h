@@ -18,6 +18,7 @@
 #include "lodestone/core/field/field_solver.h"
 
 namespace lodestone {
+inline namespace planner {
 
 enum class AccuracyPreset : int { Draft = 0, Preview = 1, Final = 2 };
 
@@ -36,4 +37,5 @@ AccuracyPresetSettings accuracyPresetSettings(AccuracyPreset preset);
 /// "draft", "preview" or "final"; throws InvalidArgument naming the bad name and the valid ones.
 AccuracyPreset parseAccuracyPreset(const std::string& name);
 
+}  // namespace planner
 }  // namespace lodestone

@@ -36,6 +36,7 @@
 #include "lodestone/core/base/vec3.h"
 
 namespace lodestone {
+inline namespace planner {
 
 enum class PlannerToggle : int {
   Auto = 0,  ///< the planner decides from the budget
@@ -103,4 +104,5 @@ MagneticPlan planMagnetic(const PlannerSettings& settings, const PlannerInputs& 
 /// the same points (|a - b| / max |b|); 0 when both are zero.
 double relativeFieldChange(const std::vector<Vec3d>& a, const std::vector<Vec3d>& b);
 
+}  // namespace planner
 }  // namespace lodestone

@@ -28,6 +28,7 @@
 #include "lodestone/core/sources/magnet_source.h"
 
 namespace lodestone {
+inline namespace sources {
 
 class CuboidMagnet final : public MagnetSource {
  public:
@@ -53,4 +54,5 @@ class CuboidMagnet final : public MagnetSource {
   Vec3d half_;
 };
 
+}  // namespace sources
 }  // namespace lodestone

@@ -29,6 +29,7 @@
 #include "lodestone/core/sources/magnet_source.h"
 
 namespace lodestone {
+inline namespace sources {
 
 class CylinderMagnet final : public MagnetSource {
  public:
@@ -56,4 +57,5 @@ class CylinderMagnet final : public MagnetSource {
   double radius_, halfLength_;
 };
 
+}  // namespace sources
 }  // namespace lodestone

@@ -15,6 +15,7 @@
 #include "lodestone/core/base/hostdev.h"
 
 namespace lodestone {
+inline namespace sources {
 
 /// Bulirsch's cel(kc, p, a, b) (dimensionless). Converges quadratically; the
 /// number of steps grows like log2(log(1/|kc|)), so kc -> 0 stays cheap and
@@ -92,4 +93,5 @@ LODESTONE_HOSTDEV inline T ellipticE(T k) {
   return cel(sqrt(kc2), T(1), T(1), kc2);
 }
 
+}  // namespace sources
 }  // namespace lodestone

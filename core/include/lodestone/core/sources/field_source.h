@@ -12,6 +12,7 @@
 #include "lodestone/core/base/vec3.h"
 
 namespace lodestone {
+inline namespace sources {
 
 class FieldSource {
  public:
@@ -67,4 +68,5 @@ class FieldSource {
   std::uint64_t instanceId_;
 };
 
+}  // namespace sources
 }  // namespace lodestone

@@ -11,6 +11,7 @@
 #include "lodestone/core/sources/field_source.h"
 
 namespace lodestone {
+inline namespace sources {
 
 class FieldSourceSet final : public FieldSource {
  public:
@@ -53,4 +54,5 @@ class FieldSourceSet final : public FieldSource {
   std::vector<std::unique_ptr<FieldSource>> sources_;
 };
 
+}  // namespace sources
 }  // namespace lodestone

@@ -22,6 +22,7 @@
 #include "lodestone/core/base/vec3.h"
 
 namespace lodestone {
+inline namespace sources {
 
 class MagnetSource : public FieldSource {
  public:
@@ -91,4 +92,5 @@ void validatePose(const Pose& pose, const char* who);
 Vec3d symmetricMagnetFarField(const Vec3d& M, double volume, const Vec3d& secondMoments,
                               const Vec3d& x);
 
+}  // namespace sources
 }  // namespace lodestone

@@ -11,6 +11,7 @@
 #include "lodestone/core/base/vec3.h"
 
 namespace lodestone {
+inline namespace sources {
 
 /// H (A/m) at offset r (m) from a point dipole of moment m (A*m^2).
 /// The singular point r = 0 is excluded: there (and wherever |r| is so small
@@ -40,4 +41,5 @@ class PointDipole final : public FieldSource {
   TimeProfile scale_;
 };
 
+}  // namespace sources
 }  // namespace lodestone

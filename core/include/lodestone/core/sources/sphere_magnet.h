@@ -10,6 +10,7 @@
 #include "lodestone/core/sources/magnet_source.h"
 
 namespace lodestone {
+inline namespace sources {
 
 class SphereMagnet final : public MagnetSource {
  public:
@@ -30,4 +31,5 @@ class SphereMagnet final : public MagnetSource {
   double radius_;
 };
 
+}  // namespace sources
 }  // namespace lodestone

@@ -7,6 +7,7 @@
 #include <vector>
 
 namespace lodestone {
+inline namespace sources {
 
 class TimeProfile {
  public:
@@ -50,4 +51,5 @@ class TimeProfile {
   std::vector<double> times_, values_;  // Keyframes only
 };
 
+}  // namespace sources
 }  // namespace lodestone

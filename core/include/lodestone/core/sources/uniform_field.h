@@ -10,6 +10,7 @@
 #include "lodestone/core/base/vec3.h"
 
 namespace lodestone {
+inline namespace sources {
 
 class UniformField final : public FieldSource {
  public:
@@ -32,4 +33,5 @@ class UniformField final : public FieldSource {
   TimeProfile scale_;
 };
 
+}  // namespace sources
 }  // namespace lodestone

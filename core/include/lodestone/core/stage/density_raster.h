@@ -17,6 +17,7 @@
 #include "lodestone/core/base/vec3.h"
 
 namespace lodestone {
+inline namespace stage {
 
 /// The density of a body of bulk number density n0 (1/m^3, >= 0, finite):
 /// `inside(x)` tells whether the world point x (m) is inside. `inside` is
@@ -38,4 +39,5 @@ DenseGrid<double> rasterizeDensityFromDistance(const GridSpec& grid, double n0,
                                                const std::function<double(const Vec3d&)>& signedDistance,
                                                int samplesPerAxis = 6);
 
+}  // namespace stage
 }  // namespace lodestone

@@ -17,8 +17,11 @@
 #include "lodestone/core/base/vec3.h"
 
 namespace lodestone {
-
+inline namespace sources {
 class FieldSource;
+}  // namespace sources
+
+inline namespace stage {
 
 /// ForceMask::Material counts a node as material where n exceeds this
 /// fraction of the grid's largest n: below it, n is round-off of B-spline
@@ -65,4 +68,5 @@ Vec3d gatherToSupport(GridView<const Vec3d> f, GridView<const double> n, GridVie
 /// neighbours. t and f may be the same grid. `scratch` as for projectedGradient.
 void spreadForce(GridView<const Vec3d> t, GridView<Vec3d> f, GridScratch* scratch = nullptr);
 
+}  // namespace stage
 }  // namespace lodestone

@@ -23,6 +23,7 @@
 #include "lodestone/core/stage/transfer.h"
 
 namespace lodestone {
+inline namespace stage {
 
 struct MagneticStageSettings {
   BoundaryKind boundary = BoundaryKind::Open;     ///< far-field (default) or the paper's shield wall
@@ -142,4 +143,5 @@ class MagneticForceStage {
   mutable DenseGrid<Vec3d> onSupport_;  // particleForces' nodal forces moved onto the material
 };
 
+}  // namespace stage
 }  // namespace lodestone

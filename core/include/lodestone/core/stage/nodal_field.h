@@ -14,6 +14,7 @@
 #include "lodestone/core/base/vec3.h"
 
 namespace lodestone {
+inline namespace stage {
 
 /// grad(phi) at every node, 1/m times the unit of phi. `scratch`, when
 /// given, holds the temporaries between calls (results are the same).
@@ -26,4 +27,5 @@ void recoverNodalFields(GridView<const double> phi, GridView<const Vec3d> Hext, 
                         const MagnetizationLaw<double>& law, GridView<Vec3d> H, GridView<Vec3d> M,
                         GridView<Vec3d> B, GridScratch* scratch = nullptr);
 
+}  // namespace stage
 }  // namespace lodestone

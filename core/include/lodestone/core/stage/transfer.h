@@ -52,6 +52,7 @@
 #include "lodestone/core/base/vec3.h"
 
 namespace lodestone {
+inline namespace stage {
 
 /// Material points as seen by the transfers (non-owning; arrays of `size`).
 struct ParticleView {
@@ -170,4 +171,5 @@ TransferReport sampleToParticles(GridView<const Vec3d> field, const Vec3d* posit
 TransferReport sampleToParticles(GridView<const double> field, const Vec3d* positions, std::size_t count, double* out,
                                  OutOfGridPolicy policy = OutOfGridPolicy::Throw);
 
+}  // namespace stage
 }  // namespace lodestone
