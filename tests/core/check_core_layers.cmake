@@ -1,6 +1,7 @@
 # Checks that core's topic folders depend on each other one way only (the
 # order written down in docs/architecture.md) and that core includes no
-# OpenVDB, CUDA or MPI header. Run as: cmake -DCORE_DIR=<core> -P check_core_layers.cmake
+# OpenVDB, CUDA or MPI header, and that each file declares its names in its
+# topic's inline namespace (lodestone::<topic>). Run as: cmake -DCORE_DIR=<core> -P check_core_layers.cmake
 # A topic may include its own headers and those of the topics listed for it.
 cmake_minimum_required(VERSION 3.25)
 set(allowed_base "base")
@@ -25,6 +26,17 @@ foreach(f IN LISTS files)
     string(APPEND violations "\n  ${rel}: unknown topic folder '${topic}'")
     continue()
   endif()
+  # The file's declarations live in its topic's namespace.
+  file(STRINGS "${f}" opens REGEX "^(inline )?namespace [a-z_]+ {")
+  if(opens AND NOT "inline namespace ${topic} {" IN_LIST opens)
+    string(APPEND violations "\n  ${rel}: opens no 'inline namespace ${topic} {' for its folder")
+  endif()
+  foreach(line IN LISTS opens)
+    if(line MATCHES "^inline namespace ([a-z_]+) {" AND NOT CMAKE_MATCH_1 STREQUAL topic
+       AND NOT CMAKE_MATCH_1 IN_LIST allowed_${topic})
+      string(APPEND violations "\n  ${rel}: ${line} (not its topic '${topic}' nor one it may use)")
+    endif()
+  endforeach()
   file(STRINGS "${f}" includes REGEX "^#include")
   foreach(line IN LISTS includes)
     if(line MATCHES "openvdb|cuda|mpi\\.h|petsc")
@@ -44,4 +56,4 @@ if(violations)
   message(FATAL_ERROR "core layering broken:${violations}")
 endif()
 list(LENGTH files count)
-message(STATUS "core layering: ${count} files, every include follows base < sources, field < stage, planner < mpm")
+message(STATUS "core layering: ${count} files, every include follows base < sources, field < stage, planner < mpm, each in its topic namespace")
