@@ -10,15 +10,8 @@
 
 namespace lodestone::plugin::abi {
 
-namespace {
-
 lodestone_status fieldsCreate(lodestone_context* c, lodestone_fields** out) {
-  return firewall(ctxOf(c), "fields_create", [&] {
-    if (out) *out = nullptr;
-    Context& context = contextOf(c);
-    need(out, "out");
-    *out = adopt<lodestone_fields>(context, HandleKind::Fields, std::make_unique<Fields>());
-  });
+  return createEntry<lodestone_fields, Fields>(c, out, HandleKind::Fields, "fields_create");
 }
 
 lodestone_status fieldsDestroy(lodestone_fields* f) {
@@ -104,21 +97,6 @@ lodestone_status fieldsEvaluate(const lodestone_fields* f, const double x[3], do
     const Vec3d h = fs.set.field(vec(x, "x"), t);
     for (int a = 0; a < 3; ++a) H[a] = h[a];
   });
-}
-
-}  // namespace
-
-void addFieldsEntries(lodestone_api& api) {
-  api.fields_create = fieldsCreate;
-  api.fields_destroy = fieldsDestroy;
-  api.fields_add_uniform = fieldsAddUniform;
-  api.fields_add_dipole = fieldsAddDipole;
-  api.fields_add_sphere_magnet = fieldsAddSphere;
-  api.fields_add_box_magnet = fieldsAddBox;
-  api.fields_add_cylinder_magnet = fieldsAddCylinder;
-  api.fields_add_vdb = fieldsAddVdb;
-  api.fields_count = fieldsCount;
-  api.fields_evaluate = fieldsEvaluate;
 }
 
 }  // namespace lodestone::plugin::abi

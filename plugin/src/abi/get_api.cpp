@@ -1,23 +1,28 @@
 // lodestone_get_api: the one exported symbol. It hands out the table of
-// entries, each part filled by the file that holds its functions
-// (library.cpp, fields.cpp, stage.cpp, nodes.cpp, network.cpp).
+// entries, filled from the one list in entries.h.
 #include "support.h"
+
+#include <cstddef>
 
 using namespace lodestone;
 using namespace lodestone::plugin::abi;
 
 namespace {
 
+#define LODESTONE_ABI_COUNT(member, function) +1
+constexpr std::size_t kEntries = 0 LODESTONE_ABI_ENTRIES(LODESTONE_ABI_COUNT);
+#undef LODESTONE_ABI_COUNT
+static_assert(sizeof(lodestone_api) == offsetof(lodestone_api, version_string) + kEntries * sizeof(void (*)()),
+              "every member of lodestone_api has an entry in LODESTONE_ABI_ENTRIES");
+
 lodestone_api buildTable() {
   lodestone_api api{};
   api.struct_size = sizeof(lodestone_api);
   api.major = LODESTONE_API_VERSION_MAJOR;
   api.minor = LODESTONE_API_VERSION_MINOR;
-  addLibraryEntries(api);
-  addFieldsEntries(api);
-  addStageEntries(api);
-  addNodeEntries(api);
-  addNetworkEntries(api);
+#define LODESTONE_ABI_FILL(member, function) api.member = &function;
+  LODESTONE_ABI_ENTRIES(LODESTONE_ABI_FILL)
+#undef LODESTONE_ABI_FILL
   return api;
 }
 

@@ -7,8 +7,6 @@
 
 namespace lodestone::plugin::abi {
 
-namespace {
-
 const char* versionString() { return LODESTONE_VERSION_STRING; }
 
 const char* statusString(lodestone_status s) {
@@ -85,18 +83,6 @@ const char* contextLastError(lodestone_context* h) {
   } catch (...) {
     return "";
   }
-}
-
-}  // namespace
-
-void addLibraryEntries(lodestone_api& api) {
-  api.version_string = versionString;
-  api.status_string = statusString;
-  api.thread_last_error = threadLastError;
-  api.has_vdb = hasVdb;
-  api.context_create = contextCreate;
-  api.context_destroy = contextDestroy;
-  api.context_last_error = contextLastError;
 }
 
 }  // namespace lodestone::plugin::abi

@@ -12,15 +12,8 @@
 
 namespace lodestone::plugin::abi {
 
-namespace {
-
 lodestone_status networkCreate(lodestone_context* c, lodestone_network** out) {
-  return firewall(ctxOf(c), "network_create", [&] {
-    if (out) *out = nullptr;
-    Context& context = contextOf(c);
-    need(out, "out");
-    *out = adopt<lodestone_network>(context, HandleKind::Network, std::make_unique<NetworkObject>());
-  });
+  return createEntry<lodestone_network, NetworkObject>(c, out, HandleKind::Network, "network_create");
 }
 
 lodestone_status networkDestroy(lodestone_network* n) {
@@ -226,27 +219,6 @@ lodestone_status networkCreateFromJson(lodestone_context* c, const char* json, l
     buildNetworkFromJson(network->network, parseJsonText(text, "network"), "network");
     *out = adopt<lodestone_network>(context, HandleKind::Network, std::move(network));
   });
-}
-
-}  // namespace
-
-void addNetworkEntries(lodestone_api& api) {
-  api.network_create = networkCreate;
-  api.network_destroy = networkDestroy;
-  api.network_add_node = networkAddNode;
-  api.network_set_float = networkSetFloat;
-  api.network_set_int = networkSetInt;
-  api.network_set_bool = networkSetBool;
-  api.network_set_string = networkSetString;
-  api.network_set_vec3 = networkSetVec3;
-  api.network_set_json = networkSetJson;
-  api.network_connect = networkConnect;
-  api.network_cook = networkCook;
-  api.network_output_json = networkOutputJson;
-  api.network_read_positions = networkReadPositions;
-  api.network_set_particles = networkSetParticles;
-  api.network_read_forces = networkReadForces;
-  api.network_create_from_json = networkCreateFromJson;
 }
 
 }  // namespace lodestone::plugin::abi

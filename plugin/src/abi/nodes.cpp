@@ -7,8 +7,6 @@
 
 namespace lodestone::plugin::abi {
 
-namespace {
-
 /// Strings the metadata functions hand out, built once and kept for the
 /// library's lifetime.
 struct ParamStrings {
@@ -122,16 +120,6 @@ lodestone_status nodeOutputInfo(const char* type, uint32_t index, lodestone_port
       throw AbiError(LODESTONE_ERROR_NOT_FOUND, concat("node '", d.type, "' has ", d.outputs.size(), " outputs"));
     portInfo(d.outputs[index], out);
   });
-}
-
-}  // namespace
-
-void addNodeEntries(lodestone_api& api) {
-  api.node_type_count = nodeTypeCount;
-  api.node_type_info = nodeTypeInfo;
-  api.node_param_info = nodeParamInfo;
-  api.node_input_info = nodeInputInfo;
-  api.node_output_info = nodeOutputInfo;
 }
 
 }  // namespace lodestone::plugin::abi

@@ -8,8 +8,6 @@
 
 namespace lodestone::plugin::abi {
 
-namespace {
-
 
 lodestone_status stageParamsDefault(lodestone_stage_params* p) {
   return firewall(nullptr, "stage_params_default", [&] {
@@ -288,24 +286,6 @@ lodestone_status stageNumberDensity(const lodestone_stage* s, double* n0) {
     const MagneticMaterial& m = st.stage->material();
     *need(n0, "n0") = m.law.kind == LawKind::None ? 0.0 : m.numberDensity;
   });
-}
-
-}  // namespace
-
-void addStageEntries(lodestone_api& api) {
-  api.stage_params_default = stageParamsDefault;
-  api.stage_create = stageCreate;
-  api.stage_destroy = stageDestroy;
-  api.stage_grid = stageGrid;
-  api.stage_run_particles = stageRunParticles;
-  api.stage_run_density = stageRunDensity;
-  api.stage_particle_forces = stageParticleForces;
-  api.stage_sample = stageSample;
-  api.stage_read_field = stageReadField;
-  api.stage_report = stageReport;
-  api.stage_report_json = stageReportJson;
-  api.stage_export_vdb = stageExportVdb;
-  api.stage_number_density = stageNumberDensity;
 }
 
 }  // namespace lodestone::plugin::abi

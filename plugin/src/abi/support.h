@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "../handle_table.h"
+#include "entries.h"
 #include "lodestone/core/base/error.h"
 #include "lodestone/core/base/vec3.h"
 #include "lodestone/core/sources/field_source_set.h"
@@ -180,17 +181,22 @@ void destroy(const Handle* h, HandleKind kind, const char* what) {
   delete o;
 }
 
+/// The body of a create entry whose object needs nothing but its context.
+template <typename Handle, typename Object>
+lodestone_status createEntry(lodestone_context* c, Handle** out, HandleKind kind, const char* function) {
+  return firewall(ctxOf(c), function, [&] {
+    if (out) *out = nullptr;
+    Context& context = contextOf(c);
+    need(out, "out");
+    *out = adopt<Handle>(context, kind, std::make_unique<Object>());
+  });
+}
+
 /// The stage, or NOT_READY before its first run.
 const Stage& ranStage(const lodestone_stage* h);
 std::string needName(const char* s, const char* what);
 /// Throws INVALID_ARGUMENT for a non-finite time (s).
 void checkTime(double t);
 
-// Each part of the table is filled by the file that holds its entries.
-void addLibraryEntries(lodestone_api& api);
-void addFieldsEntries(lodestone_api& api);
-void addStageEntries(lodestone_api& api);
-void addNodeEntries(lodestone_api& api);
-void addNetworkEntries(lodestone_api& api);
 
 }  // namespace lodestone::plugin::abi
