@@ -13,11 +13,6 @@ namespace lodestone {
 inline namespace field {
 
 namespace {
-template <typename Fn>
-void forEach(std::size_t n, const Fn& fn) {
-  parallelForEach(n, fn);
-}
-
 std::unique_ptr<Preconditioner> makePreconditioner(PreconditionerKind kind, const MultigridSettings& multigrid) {
   switch (kind) {
     case PreconditionerKind::Jacobi: return std::make_unique<JacobiPreconditioner>();
@@ -102,22 +97,22 @@ void CpuSolveBackend::swap(NodeVec a, NodeVec b) { v(a).swap(v(b)); }
 void CpuSolveBackend::negate(NodeVec from, NodeVec to) {
   const double* x = p(from);
   double* y = p(to);
-  forEach(n_, [&](std::size_t m) { y[m] = -x[m]; });
+  parallelForEach(n_, [&](std::size_t m) { y[m] = -x[m]; });
 }
 void CpuSolveBackend::axpy(double a, NodeVec xr, NodeVec yr) {
   const double* x = p(xr);
   double* y = p(yr);
-  forEach(n_, [&](std::size_t m) { y[m] += a * x[m]; });
+  parallelForEach(n_, [&](std::size_t m) { y[m] += a * x[m]; });
 }
 void CpuSolveBackend::formTrialAlong(double lambda) {
   const double *phi = p(NodeVec::Phi), *delta = p(NodeVec::Delta);
   double* trial = p(NodeVec::Trial);
-  forEach(n_, [&](std::size_t m) { trial[m] = phi[m] + lambda * delta[m]; });
+  parallelForEach(n_, [&](std::size_t m) { trial[m] = phi[m] + lambda * delta[m]; });
 }
 void CpuSolveBackend::advance(double lambda) {
   double *phi = p(NodeVec::Phi), *Kphi = p(NodeVec::Kphi);
   const double *delta = p(NodeVec::Delta), *Kdelta = p(NodeVec::Kdelta);
-  forEach(n_, [&](std::size_t m) {
+  parallelForEach(n_, [&](std::size_t m) {
     phi[m] += lambda * delta[m];
     Kphi[m] += lambda * Kdelta[m];
   });

@@ -12,23 +12,16 @@
 namespace lodestone {
 inline namespace field {
 
-namespace {
-template <typename Fn>
-void forEach(std::size_t n, const Fn& fn) {
-  parallelForEach(n, fn);
-}
-}  // namespace
-
 void JacobiPreconditioner::update(const MagnetostaticProblem& problem) {
   inverseDiagonal_.resize(problem.nodeCount());
   problem.jacobianDiagonal(inverseDiagonal_.data());
   double* d = inverseDiagonal_.data();
-  forEach(inverseDiagonal_.size(), [&](std::size_t m) { d[m] = d[m] > 0 ? 1.0 / d[m] : 0.0; });
+  parallelForEach(inverseDiagonal_.size(), [&](std::size_t m) { d[m] = d[m] > 0 ? 1.0 / d[m] : 0.0; });
 }
 
 void JacobiPreconditioner::apply(const double* r, double* z) const {
   const double* d = inverseDiagonal_.data();
-  forEach(inverseDiagonal_.size(), [&](std::size_t m) { z[m] = d[m] * r[m]; });
+  parallelForEach(inverseDiagonal_.size(), [&](std::size_t m) { z[m] = d[m] * r[m]; });
 }
 
 double Preconditioner::applyDot(std::size_t n, const double* r, double* z) const {
@@ -51,7 +44,7 @@ class CpuPcgOps {
   double start() {
     double* r = ws_.r.data();
     if (project_) {
-      forEach(n_, [&](std::size_t m) {
+      parallelForEach(n_, [&](std::size_t m) {
         r[m] = b_[m];
         x_[m] = 0.0;
       });
@@ -83,7 +76,7 @@ class CpuPcgOps {
     const double *p = ws_.p.data(), *Ap = ws_.Ap.data();
     double *r = ws_.r.data(), *x = x_;
     if (project_) {
-      forEach(n_, [&](std::size_t m) {
+      parallelForEach(n_, [&](std::size_t m) {
         x[m] += alpha * p[m];
         r[m] -= alpha * Ap[m];
       });
@@ -101,7 +94,7 @@ class CpuPcgOps {
   void nextDirection(double beta) {
     const double* z = ws_.z.data();
     double* p = ws_.p.data();
-    forEach(n_, [&](std::size_t m) { p[m] = z[m] + beta * p[m]; });
+    parallelForEach(n_, [&](std::size_t m) { p[m] = z[m] + beta * p[m]; });
   }
   void finish() {
     if (project_) project_(x_);
