@@ -16,7 +16,7 @@ std::vector<StageDecision> mechanicsDecisions(const plugin::Scene& scene, const 
   d.push_back({"colliders", colliders > 0, colliders > 0 ? concat(colliders, " collider(s)") : "idle",
                colliders > 0 ? "the scene has colliders or magnets" : "no collider or magnet", 0, 0});
   bool fluid = false, solid = false;
-  for (const MpmMaterial& m : solver.materials()) (m.model == MpmModel::ViscousFluid ? fluid : solid) = true;
+  for (const MpmMaterial& m : solver.materials()) (m.isFluid() ? fluid : solid) = true;
   d.push_back({"fluid pressure and viscosity", fluid, fluid ? "on" : "idle",
                fluid ? "a fluid material is used" : "no fluid material", 0, 0});
   d.push_back({"elastic stress", solid, solid ? "on" : "idle", solid ? "a solid material is used" : "no solid material",

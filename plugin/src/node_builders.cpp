@@ -111,9 +111,12 @@ MpmMaterial materialFrom(const ParamSet& p) {
   if (law == "langevin") mag = langevinMaterial(p.getFloat("magnetic.moment"), p.getFloat("magnetic.temperature"), n0);
   if (law == "linear") mag = linearMaterial(p.getFloat("magnetic.chi"), n0);
   const double rho = p.getFloat("density");
-  return p.getString("model") == "solid"
-             ? neoHookeanSolid(p.getFloat("youngs_modulus"), p.getFloat("poisson_ratio"), rho, mag)
-             : viscousFluid(p.getFloat("viscosity"), p.getFloat("bulk_modulus"), rho, mag);
+  const std::string model = p.getString("model");
+  if (model == "viscoplastic_fluid")
+    return viscoplasticFluid(p.getFloat("yield_stress"), p.getFloat("consistency"), p.getFloat("flow_index"),
+                             p.getFloat("max_viscosity"), p.getFloat("bulk_modulus"), rho, mag);
+  return model == "solid" ? neoHookeanSolid(p.getFloat("youngs_modulus"), p.getFloat("poisson_ratio"), rho, mag)
+                          : viscousFluid(p.getFloat("viscosity"), p.getFloat("bulk_modulus"), rho, mag);
 }
 
 std::unique_ptr<FieldSource> appliedFieldFrom(const ParamSet& p) {

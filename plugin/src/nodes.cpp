@@ -103,8 +103,9 @@ NodeDecl materialNode() {
   d.help = "An MPM material (Neo-Hookean solid or viscous fluid) with an optional magnetization law.";
   auto& q = d.params;
   q.push_back(required(stringParam("name", "Name", "material", "Name by which bodies refer to the material.")));
-  q.push_back(required(choiceParam("model", "Model", {"solid", "fluid"}, "solid",
-                                   "Constitutive model: Neo-Hookean solid or viscous (J-based) fluid.")));
+  q.push_back(required(choiceParam("model", "Model", {"solid", "fluid", "viscoplastic_fluid"}, "solid",
+                                   "Constitutive model: Neo-Hookean solid, viscous (J-based) fluid, or "
+                                   "viscoplastic (Herschel-Bulkley / Bingham, J-based) fluid.")));
   q.push_back(required(positive(floatParam("density", "Density", 1000.0, "kg/m^3", "Rest mass density."))));
   q.push_back(
       when(required(positive(floatParam("youngs_modulus", "Young's modulus", 1e5, "Pa", "Stiffness of the solid."))),
@@ -117,7 +118,28 @@ NodeDecl materialNode() {
            "model", {"fluid"}));
   q.push_back(
       when(required(positive(floatParam("bulk_modulus", "Bulk modulus", 1e5, "Pa", "Bulk modulus of the fluid."))),
-           "model", {"fluid"}));
+           "model", {"fluid", "viscoplastic_fluid"}));
+  q.push_back(when(required(nonNegative(floatParam(
+                       "yield_stress", "Yield stress", 100.0, "Pa",
+                       "Herschel-Bulkley yield stress tau_y: below it the fluid does not flow (it creeps at a "
+                       "strain rate ~ stress / max_viscosity)."))),
+                   "model", {"viscoplastic_fluid"}));
+  q.push_back(when(required(nonNegative(floatParam("consistency", "Consistency", 1.0, "Pa*s^n",
+                                                   "Herschel-Bulkley consistency k: stress above yield is "
+                                                   "tau_y + k gamma_dot^n."))),
+                   "model", {"viscoplastic_fluid"}));
+  q.push_back(when(range(floatParam("flow_index", "Flow index", 1.0, "",
+                                    "Herschel-Bulkley flow index n (1: Bingham plastic, < 1 shear thinning, "
+                                    "> 1 shear thickening)."),
+                         0.01, 2),
+                   "model", {"viscoplastic_fluid"}));
+  q.push_back(when(required(positive(floatParam(
+                       "max_viscosity", "Max viscosity", 1000.0, "Pa*s",
+                       "Cap mu_max of the effective viscosity tau_y / gamma_dot + k gamma_dot^(n-1) (the "
+                       "regularization of the yield). Larger is closer to a true yield (slower creep) but the "
+                       "viscous time step dx^2 rho / (6 mu_max) shrinks in proportion: substeps grow linearly "
+                       "with mu_max."))),
+                   "model", {"viscoplastic_fluid"}));
   q.push_back(required(choiceParam("magnetic.law", "Magnetization law",
                                    {"none", "paper", "paper-linear", "langevin", "linear"}, "none",
                                    "none; paper (Langevin, Table 2 of Sun et al. 2021); paper-linear (its low-field "

@@ -38,15 +38,22 @@ void atomicMin(std::atomic<std::size_t>& a, std::size_t v) {
 /// The constants of one material the kernels need.
 struct MaterialParams {
   bool fluid = false;
+  bool viscoplastic = false;
   double mu = 0, lambda = 0;              // Pa (solid)
   double viscosity = 0, bulkModulus = 0;  // Pa*s, Pa (fluid)
+  double yieldStress = 0, consistency = 0, flowIndex = 1, maxViscosity = 0;  // Pa, Pa*s^n, -, Pa*s
 };
 
 std::vector<MaterialParams> paramsOf(const std::vector<MpmMaterial>& materials) {
   std::vector<MaterialParams> out(materials.size());
   for (std::size_t m = 0; m < materials.size(); ++m) {
     const MpmMaterial& mat = materials[m];
-    out[m].fluid = mat.model == MpmModel::ViscousFluid;
+    out[m].fluid = mat.isFluid();  // tracks J only
+    out[m].viscoplastic = mat.model == MpmModel::ViscoplasticFluid;
+    out[m].yieldStress = mat.yieldStress;
+    out[m].consistency = mat.consistency;
+    out[m].flowIndex = mat.flowIndex;
+    out[m].maxViscosity = mat.maxViscosity;
     out[m].mu = mat.mu;
     out[m].lambda = mat.lambda;
     out[m].viscosity = mat.viscosity;
@@ -313,9 +320,11 @@ void MpmGrid::particleToGrid(const MpmParticles& particles, const std::vector<Mp
 
         const double m = M[p];
         const MaterialParams& mp = params[mat[p]];
-        // Kirchhoff stress tau = J sigma (Pa): Eq. 18 or Eqs. 19-21.
-        const Mat3d tau = mp.fluid ? viscousFluidKirchhoff(Cp[p], Jp[p], mp.viscosity, mp.bulkModulus)
-                                   : neoHookeanKirchhoff(Fp[p], mp.mu, mp.lambda);
+        // Kirchhoff stress tau = J sigma (Pa): Eq. 18, Eqs. 19-21 or Herschel-Bulkley.
+        const Mat3d tau = mp.viscoplastic ? viscoplasticFluidKirchhoff(Cp[p], Jp[p], mp.yieldStress, mp.consistency,
+                                                                       mp.flowIndex, mp.maxViscosity, mp.bulkModulus)
+                          : mp.fluid      ? viscousFluidKirchhoff(Cp[p], Jp[p], mp.viscosity, mp.bulkModulus)
+                                          : neoHookeanKirchhoff(Fp[p], mp.mu, mp.lambda);
         // A = m C - dt D^-1 V0 tau (kg/s): the MLS-MPM affine momentum with the stress impulse.
         Mat3d A;
         const double s = stressScale * V0[p];

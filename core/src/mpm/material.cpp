@@ -13,16 +13,22 @@ const char* toString(MpmModel model) {
       return "Neo-Hookean solid";
     case MpmModel::ViscousFluid:
       return "viscous fluid";
+    case MpmModel::ViscoplasticFluid:
+      return "viscoplastic fluid";
   }
   return "unknown";
 }
 
 double MpmMaterial::waveSpeed() const {
-  if (model == MpmModel::ViscousFluid) return std::sqrt(bulkModulus / density);
+  if (isFluid()) return std::sqrt(bulkModulus / density);
   return std::sqrt((lambda + 2 * mu) / density);
 }
 
-double MpmMaterial::kinematicViscosity() const { return model == MpmModel::ViscousFluid ? viscosity / density : 0.0; }
+double MpmMaterial::kinematicViscosity() const {
+  if (model == MpmModel::ViscousFluid) return viscosity / density;
+  if (model == MpmModel::ViscoplasticFluid) return maxViscosity / density;
+  return 0.0;
+}
 
 void validateMagneticMaterial(const MagneticMaterial& magnetic, const char* who) {
   const MagnetizationLaw<double>& law = magnetic.law;
@@ -64,6 +70,18 @@ void MpmMaterial::validate() const {
       require(std::isfinite(bulkModulus) && bulkModulus > 0,
               "viscous fluid: bulk modulus K must be positive and finite (Pa), got ", bulkModulus);
       break;
+    case MpmModel::ViscoplasticFluid:
+      require(std::isfinite(yieldStress) && yieldStress >= 0,
+              "viscoplastic fluid: yield stress tau_y must be finite and >= 0 (Pa), got ", yieldStress);
+      require(std::isfinite(consistency) && consistency >= 0,
+              "viscoplastic fluid: consistency k must be finite and >= 0 (Pa*s^n), got ", consistency);
+      require(std::isfinite(flowIndex) && flowIndex > 0 && flowIndex <= 2,
+              "viscoplastic fluid: flow index n must lie in (0, 2] (dimensionless), got ", flowIndex);
+      require(std::isfinite(maxViscosity) && maxViscosity > 0,
+              "viscoplastic fluid: maximum viscosity mu_max must be positive and finite (Pa*s), got ", maxViscosity);
+      require(std::isfinite(bulkModulus) && bulkModulus > 0,
+              "viscoplastic fluid: bulk modulus K must be positive and finite (Pa), got ", bulkModulus);
+      break;
     default:
       throw InvalidArgument(concat("MPM material: unknown model ", int(model)));
   }
@@ -74,6 +92,9 @@ std::string MpmMaterial::describe() const {
   std::string s;
   if (model == MpmModel::NeoHookeanSolid)
     s = concat("Neo-Hookean solid: mu = ", mu, " Pa, lambda = ", lambda, " Pa, rho = ", density, " kg/m^3");
+  else if (model == MpmModel::ViscoplasticFluid)
+    s = concat("viscoplastic fluid: tau_y = ", yieldStress, " Pa, k = ", consistency, " Pa*s^n, n = ", flowIndex,
+               ", mu_max = ", maxViscosity, " Pa*s, K = ", bulkModulus, " Pa, rho = ", density, " kg/m^3");
   else
     s = concat("viscous fluid: mu_N = ", viscosity, " Pa*s, K = ", bulkModulus, " Pa, rho = ", density, " kg/m^3");
   return s + "; magnetic: " + magnetic.describe();
@@ -100,6 +121,21 @@ MpmMaterial viscousFluid(double viscosity, double bulkModulus, double density, c
   m.model = MpmModel::ViscousFluid;
   m.density = density;
   m.viscosity = viscosity;
+  m.bulkModulus = bulkModulus;
+  m.magnetic = magnetic;
+  m.validate();
+  return m;
+}
+
+MpmMaterial viscoplasticFluid(double yieldStress, double consistency, double flowIndex, double maxViscosity,
+                              double bulkModulus, double density, const MagneticMaterial& magnetic) {
+  MpmMaterial m;
+  m.model = MpmModel::ViscoplasticFluid;
+  m.density = density;
+  m.yieldStress = yieldStress;
+  m.consistency = consistency;
+  m.flowIndex = flowIndex;
+  m.maxViscosity = maxViscosity;
   m.bulkModulus = bulkModulus;
   m.magnetic = magnetic;
   m.validate();

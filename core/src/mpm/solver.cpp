@@ -863,7 +863,7 @@ MpmEnergies MpmSolver::energies() const {
     const std::uint32_t id = particles_.material[p];
     if (id < materials_.size()) {
       const MpmMaterial& mat = materials_[id];
-      t.e = particles_.volume0[p] * (mat.model == MpmModel::ViscousFluid
+      t.e = particles_.volume0[p] * (mat.isFluid()
                                          ? fluidEnergyDensity(particles_.J[p], mat.bulkModulus)
                                          : neoHookeanEnergyDensity(particles_.F[p], mat.mu, mat.lambda));
     }

@@ -19,6 +19,16 @@
 // The pressure is p = K (1 - J). In MLS-MPM the particle's affine matrix C is
 // its velocity gradient, so grad v = C.
 //
+// Viscoplastic fluid (regularized Herschel-Bulkley), J tracked as above, yield
+// stress tau_y (Pa), consistency k (Pa*s^n), flow index n (n = 1: Bingham):
+//   D = (C + C^T)/2, D_dev = D - tr(D)/3 I, gamma_dot = sqrt(2 D_dev : D_dev)  (1/s)
+//   mu_eff = min(mu_max, tau_y / gamma_dot + k gamma_dot^(n-1))               (Pa*s)
+//   sigma  = 2 mu_eff D_dev - K (1 - J) I                                      (Cauchy)
+// The cap mu_max (a bi-viscosity regularization) makes unyielded material a
+// very viscous Newtonian fluid that creeps at strain rate ~ stress / mu_max
+// instead of standing exactly still; it bounds the explicit viscous time step
+// (dx^2 rho / (6 mu_max)), so a large yield stress never blows up.
+//
 // Inverted or collapsed elements (J <= kMinVolumeRatio) would make ln J
 // undefined; J is floored at kMinVolumeRatio inside the logarithm and the
 // 1/J factor so the stress stays finite (a strong restoring pressure) instead
@@ -104,6 +114,38 @@ LODESTONE_HOSTDEV inline Mat3<T> viscousFluidKirchhoff(const Mat3<T>& C, T J, T 
   Mat3<T> s = viscousFluidCauchy(C, J, viscosity, bulkModulus);
   for (int i = 0; i < 3; ++i)
     for (int j = 0; j < 3; ++j) s(i, j) *= J;
+  return s;
+}
+
+/// Capped Herschel-Bulkley effective viscosity (Pa*s) at shear rate gamma_dot (1/s):
+/// min(mu_max, tau_y / gamma_dot + k gamma_dot^(n-1)); mu_max at gamma_dot = 0.
+template <typename T>
+LODESTONE_HOSTDEV inline T herschelBulkleyViscosity(T gammaDot, T yieldStress, T consistency, T flowIndex,
+                                                    T maxViscosity) {
+  using std::pow;
+  if (!(gammaDot > T(0))) return maxViscosity;
+  const T mu = yieldStress / gammaDot + consistency * pow(gammaDot, flowIndex - T(1));
+  return mu < maxViscosity ? mu : maxViscosity;
+}
+
+/// Viscoplastic-fluid Kirchhoff stress tau = J (2 mu_eff D_dev - K (1 - J) I) (Pa).
+template <typename T>
+LODESTONE_HOSTDEV inline Mat3<T> viscoplasticFluidKirchhoff(const Mat3<T>& C, T J, T yieldStress, T consistency,
+                                                            T flowIndex, T maxViscosity, T bulkModulus) {
+  using std::sqrt;
+  Mat3<T> D;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) D(i, j) = T(0.5) * (C(i, j) + C(j, i));
+  const T third = trace(D) / T(3);
+  for (int i = 0; i < 3; ++i) D(i, i) -= third;
+  T dd = 0;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) dd += D(i, j) * D(i, j);
+  const T mu = herschelBulkleyViscosity(sqrt(T(2) * dd), yieldStress, consistency, flowIndex, maxViscosity);
+  const T p = bulkModulus * (T(1) - J);  // pressure, Pa
+  Mat3<T> s;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) s(i, j) = J * (T(2) * mu * D(i, j) - (i == j ? p : T(0)));
   return s;
 }
 

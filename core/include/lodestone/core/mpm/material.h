@@ -13,7 +13,8 @@ inline namespace mpm {
 
 enum class MpmModel : int {
   NeoHookeanSolid = 0,  ///< tracks the deformation gradient F (Eq. 18)
-  ViscousFluid = 1      ///< tracks only the volume ratio J (Eqs. 19-21)
+  ViscousFluid = 1,     ///< tracks only the volume ratio J (Eqs. 19-21)
+  ViscoplasticFluid = 2 ///< tracks J; capped Herschel-Bulkley deviatoric stress (constitutive.h)
 };
 const char* toString(MpmModel model);
 
@@ -24,13 +25,21 @@ struct MpmMaterial {
   double lambda = 0;          ///< solid: Lame parameter lambda, Pa
   double viscosity = 0;       ///< fluid: dynamic viscosity mu_N, Pa*s
   double bulkModulus = 0;     ///< fluid: bulk modulus K, Pa
+  double yieldStress = 0;     ///< viscoplastic fluid: yield stress tau_y, Pa
+  double consistency = 0;     ///< viscoplastic fluid: consistency k, Pa*s^n
+  double flowIndex = 1;       ///< viscoplastic fluid: flow index n in (0, 2] (1: Bingham)
+  double maxViscosity = 0;    ///< viscoplastic fluid: cap mu_max of the effective viscosity, Pa*s
+
+  /// True for the models that track only J (viscous and viscoplastic fluids).
+  bool isFluid() const { return model == MpmModel::ViscousFluid || model == MpmModel::ViscoplasticFluid; }
   MagneticMaterial magnetic;  ///< magnetization law and n0 (1/m^3); LawKind::None when not magnetic
 
   bool isMagnetic() const { return magnetic.law.kind != LawKind::None; }
   /// Fastest elastic (P-)wave speed at rest, m/s: sqrt((lambda + 2 mu)/rho)
   /// for the solid, sqrt(K/rho) for the fluid.
   double waveSpeed() const;
-  /// Kinematic viscosity mu_N / rho (m^2/s); 0 for the solid.
+  /// Largest kinematic viscosity (m^2/s) the model can produce: mu_N / rho for
+  /// the viscous fluid, mu_max / rho for the viscoplastic fluid, 0 for the solid.
   double kinematicViscosity() const;
   /// Throws InvalidArgument naming the first bad value.
   void validate() const;
@@ -48,6 +57,14 @@ MpmMaterial neoHookeanSolid(double youngModulus, double poissonRatio, double den
 /// (Pa, finite, > 0) and density rho (kg/m^3, finite, > 0).
 MpmMaterial viscousFluid(double viscosity, double bulkModulus, double density,
                          const MagneticMaterial& magnetic = nonMagneticMaterial());
+
+/// Viscoplastic (regularized Herschel-Bulkley) fluid: yield stress tau_y (Pa,
+/// finite, >= 0), consistency k (Pa*s^n, finite, >= 0), flow index n (in (0, 2]),
+/// cap of the effective viscosity mu_max (Pa*s, finite, > 0), bulk modulus K
+/// (Pa, finite, > 0), density rho (kg/m^3, finite, > 0).
+MpmMaterial viscoplasticFluid(double yieldStress, double consistency, double flowIndex, double maxViscosity,
+                              double bulkModulus, double density,
+                              const MagneticMaterial& magnetic = nonMagneticMaterial());
 
 /// Throws InvalidArgument unless the magnetic material is usable by the MPM:
 /// LawKind::None, or a linear / Langevin law with finite positive parameters
