@@ -302,6 +302,32 @@ TEST(Stability, StiffSolidAndNearlyIncompressibleFluid) {
   }
 }
 
+TEST(Stability, ViscoplasticFluidExtremes) {
+  struct Case {
+    double yield, k, n, muMax;  // Pa, Pa*s^n, -, Pa*s
+    const char* what;
+  };
+  const Case cases[] = {{1e9, 1.0, 1.0, 1e4, "yield stress 1e9 Pa (capped at mu_max = 1e4 Pa*s)"},
+                        {0.0, 0.0, 1.0, 1e3, "zero yield stress and consistency"},
+                        {100.0, 1e3, 0.01, 1e3, "flow index 0.01"},
+                        {100.0, 1e3, 2.0, 1e3, "flow index 2, k = 1e3 Pa*s^2"}};
+  for (const Case& cs : cases) {
+    auto s = std::make_unique<MpmSolver>(smallSettings());
+    const double c = centre();
+    s->emit(EmitterShape::box(Pose::at({c, c, 0.05}), {0.03, 0.03, 0.02}),
+            s->addMaterial(viscoplasticFluid(cs.yield, cs.k, cs.n, cs.muMax, 2e5, kRho, paperMaterial())),
+            emitSettings(8, {0, 0, -1}));
+    s->sources().add(std::make_unique<UniformField>(Vec3d{0, 0, 1e5}));
+    const Outcome o = run(*s, 2, 5e-4);
+    expectStable(*s, o, cs.what);
+  }
+  EXPECT_THROW(viscoplasticFluid(-1, 1, 1, 1e3, 2e5, kRho), InvalidArgument);
+  EXPECT_THROW(viscoplasticFluid(1, 1, 0, 1e3, 2e5, kRho), InvalidArgument);
+  EXPECT_THROW(viscoplasticFluid(1, 1, 2.5, 1e3, 2e5, kRho), InvalidArgument);
+  EXPECT_THROW(viscoplasticFluid(1, 1, 1, 0, 2e5, kRho), InvalidArgument);
+  EXPECT_THROW(viscoplasticFluid(1, 1, 1, INFINITY, 2e5, kRho), InvalidArgument);
+}
+
 // ---------------------------------------------------------------------------
 // Discontinuous density
 
