@@ -46,7 +46,8 @@ __global__ void headerCheckKernel(double* out, float* outf, MagnetizationLaw<dou
   Mat3d F = Mat3d::identity() * Mat3d::outer(H, H).transposed();
   out[3] = neoHookeanKirchhoff(F, 1.0, 2.0)(0, 0) + neoHookeanCauchy(F, 1.0, 2.0)(1, 1) +
            neoHookeanEnergyDensity(F, 1.0, 2.0) + viscousFluidKirchhoff(F, 1.0, 0.1, 1e5)(2, 2) +
-           viscousFluidCauchy(F, 1.0, 0.1, 1e5)(0, 1) + fluidEnergyDensity(0.9, 1e5) + determinant(F) + trace(F);
+           viscousFluidCauchy(F, 1.0, 0.1, 1e5)(0, 1) + fluidEnergyDensity(0.9, 1e5) + determinant(F) + trace(F) +
+           viscoplasticFluidKirchhoff(F, 1.0, 10.0, 1.0, 0.5, 1e3, 1e5)(0, 2);
   out[4] = applyBoundaryCondition(H, Vec3d{}, Vec3d{0, 0, 1}, bc).z;
   const int idx[3] = {int(threadIdx.x), 1, 2}, dims[3] = {8, 8, 8};
   out[5] = applyDomainWalls(H, idx, dims, 2, bc).x;
