@@ -13,6 +13,7 @@
 
 #include "lodestone/core/base/constants.h"
 #include "lodestone/core/base/error.h"
+#include "lodestone/core/base/gauss_legendre.h"
 #include "lodestone/core/base/mat3.h"
 #include "lodestone/core/base/vec3.h"
 
@@ -38,30 +39,13 @@ inline void expectContains(const std::string& msg, std::initializer_list<const c
 
 inline double relErr(const Vec3d& a, const Vec3d& ref) { return norm(a - ref) / norm(ref); }
 
-// Gauss-Legendre nodes and weights on [-1, 1] (Newton on P_n).
+// Gauss-Legendre nodes and weights on [-1, 1] (base/gauss_legendre.h).
 struct Rule {
   std::vector<double> x, w;
 };
 inline Rule gaussLegendre(int n) {
   Rule r;
-  for (int i = 0; i < n; ++i) {
-    double z = std::cos(kPi * (i + 0.75) / (n + 0.5));
-    double dp = 0;
-    for (int it = 0; it < 100; ++it) {
-      double p0 = 1, p1 = z;
-      for (int j = 2; j <= n; ++j) {
-        const double p2 = ((2.0 * j - 1) * z * p1 - (j - 1.0) * p0) / j;
-        p0 = p1;
-        p1 = p2;
-      }
-      dp = n * (z * p1 - p0) / (z * z - 1);
-      const double dz = p1 / dp;
-      z -= dz;
-      if (std::fabs(dz) < 1e-16) break;
-    }
-    r.x.push_back(z);
-    r.w.push_back(2.0 / ((1 - z * z) * dp * dp));
-  }
+  gaussLegendreRule(n, r.x, r.w);
   return r;
 }
 
