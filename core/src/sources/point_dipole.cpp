@@ -9,17 +9,6 @@
 namespace lodestone {
 inline namespace sources {
 
-Vec3d dipoleField(const Vec3d& moment, const Vec3d& r) {
-  const double d = norm(r);  // rescaled, so no overflow for huge |r|
-  if (!(d > 0)) return {};
-  const double inv = 1.0 / d;
-  const double inv3 = inv * inv * inv / (4.0 * kPi);
-  if (!std::isfinite(inv3)) return {};
-  const Vec3d u = r * inv;
-  const Vec3d H = ((3.0 * dot(u, moment)) * u - moment) * inv3;
-  return isFinite(H) ? H : Vec3d{};
-}
-
 PointDipole::PointDipole(const Vec3d& position, const Vec3d& moment, TimeProfile scale)
     : position_(position), moment_(moment), scale_(std::move(scale)) {
   require(isFinite(position), "point dipole: position must be finite (m), got (", position.x, ", ",

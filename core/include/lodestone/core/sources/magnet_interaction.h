@@ -22,6 +22,7 @@
 #include "lodestone/core/base/hostdev.h"
 #include "lodestone/core/base/vec3.h"
 #include "lodestone/core/sources/magnet_source.h"
+#include "lodestone/core/sources/point_dipole.h"
 
 namespace lodestone {
 inline namespace sources {
@@ -42,16 +43,10 @@ LODESTONE_HOSTDEV inline Vec3d dipoleDipoleForce(const Vec3d& mA, const Vec3d& m
 }
 
 /// Torque (N*m, about B's centre) on dipole mB at offset r (m, from A to B)
-/// from dipole mA: mu0 mB x H_A(r), H_A = (3 u (u.mA) - mA) / (4 pi |r|^3).
+/// from dipole mA: mu0 mB x H_A(r), H_A = dipoleField(mA, r) (point_dipole.h).
 /// Zero for r = 0.
 LODESTONE_HOSTDEV inline Vec3d dipoleDipoleTorque(const Vec3d& mA, const Vec3d& mB, const Vec3d& r) {
-  const double d2 = dot(r, r);
-  if (!(d2 > 0)) return {};
-  using std::sqrt;
-  const double d = sqrt(d2);
-  const Vec3d u = r / d;
-  const Vec3d H = (3.0 * dot(u, mA)) * u - mA;
-  return (kMu0 / (4.0 * kPi * d2 * d)) * cross(mB, H);
+  return kMu0 * cross(mB, dipoleField(mA, r));
 }
 
 enum class MagnetInteractionMethod {

@@ -3,9 +3,12 @@
 //   H(r) = (3 r_hat (r_hat . m) - m) / (4 pi |r|^3)      (A/m)
 // Also the exact exterior field of a uniformly magnetized sphere and the
 // leading far-field term of every magnet.
+#include <cmath>
 #include <memory>
 #include <string>
 
+#include "lodestone/core/base/constants.h"
+#include "lodestone/core/base/hostdev.h"
 #include "lodestone/core/sources/field_source.h"
 #include "lodestone/core/sources/time_profile.h"
 #include "lodestone/core/base/vec3.h"
@@ -16,7 +19,17 @@ inline namespace sources {
 /// H (A/m) at offset r (m) from a point dipole of moment m (A*m^2).
 /// The singular point r = 0 is excluded: there (and wherever |r| is so small
 /// that the field overflows a double) the result is zero, never NaN or inf.
-Vec3d dipoleField(const Vec3d& moment, const Vec3d& r);
+LODESTONE_HOSTDEV inline Vec3d dipoleField(const Vec3d& moment, const Vec3d& r) {
+  using std::isfinite;
+  const double d = norm(r);  // rescaled, so no overflow for huge |r|
+  if (!(d > 0)) return {};
+  const double inv = 1.0 / d;
+  const double inv3 = inv * inv * inv / (4.0 * kPi);
+  if (!isfinite(inv3)) return {};
+  const Vec3d u = r * inv;
+  const Vec3d H = ((3.0 * dot(u, moment)) * u - moment) * inv3;
+  return isFinite(H) ? H : Vec3d{};
+}
 
 class PointDipole final : public FieldSource {
  public:
