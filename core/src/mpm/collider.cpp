@@ -2,7 +2,9 @@
 // constant velocity) and the grid boundary conditions. See mpm_collider.h.
 #include "lodestone/core/mpm/collider.h"
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
 #include <utility>
 
 #include "lodestone/core/base/error.h"
@@ -167,6 +169,23 @@ ColliderShape ColliderShape::invertedShape() const {
   return s;
 }
 
+double ColliderShape::halfThickness() const {
+  const double infinite = std::numeric_limits<double>::infinity();
+  switch (kind) {
+    case ColliderShapeKind::Plane:
+      return infinite;
+    case ColliderShapeKind::Sphere:
+      return inverted ? infinite : radius;
+    case ColliderShapeKind::Box:
+      return inverted ? infinite : std::min({halfSize.x, halfSize.y, halfSize.z});
+    case ColliderShapeKind::Cylinder:
+      return inverted ? infinite : std::min(radius, halfLength);
+    case ColliderShapeKind::LevelSet:
+      return inverted ? levelSet->outsideRidgeDepth() : levelSet->insideRidgeDepth();
+  }
+  return infinite;
+}
+
 void ColliderShape::validate(const char* who) const {
   switch (kind) {
     case ColliderShapeKind::Plane:
@@ -321,6 +340,17 @@ Vec3d MpmCollider::apply(const ColliderState& s, const Vec3d& x, const Vec3d& v)
   const Vec3d n = s.pose.vectorToWorld(shape_.normal(xb));
   const Vec3d vc = s.velocity + cross(s.angularVelocity, x - s.pose.position);
   return applyBoundaryCondition(v, vc, n, boundary_);
+}
+
+bool MpmCollider::projectOut(const ColliderState& s, Vec3d& x, Vec3d& v) const {
+  const Vec3d xb = s.pose.toLocal(x);
+  const double phi = shape_.signedDistance(xb);
+  if (!(phi < 0)) return false;
+  const Vec3d n = s.pose.vectorToWorld(shape_.normal(xb));
+  x = x - phi * n;
+  const Vec3d vc = s.velocity + cross(s.angularVelocity, x - s.pose.position);
+  v = applyBoundaryCondition(v, vc, n, boundary_);
+  return true;
 }
 
 double MpmCollider::signedDistance(const Vec3d& x, double t) const { return signedDistance(stateAt(t), x); }

@@ -152,7 +152,10 @@ std::string MpmFrameReport::summary() const {
   os << "time: P2G " << secondsP2G << " s, magnetic " << secondsMagnetic << " s, grid " << secondsGridUpdate
      << " s, G2P " << secondsG2P << " s, total " << secondsTotal << " s\n";
   os << "field solves: " << magneticReports.size() << "\n";
-  os << "particles clamped " << clamped << ", removed " << removed << " (non-finite " << nonFinite << ")\n";
+  os << "particles clamped " << clamped << ", removed " << removed << " (non-finite " << nonFinite
+     << "), pushed out of colliders " << projected << "\n";
+  if (dtLimitedByColliders)
+    os << dtLimitedByColliders << " substep(s) shortened so that no particle crosses a collider's half-thickness\n";
   os << "energy: kinetic " << energies.kinetic << " J, gravitational " << energies.gravitational << " J, elastic "
      << energies.elastic << " J, total " << energies.total() << " J\n";
   for (const auto& w : warnings) os << "warning: " << w << "\n";
@@ -278,33 +281,63 @@ double MpmSolver::suggestedDt() const {
 
 double MpmSolver::stabilityLimitDt() const { return cflDt(1.0, true); }
 
-double MpmSolver::cflDt(double cfl, bool bound) const {
+double MpmSolver::maxParticleSpeed() const {
   const std::size_t np = particles_.size();
   const Vec3d* v = particles_.v.data();
-  const double vmax = tbb::parallel_reduce(
+  const double vmax2 = tbb::parallel_reduce(
       tbb::blocked_range<std::size_t>(0, np, 8192), 0.0,
       [&](const tbb::blocked_range<std::size_t>& r, double m) {
         for (std::size_t p = r.begin(); p != r.end(); ++p) m = std::max(m, norm2(v[p]));
         return m;
       },
       [](double a, double b) { return std::max(a, b); });
+  return std::sqrt(vmax2);
+}
+
+double MpmSolver::colliderCrossingDt() const {
+  double dt = std::numeric_limits<double>::infinity();
+  if (colliders_.empty() || particles_.size() == 0) return dt;
+  const double vmax = maxParticleSpeed();
+  const GridSpec& g = settings_.grid;
+  const Vec3d lo = g.origin, hi = g.maxCorner();
+  for (const MpmCollider& c : colliders_) {
+    const double half = c.shape().halfThickness();
+    if (!std::isfinite(half)) continue;
+    const ColliderState st = c.stateAt(time_);
+    double reach = 0;  // farthest domain corner from the collider's origin, m
+    for (int corner = 0; corner < 8; ++corner) {
+      const Vec3d x{corner & 1 ? hi.x : lo.x, corner & 2 ? hi.y : lo.y, corner & 4 ? hi.z : lo.z};
+      reach = std::max(reach, norm(x - st.pose.position));
+    }
+    const double speed = vmax + norm(st.velocity) + norm(st.angularVelocity) * reach;
+    if (speed > 0) dt = std::min(dt, half / speed);
+  }
+  return dt;
+}
+
+double MpmSolver::cflDt(double cfl, bool bound) const {
+  const double vmax = maxParticleSpeed();
   double c = 0, nu = 0;
   for (const MpmMaterial& m : materials_) {
     c = std::max(c, m.waveSpeed());
     nu = std::max(nu, m.kinematicViscosity());
   }
   const double dx = settings_.grid.dx;
-  const double speed = std::sqrt(vmax) + c;
+  const double speed = vmax + c;
+  // The crossing limit of thin colliders (the projection after advection
+  // pushes a particle back out through the face it entered by only while it
+  // is less than the half-thickness deep).
+  const double crossing = settings_.colliderProjection ? colliderCrossingDt() : std::numeric_limits<double>::infinity();
   // The bound: a cell per substep, and the explicit viscous limit dx^2/(6 nu)
   // (cfl dx^2/(3 nu) at the default cfl = 1/2 of it).
   if (bound) {
     double dt = speed > 0 ? dx / speed : std::numeric_limits<double>::infinity();
     if (nu > 0) dt = std::min(dt, dx * dx / (6 * nu));
-    return dt;
+    return std::min(dt, crossing);
   }
   double dt = speed > 0 ? cfl * dx / speed : settings_.dtMax;
   if (nu > 0) dt = std::min(dt, cfl * dx * dx / (3 * nu));
-  dt = std::min(dt, settings_.dtMax);
+  dt = std::min({dt, cfl * crossing, settings_.dtMax});
   return std::max(dt, settings_.dtMin);
 }
 
@@ -749,12 +782,47 @@ void MpmSolver::particleToGrid(double dt, MpmStepReport& rep) {
 bool MpmSolver::gridToParticle(double dt, MpmStepReport& rep) {
   const ParticleBounds bounds = domainBounds();
   const GridToParticleReport g2p = grid_.gridToParticle(particles_, materials_, dt, &bounds);
+  std::size_t pushedOutside = 0;
+  if (settings_.colliderProjection) rep.projected = projectOutOfColliders(dt, pushedOutside);
   if (settings_.checkFinite) checkFiniteParticles("after G2P and advection");
   rep.maxSpeed = g2p.maxSpeed;
   rep.clamped += g2p.clamped;
   const std::size_t removedBefore = rep.removed;
-  if (g2p.outside + g2p.nonFinite > 0) rep.clamped += enforceDomain(rep.removed, rep.nonFinite);
+  if (g2p.outside + g2p.nonFinite + pushedOutside > 0) rep.clamped += enforceDomain(rep.removed, rep.nonFinite);
   return rep.removed != removedBefore;
+}
+
+std::size_t MpmSolver::projectOutOfColliders(double dt, std::size_t& outside) {
+  outside = 0;
+  if (colliders_.empty()) return 0;
+  // The colliders where the grid update placed them: at the end of the substep.
+  std::vector<ColliderState> states(colliders_.size());
+  for (std::size_t c = 0; c < colliders_.size(); ++c) states[c] = colliders_[c].stateAt(time_ + dt);
+  const ParticleBounds bounds = domainBounds();
+  Vec3d* X = particles_.x.data();
+  Vec3d* V = particles_.v.data();
+  struct Count {
+    std::size_t pushed = 0, outside = 0;
+    Count& operator+=(const Count& o) {
+      pushed += o.pushed;
+      outside += o.outside;
+      return *this;
+    }
+  };
+  const Count n = deterministicSum<Count>(particles_.size(), [&](std::size_t p) {
+    Count k;
+    for (std::size_t c = 0; c < colliders_.size(); ++c) {
+      if (!colliders_[c].projectOut(states[c], X[p], V[p])) continue;
+      ++k.pushed;
+      const Vec3d& x = X[p];
+      if (x.x < bounds.lo.x || x.y < bounds.lo.y || x.z < bounds.lo.z || x.x > bounds.hi.x || x.y > bounds.hi.y ||
+          x.z > bounds.hi.z)
+        ++k.outside;
+    }
+    return k;
+  });
+  outside = n.outside;
+  return n.pushed;
 }
 
 MpmFrameReport MpmSolver::advanceFrame(double frameDuration, const MpmProgressCallback& progress) {
@@ -768,6 +836,9 @@ MpmFrameReport MpmSolver::advanceFrame(double frameDuration, const MpmProgressCa
   while (time_ < tEnd) {
     double dt = suggestedDt();
     if (settings_.fixedDt == 0 && dt <= settings_.dtMin) ++fr.dtAtMinimum;
+    if (settings_.fixedDt == 0 && settings_.colliderProjection && !colliders_.empty() &&
+        settings_.cfl * colliderCrossingDt() <= dt * (1 + 1e-12) && dt > settings_.dtMin)
+      ++fr.dtLimitedByColliders;
     if (settings_.fixedDt > 0) {
       // A fixed dt above the stability bound would blow up: substep it.
       const double limit = stabilityLimitDt();
@@ -799,6 +870,7 @@ MpmFrameReport MpmSolver::advanceFrame(double frameDuration, const MpmProgressCa
     fr.clamped += r.clamped;
     fr.removed += r.removed;
     fr.nonFinite += r.nonFinite;
+    fr.projected += r.projected;
     if (r.magneticSolved) {
       if (!r.magnetic.converged())
         fr.warnings.push_back(
@@ -825,7 +897,7 @@ MpmFrameReport MpmSolver::advanceFrame(double frameDuration, const MpmProgressCa
     fr.warnings.push_back(concat(fr.nonFinite, " particle(s) with a non-finite state were removed"));
   if (fr.dtLimitedByCfl > 0)
     fr.warnings.push_back(concat(fr.dtLimitedByCfl, " substep(s): the fixed dt = ", settings_.fixedDt,
-                                 " s exceeded the stability bound (a cell per substep, dx^2/(6 nu)) and was "
+                                 " s exceeded the stability bound (a cell per substep, dx^2/(6 nu), a collider's half-thickness) and was "
                                  "shortened to cfl times the bound"));
   fr.time = time_;
   fr.energies = energies();

@@ -113,6 +113,14 @@ struct ColliderShape {
 
   /// Signed distance (m) of body-frame point xb, negative inside the solid.
   LODESTONE_HOSTDEV double signedDistance(const Vec3d& xb) const;
+  /// The solid's thinnest half-thickness, m: a point that has entered the
+  /// solid by less than this is still nearest the face it came through, so
+  /// pushing it out along the normal returns it to its own side. The radius
+  /// of a sphere, the smallest half-size of a box, min(radius, half length)
+  /// of a cylinder, the shallowest ridge of a level set's solid side
+  /// (SampledSdf::insideRidgeDepth / outsideRidgeDepth); infinite for a plane
+  /// and for the inverted analytic shapes (their solid has no far side).
+  double halfThickness() const;
   /// Outward unit normal of the solid (body frame) at body-frame point xb:
   /// the gradient of signedDistance where it is defined, a consistent choice
   /// on ridges and the centre.
@@ -273,6 +281,13 @@ class MpmCollider {
   /// As the above, with the state evaluated once (for loops over nodes).
   double signedDistance(const ColliderState& s, const Vec3d& x) const;
   Vec3d apply(const ColliderState& s, const Vec3d& x, const Vec3d& v) const;
+  /// A particle at x (m) with velocity v (m/s) found inside the solid
+  /// (phi < 0) at state s is moved out along the normal by -phi, onto the
+  /// surface, and the boundary condition is applied to its velocity relative
+  /// to the collider there. Returns false, changing nothing, when x is not
+  /// inside. This is what keeps particles out of walls thinner than the
+  /// grid's reach (MpmSolver's collider projection).
+  bool projectOut(const ColliderState& s, Vec3d& x, Vec3d& v) const;
 
  private:
   ColliderShape shape_;

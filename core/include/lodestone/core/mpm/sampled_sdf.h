@@ -57,9 +57,23 @@ class SampledSdf {
   /// (clamped to the sampled box): the region an emitter has to scan.
   void interiorBounds(Vec3d& lo, Vec3d& hi) const;
 
+  /// The shallowest ridge of the inside, m: the smallest depth -phi of a
+  /// node that lies no higher than its two neighbours along an axis while
+  /// the surfaces on either side face opposite ways (the unit normals at the
+  /// two neighbours meet at more than 120 degrees): the medial surface of the
+  /// solid's thinnest wall, to within h/2. A point that enters the solid by less than this is still nearest
+  /// the face it came through. Convex edges and corners are not ridges; a
+  /// solid without one (a narrow band's flat interior) gives its deepest
+  /// value, at most the band's half width.
+  double insideRidgeDepth() const { return insideRidge_; }
+  /// The same for the outside (phi > 0), m; infinite when the outside has no
+  /// ridge (phi grows past the sampled box).
+  double outsideRidgeDepth() const { return outsideRidge_; }
+
  private:
   /// Clamps xb into the box; returns the cell (i,j,k) and the fractions.
   void locate(const Vec3d& xb, int& i, int& j, int& k, double& fx, double& fy, double& fz) const;
+  void findRidges();  // sets insideRidge_, outsideRidge_
   double at(int i, int j, int k) const { return double(values_[spec_.index(i, j, k)]); }
 
   GridSpec spec_;
@@ -68,6 +82,7 @@ class SampledSdf {
   Vec3d hi_;          // body-frame position of the last node, m
   double invDx_ = 0;  // 1 / h, 1/m
   Vec3d interiorLo_, interiorHi_;
+  double insideRidge_ = 0, outsideRidge_ = 0;  // m
 };
 
 inline void SampledSdf::locate(const Vec3d& xb, int& i, int& j, int& k, double& fx, double& fy, double& fz) const {

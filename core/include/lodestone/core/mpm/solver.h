@@ -17,7 +17,9 @@
 //      and the domain walls' boundary conditions;
 //   5-7. G2P (APIC), MLS update of F or J, advection (mpm/grid.h); advected
 //      particles leaving the domain are clamped or removed, non-finite ones
-//      removed, and counted in the report. Every `reorderInterval` substeps
+//      removed, and counted in the report; particles that ended inside a
+//      collider are pushed back onto its surface (colliderProjection).
+//      Every `reorderInterval` substeps
 //      the particles are then sorted by cell (mpm/particle_order.h).
 //
 // Coupling to the magnetic stage. When the stage grid equals the MPM grid
@@ -42,9 +44,11 @@
 // leaving the domain.
 //
 // Time stepping: a fixed dt, or dt = min(cfl dx / (max|v_p| + c), cfl dx^2 /
-// (3 nu), dtMax) floored at dtMin, with c the largest elastic wave speed of
-// the materials (sqrt((lambda + 2 mu)/rho) or sqrt(K/rho)) and nu the largest
-// kinematic viscosity (the explicit diffusion limit dx^2/(6 nu) at cfl = 1/2).
+// (3 nu), cfl h_c / (max|v_p| + collider speed), dtMax) floored at dtMin,
+// with c the largest elastic wave speed of the materials (sqrt((lambda + 2
+// mu)/rho) or sqrt(K/rho)), nu the largest kinematic viscosity (the explicit
+// diffusion limit dx^2/(6 nu) at cfl = 1/2) and h_c the thinnest collider
+// half-thickness (colliderCrossingDt).
 // A fixed dt above the stability bound (stabilityLimitDt) is shortened by
 // advanceFrame, with a warning, rather than taken and blown up.
 //
@@ -120,6 +124,19 @@ struct MpmSettings {
   /// extra pass over the particles and the active grid per substep.
   bool checkFinite = false;
 
+  /// After advection, particles found inside a collider are pushed back onto
+  /// its surface along the normal, with the collider's boundary condition
+  /// applied to their velocity (MpmCollider::projectOut), and the substep is
+  /// limited so that no particle moves, relative to a collider, more than
+  /// the collider's thinnest half-thickness (ColliderShape::halfThickness)
+  /// in one substep: material then cannot cross a wall however thin it is or
+  /// however hard it is pushed. Off: only the grid nodes inside a collider
+  /// see its boundary condition, which holds for walls a few cells thick
+  /// and gentle loads but lets strongly pushed material seep into walls and
+  /// through walls thinner than about two cells. One signed-distance
+  /// evaluation per particle and collider per substep.
+  bool colliderProjection = true;
+
   /// Throws InvalidArgument naming the first bad value.
   void validate() const;
 };
@@ -150,6 +167,7 @@ struct MpmStepReport {
   std::size_t clamped = 0;       ///< particles clamped back into the domain
   std::size_t removed = 0;       ///< particles removed (out of domain under Remove, or non-finite)
   std::size_t nonFinite = 0;     ///< of the removed, those with a non-finite state
+  std::size_t projected = 0;     ///< particles pushed out of a collider (MpmSettings::colliderProjection)
   double maxSpeed = 0;           ///< max |v_p| after G2P, m/s
 };
 
@@ -165,6 +183,8 @@ struct MpmFrameReport {
   int magneticReused = 0;                            ///< due solves the planner skipped (field reused)
   Vec3d magneticImpulse;                             ///< sum over substeps of dt * applied magnetic force, N*s
   std::size_t clamped = 0, removed = 0, nonFinite = 0;
+  std::size_t projected = 0;  ///< particle pushes out of colliders, summed over the substeps
+  int dtLimitedByColliders = 0;  ///< substeps whose CFL step was set by a collider's thickness
   MpmEnergies energies;    ///< at the end of the frame
   bool cancelled = false;  ///< the progress callback asked to stop
   std::vector<std::string> warnings;
@@ -239,11 +259,19 @@ class MpmSolver {
 
   /// The substep the solver would take now (s): fixedDt, or the CFL step.
   double suggestedDt() const;
-  /// The largest stable substep now (s): dx / (max|v_p| + c) and the
-  /// explicit viscous limit dx^2 / (6 nu); infinite for an empty or static
-  /// inviscid scene. advanceFrame shortens a fixedDt above it to cfl times
+  /// The largest stable substep now (s): dx / (max|v_p| + c), the
+  /// explicit viscous limit dx^2 / (6 nu) and, with colliderProjection, the
+  /// collider crossing limit colliderCrossingDt(); infinite for an empty or
+  /// static inviscid scene. advanceFrame shortens a fixedDt above it to cfl times
   /// it (counted in MpmFrameReport::dtLimitedByCfl, with a warning).
   double stabilityLimitDt() const;
+  /// The time (s) in which the fastest particle, relative to a collider's
+  /// fastest point, would cross the collider's thinnest half-thickness:
+  /// min over colliders of halfThickness / (max|v_p| + |v_c| + |w_c| r),
+  /// r the distance from the collider's origin to the farthest domain
+  /// corner. Infinite without colliders, with only planes and inverted
+  /// analytic shapes, or when nothing moves.
+  double colliderCrossingDt() const;
   /// One substep of dt (s, finite, > 0).
   MpmStepReport step(double dt);
   /// Substeps until the time has advanced by frameDuration (s); the last
@@ -306,6 +334,8 @@ class MpmSolver {
   void particleToGrid(double dt, MpmStepReport& rep);  // 1.
   void gridUpdate(double dt, MpmStepReport& rep);      // 4.
   bool gridToParticle(double dt, MpmStepReport& rep);  // 5-7.; true when particles were removed after it
+  std::size_t projectOutOfColliders(double dt, std::size_t& outside);  // particles pushed out; outside: now beyond the domain
+  double maxParticleSpeed() const;                     // m/s
   void solveMagnetic(MpmStepReport& rep);
   bool lastSolveHolds();  // the planner's reuse test (field_reuse.h); poses the magnets when it samples the field
   bool isMagneticPoint(std::size_t p) const;    // a particle with n_p > 0 of a magnetic material
