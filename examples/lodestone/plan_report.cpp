@@ -3,7 +3,10 @@
 #include <algorithm>
 #include <cmath>
 
+#include "lodestone/core/base/constants.h"
 #include "lodestone/core/base/error.h"
+#include "lodestone/core/base/number_text.h"
+#include "lodestone/core/field/magnetization_law.h"
 #include "lodestone/plugin/node_builders.h"
 
 namespace lodestone::examples {
@@ -48,6 +51,45 @@ double magneticHalfWidth(const MpmSolver& solver) {
 }
 }  // namespace
 
+std::vector<std::string> fluidCompressionWarnings(const plugin::Scene& scene, const MpmSolver& solver,
+                                                  double peakField) {
+  // The pressure a fluid builds: hydrostatic rho |g| h over the material's
+  // height h, plus, for a magnetic fluid, mu0 W(|H|) where the applied field
+  // is strongest (ferrohydrostatics: p - mu0 int_0^H M dH is constant along
+  // the fluid, so the pull raises the pressure by the co-energy density).
+  // A bulk modulus K compresses the fluid by about p / K.
+  std::vector<std::string> out;
+  const MpmParticles& p = solver.particles();
+  double zlo = 1e300, zhi = -1e300;
+  for (const Vec3d& x : p.x) zlo = std::min(zlo, x.z), zhi = std::max(zhi, x.z);
+  const double height = p.size() > 0 ? zhi - zlo : 0.0;
+  for (std::size_t k = 0; k < solver.materials().size(); ++k) {
+    const MpmMaterial& m = solver.materials()[k];
+    if (!m.isFluid()) continue;
+    const double hydrostatic = m.density * norm(scene.settings.gravity) * height;
+    const double magnetic =
+        m.isMagnetic() && peakField > 0
+            ? kMu0 * coEnergy(m.magnetic.law, m.magnetic.numberDensity, Vec3d{peakField, 0, 0})
+            : 0.0;
+    const double pressure = hydrostatic + magnetic;
+    const double squeeze = pressure / m.bulkModulus;
+    if (!(squeeze > kFluidCompressionLimit)) continue;
+    const double advised = pressure / kFluidCompressionTarget;
+    out.push_back(concat(
+        "material '", k < scene.materialNames.size() ? scene.materialNames[k] : concat(k), "': bulk_modulus ",
+        numberText(m.bulkModulus), " Pa against a pressure of about ", numberText(pressure, 3), " Pa (",
+        magnetic > 0 ? concat("magnetic ", numberText(magnetic, 3), " Pa at |H_ext| up to ", numberText(peakField, 3),
+                              " A/m, ")
+                     : std::string(),
+        "hydrostatic ", numberText(hydrostatic, 3), " Pa): the fluid's volume will change by up to about ",
+        numberText(100 * std::min(squeeze, 1.0), 2), "% where the pull presses it, and material pressed onto "
+        "colliders will pile up; use bulk_modulus >= ", numberText(advised, 2), " Pa (",
+        numberText(100 * kFluidCompressionTarget, 2), "% change), which costs about ", numberText(std::sqrt(advised / m.bulkModulus), 2),
+        "x the substeps where the sound speed sets the step (docs/physics.md, \"Choosing the bulk modulus\")"));
+  }
+  return out;
+}
+
 void printPlan(const plugin::Scene& scene, const MpmSolver& solver, std::FILE* out) {
   const PlannerSettings& ps = scene.settings.planner;
   std::fprintf(out, "plan (%s):\n",
@@ -66,9 +108,11 @@ void printPlan(const plugin::Scene& scene, const MpmSolver& solver, std::FILE* o
     MagneticPlan plan;
   };
   std::vector<Span> spans;
+  double peakField = 0;  // A/m, over the sampled frames
   for (int k = 0; k < samples; ++k) {
     const int frame = samples == 1 ? 1 : 1 + int(std::lround(double(k) * (scene.frames - 1) / (samples - 1)));
     MagneticPlan plan = solver.planMagneticAt(solver.time() + (frame - 1) * scene.frameDuration());
+    peakField = std::max(peakField, plan.peakAppliedField);
     const bool same = !spans.empty() && (ps.enabled ? planSignature(plan) == planSignature(spans.back().plan)
                                                     : plan.magnetic == spans.back().plan.magnetic);
     if (same)
@@ -150,6 +194,8 @@ void printPlan(const plugin::Scene& scene, const MpmSolver& solver, std::FILE* o
   if (scene.settings.fixedDt > 0 && std::isfinite(stable) && scene.settings.fixedDt > stable)
     std::fprintf(out, "  warning: time.dt = %.3g s is above the stable step %.3g s: the run will shorten it\n",
                  scene.settings.fixedDt, stable);
+  for (const std::string& w : fluidCompressionWarnings(scene, solver, magnetic ? peakField : 0.0))
+    std::fprintf(out, "  warning: %s\n", w.c_str());
   if (magnetic && interval == 0 && !automatic && substeps > 20)
     std::fprintf(out,
                  "  warning: the field is solved once per frame over %.4g substeps: material that moves fast "

@@ -20,11 +20,25 @@ std::vector<StageDecision> mechanicsDecisions(const plugin::Scene& scene, const 
 /// Substeps per frame with the scene's first substep (fixed, or the CFL step now).
 double substepsPerFrame(const plugin::Scene& scene, const MpmSolver& solver);
 
+/// A fluid compressed by more than this fraction under its pressure is warned about (dimensionless).
+inline constexpr double kFluidCompressionLimit = 0.1;
+/// The compression the advised bulk modulus gives (dimensionless).
+inline constexpr double kFluidCompressionTarget = 0.05;
+
+/// One warning per fluid material whose bulk modulus K lets its pressure
+/// (hydrostatic rho |g| h over the material's height, plus mu0 W(peakField)
+/// for a magnetic fluid, peakField the largest applied field at the material
+/// in A/m) compress it by more than kFluidCompressionLimit; each names the
+/// pressure, the compression, the advised K and its cost in substeps.
+std::vector<std::string> fluidCompressionWarnings(const plugin::Scene& scene, const MpmSolver& solver,
+                                                  double peakField);
+
 /// Prints the plan of `solver` over the scene's whole time line (the
 /// sources sampled at up to 16 frames, the material where it is now): every
 /// stage, on or off, the reason, the predicted error; substeps and field
 /// solves per frame, the estimated run time and memory, and warnings (resolution, a
-/// time step above the stable one, a field solved once per many substeps).
+/// time step above the stable one, a field solved once per many substeps, a
+/// fluid too soft for its pressure).
 void printPlan(const plugin::Scene& scene, const MpmSolver& solver, std::FILE* out);
 
 /// The decisions as JSON (stage, on, choice, reason, predicted_error, estimated_s).

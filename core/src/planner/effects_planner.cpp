@@ -93,6 +93,7 @@ MagneticPlan planMagnetic(const PlannerSettings& settings, const PlannerInputs& 
   for (std::size_t m = 0; m < in.count; ++m) H[m] = in.applied->field(in.positions[m], in.time);
   double hMax = 0;
   for (const Vec3d& h : H) hMax = std::max(hMax, norm(h));
+  plan.peakAppliedField = hMax;
   const MagnetizationLaw<double>& law = in.material.law;
   const double n0 = in.material.numberDensity;
   const double chi0 = law.lowFieldSusceptibility(n0);

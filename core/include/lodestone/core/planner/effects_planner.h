@@ -79,6 +79,7 @@ struct MagneticPlan {
   double reuseDistance = 0;      ///< m: reuse the solve while points moved less (0: re-solve when due)
   double reuseFieldChange = 0;   ///< relative change of H_ext at the points that forces a re-solve
   double predictedError = 0;     ///< sum of the decisions' predicted errors
+  double peakAppliedField = 0;   ///< largest |H_ext| at the magnetic points, A/m (0 when no stage runs)
   std::vector<StageDecision> decisions;
 
   /// One line per decision: stage, on/off, choice, reason, predicted error.
