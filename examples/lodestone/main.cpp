@@ -27,7 +27,6 @@
 #include "lodestone/plugin/scene.h"
 #if LODESTONE_HAVE_VDB
 #include "lodestone/vdb_io/field_file.h"
-#include "lodestone/vdb_io/level_set_file.h"
 #include "lodestone/vdb_io/point_file.h"
 #endif
 #include "lodestone/plugin/output/ply_writer.h"
@@ -70,20 +69,6 @@ constexpr int kExitBrokenPipe = 141;  // standard output closed (128 + SIGPIPE)
 
 [[noreturn]] void usageError(const std::string& message) {
   throw InvalidArgument(message + " (see lodestone --help)");
-}
-
-/// Readers for the scene's "level_set" and "mesh" shapes (none without OpenVDB).
-void installShapeLoaders(SceneOptions& options) {
-#if LODESTONE_HAVE_VDB
-  options.loaders.levelSet = [](const std::string& path, const std::string& grid) {
-    return std::make_shared<const SampledSdf>(readLevelSetVdb(path, grid));
-  };
-  options.loaders.mesh = [](const std::string& path, double voxelSize) {
-    return std::make_shared<const SampledSdf>(levelSetFromObj(path, voxelSize));
-  };
-#else
-  (void)options;
-#endif
 }
 
 // "A:B", 1 <= A <= B, into first and last; returns the error ("" when good).
@@ -246,7 +231,6 @@ std::optional<int> parseArgs(int argc, char** argv, Args& a) {
   a.command = app.get_subcommands().front()->get_name();
   if (a.clean && a.resume) usageError("--clean and --resume exclude each other");
   a.args.assign(argv, argv + argc);
-  installShapeLoaders(a.options);
   return std::nullopt;
 }
 /// Substeps per frame the time step takes: time.dt's, or (CFL) the first

@@ -59,14 +59,17 @@ std::shared_ptr<const SampledSdf> readFileShape(JsonReader& r, const std::string
   std::filesystem::path path(r.string("file"));
   if (path.is_relative()) path = files.directory / path;
   try {
+    // The node library's readers (loadShapeFile) unless the host installed its own.
     if (shape == "level_set") {
       const std::string grid = r.has("grid") ? r.string("grid") : std::string("surface");
-      if (!files.loaders->levelSet) r.failAt("file", "shape 'level_set' needs a lodestone built with OpenVDB");
-      return files.loaders->levelSet(path.string(), grid);
+      if (files.loaders->levelSet) return files.loaders->levelSet(path.string(), grid);
+      if (!vdbBuilt()) r.failAt("file", "shape 'level_set' needs a lodestone built with OpenVDB");
+      return loadShapeFile(shape, path.string(), grid, 0.0);
     }
     const double voxel = r.number("voxel_size", "m", Range::positive(), files.dx);
-    if (!files.loaders->mesh) r.failAt("file", "shape 'mesh' needs a lodestone built with OpenVDB");
-    return files.loaders->mesh(path.string(), voxel);
+    if (files.loaders->mesh) return files.loaders->mesh(path.string(), voxel);
+    if (!vdbBuilt()) r.failAt("file", "shape 'mesh' needs a lodestone built with OpenVDB");
+    return loadShapeFile(shape, path.string(), std::string(), voxel);
   } catch (const InvalidArgument& e) {
     if (std::string(e.what()).rfind(r.file(), 0) == 0) throw;  // already names the entry
     r.failAt("file", e.what());

@@ -46,6 +46,9 @@ TEST(SceneNodes, EveryExampleSceneEntryIsANodeThatCooks) {
       for (std::size_t k = 0; k < doc[kind.list].size(); ++k) {
         nlohmann::json entry = doc[kind.list][k];
         for (const std::string& key : kind.sceneOnly) entry.erase(key);
+        // A scene's relative file paths are relative to the scene file; a node's to the host's directory.
+        if (entry.contains("file") && std::filesystem::path(entry["file"].get<std::string>()).is_relative())
+          entry["file"] = (file.path().parent_path() / entry["file"].get<std::string>()).string();
         Network net;
         net.addNode(kind.node, "n");
         if (std::string(kind.node) == "particle_source") net.setParam("n", "cell_size", scene.settings.grid.dx);

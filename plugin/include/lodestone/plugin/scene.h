@@ -74,13 +74,13 @@ struct Scene {
 };
 
 /// Readers of shapes stored in files, for bodies and colliders of shape
-/// "level_set" (a VDB level set) and "mesh" (an OBJ file). The scene library
-/// does not depend on OpenVDB: a host built with vdb_io installs readers
-/// (the lodestone command wraps readLevelSetVdb and levelSetFromObj of
-/// vdb_io/level_set_file.h); without them such shapes are rejected with a
-/// message saying so. Paths arrive resolved against the
-/// scene file's directory. Both return the shape in its own frame (the file's
-/// world frame), which the scene entry's pose then places.
+/// "level_set" (a VDB level set) and "mesh" (an OBJ file). Left empty, the
+/// node library's readers are used (loadShapeFile of node_builders.h:
+/// vdb_io's readLevelSetVdb and levelSetFromObj), and without OpenVDB such
+/// shapes are rejected with a message saying so; a host may install its own.
+/// Paths arrive resolved against the scene file's directory. Both return
+/// the shape in its own frame (the file's world frame), which the scene
+/// entry's pose then places.
 struct ShapeLoaders {
   /// Float level set `grid` of the .vdb file `path`.
   std::function<std::shared_ptr<const SampledSdf>(const std::string& path, const std::string& grid)> levelSet;
@@ -91,7 +91,7 @@ struct ShapeLoaders {
 struct SceneOptions {
   bool full = false;     ///< use the scene's full-resolution dx (domain.full_dx)
   double dx = 0;         ///< > 0: override the grid spacing (m)
-  ShapeLoaders loaders;  ///< readers for "level_set" and "mesh" shapes (none: such shapes are rejected)
+  ShapeLoaders loaders;  ///< readers for "level_set" and "mesh" shapes (empty: the node library's)
 };
 
 /// Reads and validates a scene file; throws InvalidArgument naming the file,
