@@ -1,5 +1,6 @@
 #include "preview.h"
 
+#include <algorithm>
 #include <cmath>
 #include <vector>
 
@@ -24,6 +25,22 @@ Primitive magnetPrimitive(const MagnetSource& m) {
   const auto& b = dynamic_cast<const CuboidMagnet&>(m);
   return Primitive::box(m.pose(), b.halfSize(), red);
 }
+/// Points on the surface of a level-set collider (world frame, m), about
+/// `spacing` apart: the nodes of its signed distance within half a voxel of
+/// the surface, every stride-th along each axis, moved onto phi = 0.
+void levelSetSurfacePoints(const MpmCollider& c, const Pose& pose, double spacing, std::vector<Vec3d>& out) {
+  const SampledSdf& sdf = *c.shape().levelSet;
+  const GridSpec& g = sdf.spec();
+  const int stride = std::max(1, int(std::lround(spacing / g.dx)));
+  for (int k = 0; k < g.dims.k; k += stride)
+    for (int j = 0; j < g.dims.j; j += stride)
+      for (int i = 0; i < g.dims.i; i += stride) {
+        const Vec3d xb = g.nodePosition(i, j, k);
+        const double phi = sdf.signedDistance(xb);
+        if (std::fabs(phi) > 0.5 * stride * g.dx) continue;
+        out.push_back(pose.toWorld(xb - phi * sdf.normal(xb)));
+      }
+}
 }  // namespace
 
 RgbImage renderPreview(const plugin::Scene& scene, const MpmSolver& solver) {
@@ -35,6 +52,15 @@ RgbImage renderPreview(const plugin::Scene& scene, const MpmSolver& solver) {
     colours[i] = solver.materials()[m].isMagnetic() ? kMagneticColours[m % 3] : kPlainColours[m % 4];
   }
   std::vector<Primitive> shapes;
+  // Level-set and mesh colliders are drawn as points on their surface.
+  std::vector<Vec3d> points(p.x);
+  const Rgb surface{200, 200, 196};
+  for (std::size_t i = 0; i < solver.colliderCount(); ++i) {
+    const MpmCollider& c = solver.collider(i);
+    if (c.shape().kind == ColliderShapeKind::LevelSet)
+      levelSetSurfacePoints(c, c.motion().poseAt(solver.time()), 0.5 * g.dx, points);
+  }
+  colours.resize(points.size(), surface);
   for (std::size_t i = 0; i < solver.magnetCount(); ++i) shapes.push_back(magnetPrimitive(solver.magnet(i)));
   for (std::size_t i = 0; i < solver.colliderCount(); ++i) {
     const MpmCollider& c = solver.collider(i);
@@ -67,8 +93,8 @@ RgbImage renderPreview(const plugin::Scene& scene, const MpmSolver& solver) {
     cam.height = scene.output.height;
   }
   output::ParticleView view;
-  view.positions = p.x.data();
-  view.count = p.size();
+  view.positions = points.data();
+  view.count = points.size();
   view.colours = colours.data();
   // Sphere impostors about the particle spacing (dx / ppc^(1/3) for 8 ppc).
   view.radius = 0.5 * g.dx * 0.62;
