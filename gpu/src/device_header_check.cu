@@ -8,6 +8,7 @@
 #include "lodestone/core/field/langevin.h"
 #include "lodestone/core/field/magnetization_law.h"
 #include "lodestone/core/base/mat3.h"
+#include "lodestone/core/base/symmetric_eigen.h"
 #include "lodestone/core/field/q1_axis_weights.h"
 #include "lodestone/core/mpm/apic_gather.h"
 #include "lodestone/core/mpm/collider.h"
@@ -47,7 +48,11 @@ __global__ void headerCheckKernel(double* out, float* outf, MagnetizationLaw<dou
   out[3] = neoHookeanKirchhoff(F, 1.0, 2.0)(0, 0) + neoHookeanCauchy(F, 1.0, 2.0)(1, 1) +
            neoHookeanEnergyDensity(F, 1.0, 2.0) + viscousFluidKirchhoff(F, 1.0, 0.1, 1e5)(2, 2) +
            viscousFluidCauchy(F, 1.0, 0.1, 1e5)(0, 1) + fluidEnergyDensity(0.9, 1e5) + determinant(F) + trace(F) +
-           viscoplasticFluidKirchhoff(F, 1.0, 10.0, 1.0, 0.5, 1e3, 1e5)(0, 2);
+           viscoplasticFluidKirchhoff(F, 1.0, 10.0, 1.0, 0.5, 1e3, 1e5)(0, 2) +
+           elastoplasticKirchhoff(vonMisesReturn(F, 1.0, 0.5), F, 1.0, 2.0, 0.1)(0, 1) + henckyEnergyDensity(F, 1.0, 2.0) +
+           vonMisesStress(henckyKirchhoff(F, 1.0, 2.0));
+  outf[1] = symmetricEigen(Mat3<float>::outer(Vec3<float>{1.f, 2.f, float(a)}, Vec3<float>{1.f, 2.f, 3.f})).values[0] +
+            vonMisesReturn(Mat3<float>::identity(), 1.f, 0.5f)(0, 0);
   out[4] = applyBoundaryCondition(H, Vec3d{}, Vec3d{0, 0, 1}, bc).z;
   const int idx[3] = {int(threadIdx.x), 1, 2}, dims[3] = {8, 8, 8};
   out[5] = applyDomainWalls(H, idx, dims, 2, bc).x;

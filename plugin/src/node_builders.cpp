@@ -112,6 +112,9 @@ MpmMaterial materialFrom(const ParamSet& p) {
   if (law == "linear") mag = linearMaterial(p.getFloat("magnetic.chi"), n0);
   const double rho = p.getFloat("density");
   const std::string model = p.getString("model");
+  if (model == "elastoplastic_solid")
+    return elastoplasticSolid(p.getFloat("youngs_modulus"), p.getFloat("poisson_ratio"), p.getFloat("yield_stress"),
+                              p.getFloat("viscosity"), rho, mag);
   if (model == "viscoplastic_fluid")
     return viscoplasticFluid(p.getFloat("yield_stress"), p.getFloat("consistency"), p.getFloat("flow_index"),
                              p.getFloat("max_viscosity"), p.getFloat("bulk_modulus"), rho, mag);

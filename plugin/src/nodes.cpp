@@ -100,30 +100,41 @@ NodeDecl materialNode() {
   d.type = "material";
   d.label = "Material";
   d.category = "material";
-  d.help = "An MPM material (Neo-Hookean solid or viscous fluid) with an optional magnetization law.";
+  d.help =
+      "An MPM material (Neo-Hookean solid, viscous or viscoplastic fluid, or damped elastoplastic solid) with an "
+      "optional magnetization law.";
   auto& q = d.params;
   q.push_back(required(stringParam("name", "Name", "material", "Name by which bodies refer to the material.")));
-  q.push_back(required(choiceParam("model", "Model", {"solid", "fluid", "viscoplastic_fluid"}, "solid",
-                                   "Constitutive model: Neo-Hookean solid, viscous (J-based) fluid, or "
-                                   "viscoplastic (Herschel-Bulkley / Bingham, J-based) fluid.")));
+  q.push_back(required(choiceParam("model", "Model", {"solid", "fluid", "viscoplastic_fluid", "elastoplastic_solid"},
+                                   "solid",
+                                   "Constitutive model: Neo-Hookean solid, viscous (J-based) fluid, "
+                                   "viscoplastic (Herschel-Bulkley / Bingham, J-based) fluid, or damped elastoplastic "
+                                   "solid (Hencky elasticity, von Mises yield, Kelvin-Voigt damping; deforms and "
+                                   "stays, like clay; CPU only).")));
   q.push_back(required(positive(floatParam("density", "Density", 1000.0, "kg/m^3", "Rest mass density."))));
   q.push_back(
       when(required(positive(floatParam("youngs_modulus", "Young's modulus", 1e5, "Pa", "Stiffness of the solid."))),
-           "model", {"solid"}));
+           "model", {"solid", "elastoplastic_solid"}));
   q.push_back(
       when(range(floatParam("poisson_ratio", "Poisson's ratio", 0.3, "", "Compressibility of the solid."), 0, 0.49),
-           "model", {"solid"}));
-  q.push_back(
-      when(required(nonNegative(floatParam("viscosity", "Viscosity", 1.0, "Pa*s", "Dynamic viscosity of the fluid."))),
-           "model", {"fluid"}));
+           "model", {"solid", "elastoplastic_solid"}));
+  q.push_back(when(required(nonNegative(floatParam(
+                       "viscosity", "Viscosity", 1.0, "Pa*s",
+                       "Dynamic viscosity of the fluid; for the elastoplastic solid the Kelvin-Voigt damping "
+                       "viscosity eta (stress 2 eta D_dev): a shear vibration of wavenumber k loses amplitude at the "
+                       "rate eta k^2 / (2 rho) (1/s), and the viscous time step dx^2 rho / (6 eta) caps the "
+                       "substep."))),
+                   "model", {"fluid", "elastoplastic_solid"}));
   q.push_back(
       when(required(positive(floatParam("bulk_modulus", "Bulk modulus", 1e5, "Pa", "Bulk modulus of the fluid."))),
            "model", {"fluid", "viscoplastic_fluid"}));
   q.push_back(when(required(nonNegative(floatParam(
                        "yield_stress", "Yield stress", 100.0, "Pa",
-                       "Herschel-Bulkley yield stress tau_y: below it the fluid does not flow (it creeps at a "
-                       "strain rate ~ stress / max_viscosity)."))),
-                   "model", {"viscoplastic_fluid"}));
+                       "Viscoplastic fluid: Herschel-Bulkley shear yield stress tau_y, below which the fluid "
+                       "does not flow (it creeps at a strain rate ~ stress / max_viscosity). Elastoplastic solid: "
+                       "von Mises (uniaxial) yield stress sigma_y, beyond which it deforms permanently (0: yields "
+                       "at once, keeping only its volume elasticity)."))),
+                   "model", {"viscoplastic_fluid", "elastoplastic_solid"}));
   q.push_back(when(required(nonNegative(floatParam("consistency", "Consistency", 1.0, "Pa*s^n",
                                                    "Herschel-Bulkley consistency k: stress above yield is "
                                                    "tau_y + k gamma_dot^n."))),

@@ -137,7 +137,7 @@ TEST(PluginNodes, ValidationErrorsNameTheNodeAndTheParameter) {
       {[&] { net.setParam("ferro", "density", -5.0); }, {"node 'ferro' (material)", "density", "kg/m^3", "> 0", "-5"}},
       {[&] { net.setParam("ferro", "densty", 1.0); }, {"node 'ferro' (material)", "densty", "did you mean 'density'"}},
       {[&] { net.setParam("ferro", "model", std::string("gel")); },
-       {"ferro", "model", "one of 'solid', 'fluid' or 'viscoplastic_fluid', found 'gel'"}},
+       {"ferro", "model", "one of 'solid', 'fluid', 'viscoplastic_fluid' or 'elastoplastic_solid', found 'gel'"}},
       {[&] { net.setParam("ferro", "poisson_ratio", 0.6); }, {"ferro", "poisson_ratio", "in [0, 0.49]"}},
       {[&] { net.setParam("blob", "particles_per_cell", 2.5); },
        {"node 'blob' (particle_source)", "particles_per_cell", "integer"}},

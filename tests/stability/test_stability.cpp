@@ -328,6 +328,42 @@ TEST(Stability, ViscoplasticFluidExtremes) {
   EXPECT_THROW(viscoplasticFluid(1, 1, 1, INFINITY, 2e5, kRho), InvalidArgument);
 }
 
+TEST(Stability, ElastoplasticSolidExtremes) {
+  struct Case {
+    double E, yield, eta;  // Pa, Pa, Pa*s
+    const char* what;
+  };
+  const Case cases[] = {{1e5, 0.0, 1.0, "yield stress 0 Pa (flows at once, volume elasticity only)"},
+                        {1e5, 1e9, 1.0, "yield stress 1e9 Pa (never yields)"},
+                        {1e5, 1e3, 1e4, "damping viscosity 1e4 Pa*s"},
+                        {1e9, 1e6, 0.0, "E = 1e9 Pa, yield stress 1e6 Pa, undamped"}};
+  for (const Case& cs : cases) {
+    auto s = std::make_unique<MpmSolver>(smallSettings());
+    const double c = centre();
+    s->emit(EmitterShape::box(Pose::at({c, c, 0.05}), {0.03, 0.03, 0.02}),
+            s->addMaterial(elastoplasticSolid(cs.E, 0.3, cs.yield, cs.eta, kRho, paperMaterial())),
+            emitSettings(8, {0, 0, -1}));
+    s->sources().add(std::make_unique<UniformField>(Vec3d{0, 0, 1e5}));
+    const Outcome o = run(*s, 2, 5e-4);
+    expectStable(*s, o, cs.what);
+  }
+  const auto throwsNaming = [](auto make, const char* value) {
+    try {
+      make();
+      ADD_FAILURE() << "no exception for " << value;
+    } catch (const InvalidArgument& e) {
+      EXPECT_NE(std::string(e.what()).find(value), std::string::npos) << e.what();
+    }
+  };
+  throwsNaming([] { return elastoplasticSolid(-5, 0.3, 1e3, 1, kRho); }, "-5");
+  throwsNaming([] { return elastoplasticSolid(1e5, 0.5, 1e3, 1, kRho); }, "0.5");
+  throwsNaming([] { return elastoplasticSolid(1e5, 0.3, -7, 1, kRho); }, "-7");
+  throwsNaming([] { return elastoplasticSolid(1e5, 0.3, INFINITY, 1, kRho); }, "inf");
+  throwsNaming([] { return elastoplasticSolid(1e5, 0.3, 1e3, -3, kRho); }, "-3");
+  throwsNaming([] { return elastoplasticSolid(1e5, 0.3, 1e3, NAN, kRho); }, "nan");
+  throwsNaming([] { return elastoplasticSolid(1e5, 0.3, 1e3, 1, 0); }, "got 0");
+}
+
 // ---------------------------------------------------------------------------
 // Discontinuous density
 

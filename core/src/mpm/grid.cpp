@@ -39,6 +39,7 @@ void atomicMin(std::atomic<std::size_t>& a, std::size_t v) {
 struct MaterialParams {
   bool fluid = false;
   bool viscoplastic = false;
+  bool elastoplastic = false;  // tracks F_E, Hencky + von Mises + Kelvin-Voigt (viscosity = eta)
   double mu = 0, lambda = 0;              // Pa (solid)
   double viscosity = 0, bulkModulus = 0;  // Pa*s, Pa (fluid)
   double yieldStress = 0, consistency = 0, flowIndex = 1, maxViscosity = 0;  // Pa, Pa*s^n, -, Pa*s
@@ -50,6 +51,7 @@ std::vector<MaterialParams> paramsOf(const std::vector<MpmMaterial>& materials) 
     const MpmMaterial& mat = materials[m];
     out[m].fluid = mat.isFluid();  // tracks J only
     out[m].viscoplastic = mat.model == MpmModel::ViscoplasticFluid;
+    out[m].elastoplastic = mat.model == MpmModel::ElastoplasticSolid;
     out[m].yieldStress = mat.yieldStress;
     out[m].consistency = mat.consistency;
     out[m].flowIndex = mat.flowIndex;
@@ -320,11 +322,13 @@ void MpmGrid::particleToGrid(const MpmParticles& particles, const std::vector<Mp
 
         const double m = M[p];
         const MaterialParams& mp = params[mat[p]];
-        // Kirchhoff stress tau = J sigma (Pa): Eq. 18, Eqs. 19-21 or Herschel-Bulkley.
+        // Kirchhoff stress tau = J sigma (Pa): Eq. 18, Eqs. 19-21, Herschel-Bulkley or damped Hencky.
         const Mat3d tau = mp.viscoplastic ? viscoplasticFluidKirchhoff(Cp[p], Jp[p], mp.yieldStress, mp.consistency,
                                                                        mp.flowIndex, mp.maxViscosity, mp.bulkModulus)
                           : mp.fluid      ? viscousFluidKirchhoff(Cp[p], Jp[p], mp.viscosity, mp.bulkModulus)
-                                          : neoHookeanKirchhoff(Fp[p], mp.mu, mp.lambda);
+                          : mp.elastoplastic
+                              ? elastoplasticKirchhoff(Fp[p], Cp[p], mp.mu, mp.lambda, mp.viscosity)
+                              : neoHookeanKirchhoff(Fp[p], mp.mu, mp.lambda);
         // A = m C - dt D^-1 V0 tau (kg/s): the MLS-MPM affine momentum with the stress impulse.
         Mat3d A;
         const double s = stressScale * V0[p];
@@ -433,14 +437,17 @@ GridToParticleReport MpmGrid::gridToParticle(MpmParticles& particles, const std:
           Vec3d vp;
           Mat3d C;
           gatherApic(vel, sj, std::size_t(spec_.dims.j), u, b3, cScale, vp, C);
-          // Step 6: MLS update of the deformation (F <- (I + dt C) F, or J alone for fluids).
-          if (params[mat[p]].fluid) {
+          // Step 6: MLS update of the deformation (F <- (I + dt C) F, or J alone for fluids);
+          // the elastoplastic solid's trial F_E is returned to the yield surface.
+          const MaterialParams& mp = params[mat[p]];
+          if (mp.fluid) {
             Jp[p] *= 1.0 + dt * trace(C);
           } else {
             Mat3d G = Mat3d::identity();
             for (int a = 0; a < 3; ++a)
               for (int b = 0; b < 3; ++b) G(a, b) += dt * C(a, b);
             Fp[p] = G * Fp[p];
+            if (mp.elastoplastic) Fp[p] = vonMisesReturn(Fp[p], mp.mu, mp.yieldStress);
             Jp[p] = determinant(Fp[p]);
           }
           Cp[p] = C;

@@ -15,6 +15,8 @@ const char* toString(MpmModel model) {
       return "viscous fluid";
     case MpmModel::ViscoplasticFluid:
       return "viscoplastic fluid";
+    case MpmModel::ElastoplasticSolid:
+      return "elastoplastic solid";
   }
   return "unknown";
 }
@@ -27,6 +29,7 @@ double MpmMaterial::waveSpeed() const {
 double MpmMaterial::kinematicViscosity() const {
   if (model == MpmModel::ViscousFluid) return viscosity / density;
   if (model == MpmModel::ViscoplasticFluid) return maxViscosity / density;
+  if (model == MpmModel::ElastoplasticSolid) return viscosity / density;
   return 0.0;
 }
 
@@ -82,6 +85,17 @@ void MpmMaterial::validate() const {
       require(std::isfinite(bulkModulus) && bulkModulus > 0,
               "viscoplastic fluid: bulk modulus K must be positive and finite (Pa), got ", bulkModulus);
       break;
+    case MpmModel::ElastoplasticSolid:
+      require(std::isfinite(mu) && mu > 0,
+              "elastoplastic solid: shear modulus mu must be positive and finite (Pa), got ", mu);
+      require(std::isfinite(lambda) && lambda + 2.0 / 3.0 * mu > 0,
+              "elastoplastic solid: lambda must be finite with bulk modulus lambda + 2 mu / 3 > 0 (Pa), got lambda = ",
+              lambda, " Pa, mu = ", mu, " Pa");
+      require(std::isfinite(yieldStress) && yieldStress >= 0,
+              "elastoplastic solid: yield stress sigma_y must be finite and >= 0 (Pa), got ", yieldStress);
+      require(std::isfinite(viscosity) && viscosity >= 0,
+              "elastoplastic solid: damping viscosity eta must be finite and >= 0 (Pa*s), got ", viscosity);
+      break;
     default:
       throw InvalidArgument(concat("MPM material: unknown model ", int(model)));
   }
@@ -95,23 +109,47 @@ std::string MpmMaterial::describe() const {
   else if (model == MpmModel::ViscoplasticFluid)
     s = concat("viscoplastic fluid: tau_y = ", yieldStress, " Pa, k = ", consistency, " Pa*s^n, n = ", flowIndex,
                ", mu_max = ", maxViscosity, " Pa*s, K = ", bulkModulus, " Pa, rho = ", density, " kg/m^3");
+  else if (model == MpmModel::ElastoplasticSolid)
+    s = concat("elastoplastic solid: mu = ", mu, " Pa, lambda = ", lambda, " Pa, sigma_y = ", yieldStress,
+               " Pa, eta = ", viscosity, " Pa*s, rho = ", density, " kg/m^3");
   else
     s = concat("viscous fluid: mu_N = ", viscosity, " Pa*s, K = ", bulkModulus, " Pa, rho = ", density, " kg/m^3");
   return s + "; magnetic: " + magnetic.describe();
 }
 
-MpmMaterial neoHookeanSolid(double youngModulus, double poissonRatio, double density,
-                            const MagneticMaterial& magnetic) {
-  require(std::isfinite(youngModulus) && youngModulus > 0,
-          "Neo-Hookean solid: Young's modulus E must be a positive finite value in Pa, got ", youngModulus);
-  require(std::isfinite(poissonRatio) && poissonRatio > -1 && poissonRatio < 0.5,
-          "Neo-Hookean solid: Poisson's ratio nu must lie in (-1, 0.5) (dimensionless), got ", poissonRatio);
+namespace {
+
+/// A solid of the given model with mu = E / (2 (1 + nu)), lambda = E nu / ((1 + nu)(1 - 2 nu)).
+MpmMaterial solidFromYoung(MpmModel model, double youngModulus, double poissonRatio, double density,
+                           const MagneticMaterial& magnetic) {
+  const char* who = toString(model);
+  require(std::isfinite(youngModulus) && youngModulus > 0, who,
+          ": Young's modulus E must be a positive finite value in Pa, got ", youngModulus);
+  require(std::isfinite(poissonRatio) && poissonRatio > -1 && poissonRatio < 0.5, who,
+          ": Poisson's ratio nu must lie in (-1, 0.5) (dimensionless), got ", poissonRatio);
   MpmMaterial m;
-  m.model = MpmModel::NeoHookeanSolid;
+  m.model = model;
   m.density = density;
   m.mu = youngModulus / (2 * (1 + poissonRatio));
   m.lambda = youngModulus * poissonRatio / ((1 + poissonRatio) * (1 - 2 * poissonRatio));
   m.magnetic = magnetic;
+  return m;
+}
+
+}  // namespace
+
+MpmMaterial neoHookeanSolid(double youngModulus, double poissonRatio, double density,
+                            const MagneticMaterial& magnetic) {
+  MpmMaterial m = solidFromYoung(MpmModel::NeoHookeanSolid, youngModulus, poissonRatio, density, magnetic);
+  m.validate();
+  return m;
+}
+
+MpmMaterial elastoplasticSolid(double youngModulus, double poissonRatio, double yieldStress, double viscosity,
+                               double density, const MagneticMaterial& magnetic) {
+  MpmMaterial m = solidFromYoung(MpmModel::ElastoplasticSolid, youngModulus, poissonRatio, density, magnetic);
+  m.yieldStress = yieldStress;
+  m.viscosity = viscosity;
   m.validate();
   return m;
 }

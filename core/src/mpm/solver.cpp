@@ -935,9 +935,11 @@ MpmEnergies MpmSolver::energies() const {
     const std::uint32_t id = particles_.material[p];
     if (id < materials_.size()) {
       const MpmMaterial& mat = materials_[id];
-      t.e = particles_.volume0[p] * (mat.isFluid()
-                                         ? fluidEnergyDensity(particles_.J[p], mat.bulkModulus)
-                                         : neoHookeanEnergyDensity(particles_.F[p], mat.mu, mat.lambda));
+      // The elastoplastic solid's F is its elastic part F_E: the stored energy.
+      t.e = particles_.volume0[p] *
+            (mat.isFluid() ? fluidEnergyDensity(particles_.J[p], mat.bulkModulus)
+             : mat.model == MpmModel::ElastoplasticSolid ? henckyEnergyDensity(particles_.F[p], mat.mu, mat.lambda)
+                                                         : neoHookeanEnergyDensity(particles_.F[p], mat.mu, mat.lambda));
     }
     return t;
   });

@@ -29,6 +29,27 @@
 // instead of standing exactly still; it bounds the explicit viscous time step
 // (dx^2 rho / (6 mu_max)), so a large yield stress never blows up.
 //
+// Damped elastoplastic solid ("magnetic clay"), F = F_E tracked as the
+// elastic part of the deformation (the plastic part is not stored: von Mises
+// flow is isochoric and the model has no hardening, so nothing depends on it).
+// Hencky (logarithmic-strain St. Venant-Kirchhoff) elasticity with the solid's
+// Lame parameters mu, lambda (Pa) on the principal stretches s_i of F_E, where
+// F_E F_E^T = U diag(s_i^2) U^T (Klar et al. 2016, Sec. 6; Gao et al. 2017):
+//   eps_i = ln s_i,   tau = U diag(2 mu eps_i + lambda sum_k eps_k) U^T      (Kirchhoff)
+//   Psi   = mu sum_i eps_i^2 + lambda/2 (sum_i eps_i)^2                       (J/m^3)
+// Von Mises plasticity with yield stress sigma_y (Pa, the uniaxial yield
+// stress): the equivalent stress q = sqrt(3/2 tau_dev : tau_dev) may not
+// exceed sigma_y. Since tau_dev = 2 mu eps_dev, the return mapping is exact in
+// principal space (radial return, Simo and Hughes 1998, Box 3.1, with log
+// strains):
+//   q_tr > sigma_y:  eps_dev <- eps_dev sigma_y / q_tr,  tr(eps) kept,
+//   F_E <- U diag(exp(eps_i) / s_i) U^T F_E  (the rotation of F_E is kept),
+// so det F_E (the volume) is unchanged by plastic flow. Kelvin-Voigt damping
+// with viscosity eta (Pa*s) on the deviatoric rate of deformation:
+//   D = (C + C^T)/2,  sigma_visc = 2 eta D_dev,  tau = tau_Hencky + J sigma_visc.
+// Principal stretches below kMinStretch are raised to it (ln s stays finite,
+// the stress a strong restoring one), like the J floor below.
+//
 // Inverted or collapsed elements (J <= kMinVolumeRatio) would make ln J
 // undefined; J is floored at kMinVolumeRatio inside the logarithm and the
 // 1/J factor so the stress stays finite (a strong restoring pressure) instead
@@ -37,12 +58,15 @@
 
 #include "lodestone/core/base/hostdev.h"
 #include "lodestone/core/base/mat3.h"
+#include "lodestone/core/base/symmetric_eigen.h"
 
 namespace lodestone {
 inline namespace mpm {
 
 /// Smallest volume ratio used inside ln J and 1/J (dimensionless).
 inline constexpr double kMinVolumeRatio = 1e-6;
+/// Smallest principal stretch used inside ln s (dimensionless): kMinVolumeRatio^(1/3).
+inline constexpr double kMinStretch = 1e-2;
 
 /// det A.
 template <typename T>
@@ -147,6 +171,111 @@ LODESTONE_HOSTDEV inline Mat3<T> viscoplasticFluidKirchhoff(const Mat3<T>& C, T 
   for (int i = 0; i < 3; ++i)
     for (int j = 0; j < 3; ++j) s(i, j) = J * (T(2) * mu * D(i, j) - (i == j ? p : T(0)));
   return s;
+}
+
+/// Principal Hencky strains eps_i = ln s_i (s_i floored at kMinStretch) and
+/// directions U (columns) of F F^T = U diag(s_i^2) U^T.
+template <typename T>
+struct HenckyStrain {
+  T eps[3];
+  T stretch[3];  ///< s_i, floored
+  Mat3<T> U;
+};
+
+template <typename T>
+LODESTONE_HOSTDEV inline HenckyStrain<T> henckyStrain(const Mat3<T>& F) {
+  using std::log;
+  using std::sqrt;
+  Mat3<T> b;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) b(i, j) = F(i, 0) * F(j, 0) + F(i, 1) * F(j, 1) + F(i, 2) * F(j, 2);
+  const SymmetricEigen3<T> e = symmetricEigen(b);
+  HenckyStrain<T> h;
+  h.U = e.vectors;
+  const T floor2 = T(kMinStretch) * T(kMinStretch);
+  for (int i = 0; i < 3; ++i) {
+    const T s2 = e.values[i] > floor2 ? e.values[i] : floor2;  // also maps NaN to the floor
+    h.stretch[i] = sqrt(s2);
+    h.eps[i] = T(0.5) * log(s2);
+  }
+  return h;
+}
+
+/// U diag(d) U^T.
+template <typename T>
+LODESTONE_HOSTDEV inline Mat3<T> principalToMatrix(const Mat3<T>& U, const T d[3]) {
+  Mat3<T> m;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) m(i, j) = U(i, 0) * d[0] * U(j, 0) + U(i, 1) * d[1] * U(j, 1) + U(i, 2) * d[2] * U(j, 2);
+  return m;
+}
+
+/// Hencky Kirchhoff stress tau = U diag(2 mu eps_i + lambda tr eps) U^T (Pa).
+template <typename T>
+LODESTONE_HOSTDEV inline Mat3<T> henckyKirchhoff(const Mat3<T>& F, T mu, T lambda) {
+  const HenckyStrain<T> h = henckyStrain(F);
+  const T tr = h.eps[0] + h.eps[1] + h.eps[2];
+  const T d[3] = {T(2) * mu * h.eps[0] + lambda * tr, T(2) * mu * h.eps[1] + lambda * tr,
+                  T(2) * mu * h.eps[2] + lambda * tr};
+  return principalToMatrix(h.U, d);
+}
+
+/// Hencky strain energy per reference volume mu sum eps_i^2 + lambda/2 (tr eps)^2 (J/m^3).
+template <typename T>
+LODESTONE_HOSTDEV inline T henckyEnergyDensity(const Mat3<T>& F, T mu, T lambda) {
+  const HenckyStrain<T> h = henckyStrain(F);
+  const T tr = h.eps[0] + h.eps[1] + h.eps[2];
+  return mu * (h.eps[0] * h.eps[0] + h.eps[1] * h.eps[1] + h.eps[2] * h.eps[2]) + T(0.5) * lambda * tr * tr;
+}
+
+/// Von Mises equivalent stress sqrt(3/2 s : s) of the deviator s of tau (Pa).
+template <typename T>
+LODESTONE_HOSTDEV inline T vonMisesStress(const Mat3<T>& tau) {
+  using std::sqrt;
+  const T mean = trace(tau) / T(3);
+  T ss = 0;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) {
+      const T s = tau(i, j) - (i == j ? mean : T(0));
+      ss += s * s;
+    }
+  return sqrt(T(1.5) * ss);
+}
+
+/// Von Mises return mapping of a trial elastic deformation gradient F_E (Hencky
+/// elasticity, shear modulus mu in Pa, yield stress sigma_y in Pa, perfect
+/// plasticity): F_E itself below yield, else F_E with its deviatoric log
+/// strain scaled onto q = sigma_y at the same volume and rotation.
+template <typename T>
+LODESTONE_HOSTDEV inline Mat3<T> vonMisesReturn(const Mat3<T>& F, T mu, T yieldStress) {
+  using std::exp;
+  using std::sqrt;
+  const HenckyStrain<T> h = henckyStrain(F);
+  const T mean = (h.eps[0] + h.eps[1] + h.eps[2]) / T(3);
+  const T dev[3] = {h.eps[0] - mean, h.eps[1] - mean, h.eps[2] - mean};
+  // q = sqrt(3/2) |2 mu eps_dev|.
+  const T q = T(2) * mu * sqrt(T(1.5) * (dev[0] * dev[0] + dev[1] * dev[1] + dev[2] * dev[2]));
+  if (!(q > yieldStress)) return F;
+  const T scale = yieldStress / q;
+  T ratio[3];
+  for (int i = 0; i < 3; ++i) ratio[i] = exp(mean + scale * dev[i]) / h.stretch[i];
+  return principalToMatrix(h.U, ratio) * F;
+}
+
+/// Damped elastoplastic Kirchhoff stress tau = tau_Hencky(F_E) + J 2 eta D_dev (Pa),
+/// with the elastic part F_E (already returned to the yield surface), the
+/// velocity gradient C (1/s) and the Kelvin-Voigt viscosity eta (Pa*s).
+template <typename T>
+LODESTONE_HOSTDEV inline Mat3<T> elastoplasticKirchhoff(const Mat3<T>& F, const Mat3<T>& C, T mu, T lambda,
+                                                        T viscosity) {
+  Mat3<T> tau = henckyKirchhoff(F, mu, lambda);
+  T J = determinant(F);
+  if (!(J > T(kMinVolumeRatio))) J = T(kMinVolumeRatio);
+  const T third = trace(C) / T(3);
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j)
+      tau(i, j) += J * viscosity * (C(i, j) + C(j, i) - (i == j ? T(2) * third : T(0)));
+  return tau;
 }
 
 /// Elastic energy per reference volume of the fluid, K/2 (J - 1)^2 (J/m^3).

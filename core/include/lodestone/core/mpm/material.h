@@ -1,6 +1,6 @@
 #pragma once
-// Materials of the reference MLS-MPM: a mechanical model (Neo-Hookean solid
-// or viscous fluid, mpm_constitutive.h) with its density, plus an optional
+// Materials of the reference MLS-MPM: a mechanical model (Neo-Hookean solid,
+// viscous or viscoplastic fluid, damped elastoplastic solid; constitutive.h) with its density, plus an optional
 // magnetic material (law none / linear / Langevin and the bulk micro-particle
 // number density n0, material.h). Built by validated factories that throw
 // InvalidArgument naming the bad value and its unit.
@@ -14,18 +14,20 @@ inline namespace mpm {
 enum class MpmModel : int {
   NeoHookeanSolid = 0,  ///< tracks the deformation gradient F (Eq. 18)
   ViscousFluid = 1,     ///< tracks only the volume ratio J (Eqs. 19-21)
-  ViscoplasticFluid = 2 ///< tracks J; capped Herschel-Bulkley deviatoric stress (constitutive.h)
+  ViscoplasticFluid = 2, ///< tracks J; capped Herschel-Bulkley deviatoric stress (constitutive.h)
+  ElastoplasticSolid = 3  ///< tracks the elastic part F_E of F; Hencky, von Mises, Kelvin-Voigt damping
 };
 const char* toString(MpmModel model);
 
 struct MpmMaterial {
   MpmModel model = MpmModel::NeoHookeanSolid;
   double density = 0;         ///< rest mass density rho, kg/m^3
-  double mu = 0;              ///< solid: shear modulus (second Lame parameter) mu, Pa
-  double lambda = 0;          ///< solid: Lame parameter lambda, Pa
-  double viscosity = 0;       ///< fluid: dynamic viscosity mu_N, Pa*s
+  double mu = 0;              ///< solids: shear modulus (second Lame parameter) mu, Pa
+  double lambda = 0;          ///< solids: Lame parameter lambda, Pa
+  double viscosity = 0;       ///< fluid: dynamic viscosity mu_N; elastoplastic solid: damping eta; Pa*s
   double bulkModulus = 0;     ///< fluid: bulk modulus K, Pa
-  double yieldStress = 0;     ///< viscoplastic fluid: yield stress tau_y, Pa
+  double yieldStress = 0;     ///< viscoplastic fluid: shear yield stress tau_y; elastoplastic solid:
+                              ///< von Mises (uniaxial) yield stress sigma_y; Pa
   double consistency = 0;     ///< viscoplastic fluid: consistency k, Pa*s^n
   double flowIndex = 1;       ///< viscoplastic fluid: flow index n in (0, 2] (1: Bingham)
   double maxViscosity = 0;    ///< viscoplastic fluid: cap mu_max of the effective viscosity, Pa*s
@@ -36,10 +38,11 @@ struct MpmMaterial {
 
   bool isMagnetic() const { return magnetic.law.kind != LawKind::None; }
   /// Fastest elastic (P-)wave speed at rest, m/s: sqrt((lambda + 2 mu)/rho)
-  /// for the solid, sqrt(K/rho) for the fluid.
+  /// for the solids, sqrt(K/rho) for the fluids.
   double waveSpeed() const;
   /// Largest kinematic viscosity (m^2/s) the model can produce: mu_N / rho for
-  /// the viscous fluid, mu_max / rho for the viscoplastic fluid, 0 for the solid.
+  /// the viscous fluid, mu_max / rho for the viscoplastic fluid, eta / rho for
+  /// the elastoplastic solid, 0 for the Neo-Hookean solid.
   double kinematicViscosity() const;
   /// Throws InvalidArgument naming the first bad value.
   void validate() const;
@@ -65,6 +68,14 @@ MpmMaterial viscousFluid(double viscosity, double bulkModulus, double density,
 MpmMaterial viscoplasticFluid(double yieldStress, double consistency, double flowIndex, double maxViscosity,
                               double bulkModulus, double density,
                               const MagneticMaterial& magnetic = nonMagneticMaterial());
+
+/// Damped elastoplastic solid ("magnetic clay"): Young's modulus E (Pa, finite,
+/// > 0) and Poisson's ratio nu (in (-1, 0.5)) give mu and lambda as for the
+/// Neo-Hookean solid; von Mises yield stress sigma_y (Pa, finite, >= 0; perfect
+/// plasticity), Kelvin-Voigt damping viscosity eta (Pa*s, finite, >= 0),
+/// density rho (kg/m^3, finite, > 0). CPU only (the gpu stepper has no such model).
+MpmMaterial elastoplasticSolid(double youngModulus, double poissonRatio, double yieldStress, double viscosity,
+                               double density, const MagneticMaterial& magnetic = nonMagneticMaterial());
 
 /// Throws InvalidArgument unless the magnetic material is usable by the MPM:
 /// LawKind::None, or a linear / Langevin law with finite positive parameters

@@ -145,7 +145,7 @@ struct MpmSettings {
 struct MpmEnergies {
   double kinetic = 0;        ///< sum 1/2 m_p |v_p|^2
   double gravitational = 0;  ///< -sum m_p g . x_p (zero at the world origin)
-  double elastic = 0;        ///< sum V_p^0 Psi (Neo-Hookean or K/2 (J-1)^2)
+  double elastic = 0;        ///< sum V_p^0 Psi (Neo-Hookean, Hencky of F_E, or K/2 (J-1)^2)
   double total() const { return kinetic + gravitational + elastic; }
 };
 
