@@ -427,6 +427,50 @@ TEST(Stability, MagneticMaterialInsideAMagnetAndTouchingTheWalls) {
 }
 
 // ---------------------------------------------------------------------------
+// Thin colliders under extreme loads (MpmSettings::colliderProjection)
+
+namespace {
+// Particles below z (m).
+std::size_t countBelow(const MpmSolver& s, double z) {
+  std::size_t n = 0;
+  for (const Vec3d& x : s.particles().x) n += x.z < z ? 1 : 0;
+  return n;
+}
+}  // namespace
+
+TEST(Stability, ThinPlateHoldsASoftFluidPulledByAMagnetAndAFastFall) {
+  const double c = centre(), L = (kNodes - 1) * kDx, top = 0.051, bottom = 0.049;
+  const MpmCollider plate(ColliderShape::box({L, L, 0.001}), ColliderMotion::fixed(Pose::at({c, c, 0.05})),
+                          BoundaryCondition{BoundaryMode::Slip, 0.0});
+  {
+    // A fluid of K = 1e3 Pa (the pull crushes it: mu0 W ~ 5e4 Pa at the
+    // plate) on a 2 mm plate, a 1.2 T magnet just under the plate.
+    auto s = std::make_unique<MpmSolver>(smallSettings());
+    s->addCollider(plate);
+    s->emit(EmitterShape::box(Pose::at({c, c, 0.075}), {0.03, 0.03, 0.02}),
+            s->addMaterial(ferrofluid(paperMaterial(), 1e3)), emitSettings());
+    s->sources().add(SphereMagnet(Pose::at({c, c, 0.025}), 0.02, {0, 0, magnetizationFromRemanence(1.2)}));
+    const Outcome o = run(*s, 3, 0.01);
+    expectStable(*s, o, "soft fluid pulled onto a 2 mm plate");
+    EXPECT_EQ(countBelow(*s, top - 1e-9), 0u) << "fluid entered or crossed the plate";
+  }
+  {
+    // A fixed dt of 1 ms, a block falling at 4 m/s onto the plate: the
+    // crossing limit (1 mm / 4 m/s) shortens every substep near the plate.
+    MpmSettings st = smallSettings();
+    st.fixedDt = 1e-3;
+    auto s = std::make_unique<MpmSolver>(st);
+    s->addCollider(plate);
+    s->emit(EmitterShape::box(Pose::at({c, c, 0.09}), {0.03, 0.03, 0.02}), s->addMaterial(ferrofluid(nonMagneticMaterial())),
+            emitSettings(8, {0, 0, -4}));
+    const Outcome o = run(*s, 3, 0.01);
+    expectStable(*s, o, "fast fall onto a 2 mm plate, fixed dt");
+    EXPECT_GT(o.dtLimited, 0);
+    EXPECT_EQ(countBelow(*s, bottom), 0u) << "fluid crossed the plate";
+  }
+}
+
+// ---------------------------------------------------------------------------
 // Time step
 
 TEST(Stability, FixedDtAtAndAboveTheCflBoundIsSubstepped) {
