@@ -3,7 +3,11 @@
 // magnetism, at 1e5 and 1e6 particles (8 per cell) on a 128^3 grid of the
 // paper's spacing (dx = 7.8 mm). The block falls under gravity onto the
 // floor with a small spin, so the particles move and the grid update has
-// work to do. Prints a table and writes CSV. Not a test: timings are
+// work to do. With --collider box or level_set a floor slab 1.5 cm thick
+// (an analytic box, or its signed distance sampled every 2 mm) lies under the
+// block, and each case runs with the collider projection off and on
+// (MpmSettings::colliderProjection) in the same run: its price is the
+// difference. Prints a table and writes CSV. Not a test: timings are
 // machine-dependent.
 // `lodestone-bench-mpm-step --help` lists the options.
 #include <algorithm>
@@ -12,6 +16,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
+#include <memory>
 #include <optional>
 #include <sstream>
 #include <string>
@@ -23,6 +28,7 @@
 #include "lodestone/cli/command_line.h"
 
 #include "lodestone/core/base/error.h"
+#include "lodestone/core/mpm/sampled_sdf.h"
 #include "lodestone/core/mpm/solver.h"
 
 using namespace lodestone;
@@ -35,12 +41,36 @@ struct Timing {
   double dt = 0, total = 0, p2g = 0, binning = 0, grid = 0, g2p = 0;  // mean seconds per step
 };
 
-Timing run(bool fluid, double targetParticles, int steps, int nodes, int reorder, int age) {
+/// The floor slab of --collider: 1.5 cm thick, as wide as the domain, its top 2 cells above the floor.
+MpmCollider floorSlab(const std::string& kind, const MpmSolver& solver) {
+  const GridSpec& g = solver.settings().grid;
+  const Vec3d lo = solver.domainLower(), hi = solver.domainUpper();
+  const Vec3d half{0.5 * (hi.x - lo.x), 0.5 * (hi.y - lo.y), 0.0075};
+  const Pose pose = Pose::at({0.5 * (lo.x + hi.x), 0.5 * (lo.y + hi.y), lo.z + 2 * g.dx - half.z});
+  ColliderShape box = ColliderShape::box(half);
+  if (kind == "box") return MpmCollider(box, ColliderMotion::fixed(pose));
+  GridSpec sg;
+  sg.dx = 0.002;
+  sg.dims = {int(std::ceil(2 * half.x / sg.dx)) + 7, int(std::ceil(2 * half.y / sg.dx)) + 7,
+             int(std::ceil(2 * half.z / sg.dx)) + 7};
+  sg.origin = Vec3d{-0.5 * (sg.dims.i - 1) * sg.dx, -0.5 * (sg.dims.j - 1) * sg.dx, -0.5 * (sg.dims.k - 1) * sg.dx};
+  std::vector<float> phi(sg.nodeCount());
+  for (int k = 0; k < sg.dims.k; ++k)
+    for (int j = 0; j < sg.dims.j; ++j)
+      for (int i = 0; i < sg.dims.i; ++i) phi[sg.index(i, j, k)] = float(box.signedDistance(sg.nodePosition(i, j, k)));
+  return MpmCollider(ColliderShape::levelSetShape(std::make_shared<const SampledSdf>(sg, std::move(phi), "slab")),
+                     ColliderMotion::fixed(pose));
+}
+
+Timing run(bool fluid, double targetParticles, int steps, int nodes, int reorder, int age, const std::string& collider,
+           bool projection) {
   MpmSettings s;
   s.reorderInterval = reorder;
   s.grid.dx = 7.8e-3;
   s.grid.dims = {nodes, nodes, nodes};
+  s.colliderProjection = projection;
   MpmSolver solver(s);
+  if (collider != "none") solver.addCollider(floorSlab(collider, solver));
   const std::uint32_t m = solver.addMaterial(fluid ? viscousFluid(1.0, 1e5, 1000) : neoHookeanSolid(1e5, 0.3, 1000));
   // A cube of n cells per side at 8 particles per cell.
   const int n = std::max(2, int(std::lround(std::cbrt(targetParticles / 8.0))));
@@ -82,7 +112,7 @@ int main(int argc, char** argv) {
   try {
     std::vector<double> counts{1e5, 1e6};
     int steps = 20, nodes = 128, threads = 0, reorder = MpmSettings{}.reorderInterval, age = 0;
-    std::string csvPath = "bench_mpm_step.csv";
+    std::string csvPath = "bench_mpm_step.csv", collider = "none";
     CLI::App app("lodestone-bench-mpm-step: times one MLS-MPM substep (no magnetism)", "lodestone-bench-mpm-step");
     cli::helpLayout(app, 28);
     cli::addNumberList(app, "--particles", counts, "target particle counts, 8 per cell (each 8..1e9)");
@@ -106,34 +136,40 @@ int main(int argc, char** argv) {
         ->type_name("N")
         ->check(cli::wholeNumber(0))
         ->default_str(cli::formatNumber(age));
+    app.add_option("--collider", collider, "a floor slab under the block: none, box or level_set (each case then "
+                   "runs with the collider projection off and on)")
+        ->check(CLI::IsMember({"none", "box", "level_set"}))
+        ->capture_default_str();
     app.add_option("--csv", csvPath, "CSV output")->type_name("FILE")->capture_default_str();
     if (const std::optional<int> code = cli::parse(app, argc, argv)) return *code;
     for (double c : counts) require(c >= 8 && c <= 1e9, "--particles: ", c, " is not in 8..1e9");
 
     std::ofstream csv(csvPath);
     require(bool(csv), "cannot write ", csvPath);
-    csv << "material,particles,grid_nodes_per_axis,steps,age_steps,reorder_interval,dt_s,ms_per_step,ms_p2g,ms_binning,"
-           "ms_grid_update,ms_g2p,ns_per_particle_step,threads\n";
+    csv << "material,particles,grid_nodes_per_axis,steps,age_steps,reorder_interval,collider,collider_projection,dt_s,"
+           "ms_per_step,ms_p2g,ms_binning,ms_grid_update,ms_g2p,ns_per_particle_step,threads\n";
     if (threads == 0) threads = tbb::info::default_concurrency();
     tbb::global_control limit(tbb::global_control::max_allowed_parallelism, std::size_t(threads));
     std::printf(
         "Lodestone MPM step benchmark (%d threads, %d^3 grid, dx = 7.8 mm, %d timed substeps after %d, "
         "reorder interval %d)\n",
         threads, nodes, steps, age + 2, reorder);
-    std::printf("%-8s %10s %10s %9s %9s %9s %9s %9s %10s\n", "material", "particles", "dt s", "ms/step", "P2G",
-                "(binning)", "grid", "G2P", "ns/p/step");
+    std::printf("%-8s %10s %10s %10s %9s %9s %9s %9s %9s %10s\n", "material", "particles", "projection", "dt s",
+                "ms/step", "P2G", "(binning)", "grid", "G2P", "ns/p/step");
     for (double c : counts)
-      for (int fluid = 0; fluid < 2; ++fluid) {
-        const Timing t = run(fluid != 0, c, steps, nodes, reorder, age);
-        const char* name = fluid ? "fluid" : "elastic";
-        const double ns = 1e9 * t.total / double(t.particles);
-        std::printf("%-8s %10zu %10.3g %9.2f %9.2f %9.2f %9.2f %9.2f %10.1f\n", name, t.particles, t.dt, 1e3 * t.total,
-                    1e3 * t.p2g, 1e3 * t.binning, 1e3 * t.grid, 1e3 * t.g2p, ns);
-        std::fflush(stdout);
-        csv << name << ',' << t.particles << ',' << nodes << ',' << t.steps << ',' << age << ',' << reorder << ','
-            << t.dt << ',' << 1e3 * t.total << ',' << 1e3 * t.p2g << ',' << 1e3 * t.binning << ',' << 1e3 * t.grid
-            << ',' << 1e3 * t.g2p << ',' << ns << ',' << threads << '\n';
-      }
+      for (int fluid = 0; fluid < 2; ++fluid)
+        for (int projection = collider == "none" ? 1 : 0; projection < 2; ++projection) {
+          const Timing t = run(fluid != 0, c, steps, nodes, reorder, age, collider, projection != 0);
+          const char* name = fluid ? "fluid" : "elastic";
+          const char* proj = collider == "none" ? "-" : projection ? "on" : "off";
+          const double ns = 1e9 * t.total / double(t.particles);
+          std::printf("%-8s %10zu %10s %10.3g %9.2f %9.2f %9.2f %9.2f %9.2f %10.1f\n", name, t.particles, proj, t.dt,
+                      1e3 * t.total, 1e3 * t.p2g, 1e3 * t.binning, 1e3 * t.grid, 1e3 * t.g2p, ns);
+          std::fflush(stdout);
+          csv << name << ',' << t.particles << ',' << nodes << ',' << t.steps << ',' << age << ',' << reorder << ','
+              << collider << ',' << proj << ',' << t.dt << ',' << 1e3 * t.total << ',' << 1e3 * t.p2g << ','
+              << 1e3 * t.binning << ',' << 1e3 * t.grid << ',' << 1e3 * t.g2p << ',' << ns << ',' << threads << '\n';
+        }
     std::printf("CSV written to %s\n", csvPath.c_str());
     return 0;
   } catch (const std::exception& e) {
