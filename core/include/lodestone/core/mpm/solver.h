@@ -75,6 +75,7 @@
 #include "lodestone/core/mpm/grid.h"
 #include "lodestone/core/mpm/material.h"
 #include "lodestone/core/mpm/particles.h"
+#include "lodestone/core/mpm/rate_emitter.h"
 
 namespace lodestone {
 inline namespace mpm {
@@ -151,6 +152,7 @@ struct MpmStepReport {
   std::size_t removed = 0;       ///< particles removed (out of domain under Remove, or non-finite)
   std::size_t nonFinite = 0;     ///< of the removed, those with a non-finite state
   double maxSpeed = 0;           ///< max |v_p| after G2P, m/s
+  RateEmitReport emitted;        ///< what the rate emitters added (8.)
 };
 
 /// Outcome of advanceFrame.
@@ -165,6 +167,7 @@ struct MpmFrameReport {
   int magneticReused = 0;                            ///< due solves the planner skipped (field reused)
   Vec3d magneticImpulse;                             ///< sum over substeps of dt * applied magnetic force, N*s
   std::size_t clamped = 0, removed = 0, nonFinite = 0;
+  RateEmitReport emitted;  ///< what the rate emitters added, summed over the substeps
   MpmEnergies energies;    ///< at the end of the frame
   bool cancelled = false;  ///< the progress callback asked to stop
   std::vector<std::string> warnings;
@@ -206,6 +209,12 @@ class MpmSolver {
   /// Fills a shape with particles of material `material` (an index from
   /// addMaterial); a zero settings.cellSize means the MPM grid's dx.
   EmitReport emit(const EmitterShape& shape, std::uint32_t material, EmitterSettings settings);
+
+  /// Adds a source that emits material of `material` over time (mpm/rate_emitter.h);
+  /// a zero settings.lattice.cellSize means the MPM grid's dx. Returns its index.
+  std::size_t addEmitter(const EmitterShape& shape, std::uint32_t material, RateEmitterSettings settings);
+  std::size_t emitterCount() const { return emitters_.size(); }
+  const RateEmitter& emitter(std::size_t i) const;
 
   std::size_t addCollider(const MpmCollider& collider);
   std::size_t colliderCount() const { return colliders_.size(); }
@@ -307,6 +316,8 @@ class MpmSolver {
   void gridUpdate(double dt, MpmStepReport& rep);      // 4.
   bool gridToParticle(double dt, MpmStepReport& rep);  // 5-7.; true when particles were removed after it
   void solveMagnetic(MpmStepReport& rep);
+  void emitFromEmitters(double dt, MpmStepReport& rep);  // 8.
+  double maxEmissionSpeed() const;                       // m/s, of the emitters on within the next dtMax
   bool lastSolveHolds();  // the planner's reuse test (field_reuse.h); poses the magnets when it samples the field
   bool isMagneticPoint(std::size_t p) const;    // a particle with n_p > 0 of a magnetic material
   const MagneticMaterial* magneticLaw() const;  // the (shared) law of the magnetic materials, or null
@@ -322,6 +333,7 @@ class MpmSolver {
   MpmParticles particles_;
   std::vector<MpmMaterial> materials_;
   std::vector<MpmCollider> colliders_;
+  std::vector<RateEmitter> emitters_;
   FieldSourceSet sources_;
   std::vector<std::unique_ptr<MagnetSource>> magnets_;
   static constexpr std::size_t kNoCollider = ~std::size_t(0);
