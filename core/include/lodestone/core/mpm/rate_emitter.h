@@ -34,7 +34,9 @@
 // or faster than its material leaves the shape, therefore adds no more than
 // the space takes instead of stacking points; the volume identity above is
 // then an upper bound. A consistent stream (consecutive chunks h apart) is
-// never blocked by itself.
+// never blocked by itself. Colliders are not consulted: an emitter placed
+// inside one emits there and the collider's boundary condition acts on the
+// material from the next substep, so a nozzle belongs outside solids.
 #include <cstddef>
 #include <cstdint>
 #include <string>
