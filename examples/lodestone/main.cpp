@@ -263,6 +263,11 @@ void printSceneSummary(const Scene& scene, const MpmSolver& solver) {
               scene.fields.size());
   for (std::size_t m = 0; m < scene.materials.size(); ++m)
     std::printf("  material '%s': %s\n", scene.materialNames[m].c_str(), scene.materials[m].describe().c_str());
+  const double end = solver.time() + scene.frames * scene.frameDuration();
+  for (std::size_t e = 0; e < solver.emitterCount(); ++e)
+    std::printf("  emitter '%s' (%s): %s; up to %.0f particles by t = %.4g s\n", scene.emitters[e].name.c_str(),
+                scene.materialNames[solver.emitter(e).materialIndex()].c_str(), solver.emitter(e).describe().c_str(),
+                solver.emitter(e).particlesBy(end), end);
   std::printf("  %d frames at %.4g fps; %s; field solved %s\n", scene.frames, scene.fps,
               scene.settings.fixedDt > 0 ? concat("dt = ", scene.settings.fixedDt, " s").c_str()
                                          : concat("CFL ", scene.settings.cfl, ", dt <= ", scene.settings.dtMax, " s").c_str(),
@@ -313,6 +318,8 @@ nlohmann::json frameJson(int frame, const MpmFrameReport& r, std::size_t particl
   putCount(f, "clamped", std::int64_t(r.clamped));
   putCount(f, "removed", std::int64_t(r.removed));
   putCount(f, "non_finite", std::int64_t(r.nonFinite));
+  putCount(f, "emitted", std::int64_t(r.emitted.particles));
+  putCount(f, "emission_blocked", std::int64_t(r.emitted.blocked + r.emitted.outside));
   nlohmann::json e;
   putQuantity(e, "kinetic", r.energies.kinetic, "J");
   putQuantity(e, "gravitational", r.energies.gravitational, "J");

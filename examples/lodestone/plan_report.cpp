@@ -24,7 +24,34 @@ std::vector<StageDecision> mechanicsDecisions(const plugin::Scene& scene, const 
                fluid ? "a fluid material is used" : "no fluid material", 0, 0});
   d.push_back({"elastic stress", solid, solid ? "on" : "idle", solid ? "a solid material is used" : "no solid material",
                0, 0});
+  const double end = solver.time() + scene.frames * scene.frameDuration();
+  std::size_t on = 0;
+  for (std::size_t e = 0; e < solver.emitterCount(); ++e)
+    on += solver.emitter(e).settings().schedule.onWithin(solver.time(), end) ? 1 : 0;
+  d.push_back({"emission", on > 0, on > 0 ? concat(on, " emitter(s)") : "idle",
+               on > 0                       ? concat(on, " of ", solver.emitterCount(), " emitter(s) on during the run")
+               : solver.emitterCount() > 0 ? "no emitter is on during the run"
+                                           : "no emitter",
+               0, 0});
   return d;
+}
+
+std::string emitterTimeline(const plugin::Scene& scene, const MpmSolver& solver, std::size_t e) {
+  const EmissionSchedule& schedule = solver.emitter(e).settings().schedule;
+  std::string text;
+  int first = 1;
+  bool on = false;
+  for (int f = 1; f <= scene.frames + 1; ++f) {
+    const bool now = f <= scene.frames && schedule.onWithin(solver.time() + (f - 1) * scene.frameDuration(),
+                                                            solver.time() + f * scene.frameDuration());
+    if (f > 1 && (now != on || f > scene.frames)) {
+      text += concat(text.empty() ? "" : ", ", on ? "on" : "idle", " in frame", first == f - 1 ? " " : "s ", first,
+                     first == f - 1 ? std::string() : concat("-", f - 1));
+      first = f;
+    }
+    on = now;
+  }
+  return text;
 }
 
 double substepsPerFrame(const plugin::Scene& scene, const MpmSolver& solver) {
@@ -131,7 +158,25 @@ void printPlan(const plugin::Scene& scene, const MpmSolver& solver, std::FILE* o
   const GridSpec& mg = scene.settings.magneticGrid ? *scene.settings.magneticGrid : scene.settings.grid;
   double solveSeconds = PlannerInputs{}.secondsPerNodeSolve * double(mg.nodeCount());
   bool magnetic = false;
+  // Magnetic material that only an emitter brings: the plan samples the
+  // material present now, the stages run once the emitter has added some.
+  bool magneticNow = false;
+  for (const Span& span : spans) magneticNow = magneticNow || span.plan.magnetic;
+  const bool sources = !scene.fields.empty() || solver.magnetCount() > 0;
+  bool emitterMagnetic = false;
+  for (std::size_t e = 0; e < solver.emitterCount() && sources && !magneticNow && !emitterMagnetic; ++e) {
+    const RateEmitter& emitter = solver.emitter(e);
+    if (!solver.materials()[emitter.materialIndex()].isMagnetic()) continue;
+    const double born = emitter.birthTime(0);
+    if (born >= solver.time() + scene.frames * scene.frameDuration()) continue;
+    emitterMagnetic = magnetic = true;
+    std::fprintf(out,
+                 "  magnetic stages (from frame %d, when emitter '%s' first emits): on - it emits magnetic material "
+                 "(each solve plans for the material then present)\n",
+                 1 + int(std::floor((born - solver.time()) / scene.frameDuration())), scene.emitters[e].name.c_str());
+  }
   for (const Span& span : spans) {
+    if (emitterMagnetic) break;  // said above
     const MagneticPlan& plan = span.plan;
     magnetic = magnetic || plan.magnetic;
     const std::string frames = spans.size() == 1 ? std::string("all frames")
@@ -155,9 +200,22 @@ void printPlan(const plugin::Scene& scene, const MpmSolver& solver, std::FILE* o
   }
   if (spans.size() > 1)
     std::fprintf(out, "  (the decisions change over the time line: each solve plans again for its own time)\n");
+  // Emitters: when each is on, and the particles it adds (before any is
+  // blocked by material already there).
+  const double end = solver.time() + scene.frames * scene.frameDuration();
+  double emittedByEnd = 0, emittedMean = 0;  // particles; the mean over the frames
+  for (std::size_t e = 0; e < solver.emitterCount(); ++e) {
+    const RateEmitter& emitter = solver.emitter(e);
+    emittedByEnd += emitter.particlesBy(end);
+    for (int f = 1; f <= scene.frames; ++f)
+      emittedMean += emitter.particlesBy(solver.time() + f * scene.frameDuration()) / scene.frames;
+    std::fprintf(out, "  emitter '%s': %s; up to %.0f particles by t = %.4g s (%s)\n", scene.emitters[e].name.c_str(),
+                 emitterTimeline(scene, solver, e).c_str(), emitter.particlesBy(end), end, emitter.describe().c_str());
+  }
 
   // Run time: the MPM substeps plus the field solves.
-  const double mpmSeconds = kSecondsPerParticleSubstep * double(solver.particles().size()) * substeps;
+  const double mpmSeconds =
+      kSecondsPerParticleSubstep * (double(solver.particles().size()) + emittedMean) * substeps;
   std::fprintf(out, "  %.4g substeps per frame (%s = %.3g s)", substeps,
                scene.settings.fixedDt > 0 ? "time.dt" : "first CFL step", solver.suggestedDt());
   if (magnetic) {
@@ -178,9 +236,11 @@ void printPlan(const plugin::Scene& scene, const MpmSolver& solver, std::FILE* o
   // Memory: the estimate the scene was checked against before building.
   const double nodes = double(scene.settings.grid.nodeCount()) + (mg == scene.settings.grid ? 0.0 : double(mg.nodeCount()));
   const double gib = double(std::size_t(1) << 30);
-  std::fprintf(out, "  estimated memory: %.3g GiB (%.4g grid nodes, %zu particles) of %.3g GiB\n",
-               plugin::estimatedMemoryBytes(nodes, double(solver.particles().size())) / gib, nodes,
-               solver.particles().size(), plugin::memoryLimitBytes() / gib);
+  const double particles = double(solver.particles().size()) + emittedByEnd;
+  std::fprintf(out, "  estimated memory: %.3g GiB (%.4g grid nodes, %.0f particles%s) of %.3g GiB\n",
+               plugin::estimatedMemoryBytes(nodes, particles) / gib, nodes, particles,
+               solver.emitterCount() > 0 ? concat(" at the end, ", emittedByEnd, " of them emitted").c_str() : "",
+               plugin::memoryLimitBytes() / gib);
 
   // Warnings: resolution, and settings that will blow up or lag.
   const double halfWidth = magneticHalfWidth(solver);

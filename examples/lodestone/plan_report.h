@@ -14,8 +14,13 @@
 namespace lodestone::examples {
 
 /// Mechanical stages with nothing to do in this scene (no gravity, no
-/// colliders, no fluid, no solid) and why; the MPM core is always on.
+/// colliders, no fluid, no solid, no emitter on during the run) and why; the
+/// MPM core is always on.
 std::vector<StageDecision> mechanicsDecisions(const plugin::Scene& scene, const MpmSolver& solver);
+
+/// When emitter `e` of `solver` is on over the scene's frames: "on in frames
+/// 1-30, idle in frames 31-48".
+std::string emitterTimeline(const plugin::Scene& scene, const MpmSolver& solver, std::size_t e);
 
 /// Substeps per frame with the scene's first substep (fixed, or the CFL step now).
 double substepsPerFrame(const plugin::Scene& scene, const MpmSolver& solver);

@@ -100,6 +100,62 @@ EmitterSettings emitterSettingsFrom(const ParamSet& p) {
   return e;
 }
 
+RateEmitterSettings rateEmitterSettingsFrom(const ParamSet& p, const ColliderMotion& motion) {
+  RateEmitterSettings s;
+  s.lattice = emitterSettingsFrom(p);
+  if (p.given("speed")) {
+    s.lattice.velocity = {0, 0, p.getFloat("speed")};
+    s.velocityInBodyFrame = true;
+  }
+  const std::string& rate = p.getString("rate");
+  require(rate != "stream" || p.given("speed"),
+          "a stream rate needs `speed`, the emission speed along the axis in m/s (velocity is in the world frame)");
+  s.rateKind = rate == "volume"      ? EmissionRateKind::VolumePerSecond
+               : rate == "particles" ? EmissionRateKind::ParticlesPerSecond
+                                     : EmissionRateKind::Stream;
+  if (rate == "volume") s.rate = p.getFloat("volume_rate");
+  if (rate == "particles") s.rate = p.getFloat("particle_rate");
+  s.inheritMotion = p.getBool("inherit_motion");
+  s.motion = motion;
+  s.followsMotion = motion.kind() != ColliderMotion::Kind::Static;
+  if (p.given("intervals")) {
+    require(!p.given("start") && !p.given("end"), "give start and end, or intervals, not both");
+    const std::vector<double>& t = p.getFloats("intervals");
+    require(t.size() % 2 == 0, "intervals holds ", t.size(), " times; it needs on, off pairs (an even count)");
+    std::vector<std::pair<double, double>> onOff;
+    for (std::size_t k = 0; k < t.size(); k += 2) onOff.emplace_back(t[k], t[k + 1]);
+    s.schedule = EmissionSchedule::intervals(std::move(onOff));
+  } else {
+    s.schedule = EmissionSchedule::between(p.getFloat("start"),
+                                           p.given("end") ? p.getFloat("end") : EmissionSchedule::kForever);
+  }
+  return s;
+}
+
+double estimatedEmittedParticles(const EmitterShape& shape, const RateEmitterSettings& s, double duration) {
+  const double cell = s.lattice.cellSize, ppc = s.lattice.particlesPerCell;
+  const double pointVolume = cell * cell * cell / ppc;  // m^3
+  const double chunk = estimatedParticles(shape.volume(), cell, s.lattice.particlesPerCell);
+  double perSecond = 0;
+  switch (s.rateKind) {
+    case EmissionRateKind::VolumePerSecond:
+      perSecond = s.rate / pointVolume;
+      break;
+    case EmissionRateKind::ParticlesPerSecond:
+      perSecond = s.rate;
+      break;
+    case EmissionRateKind::Stream: {
+      // A chunk each time the material has moved the shape's length along its axis.
+      const double length = shape.kind == EmitterShapeKind::Box      ? 2 * shape.halfSize.z
+                            : shape.kind == EmitterShapeKind::Sphere ? 2 * shape.radius
+                                                                     : 2 * shape.halfLength;
+      perSecond = s.velocityInBodyFrame && length > 0 ? std::max(0.0, s.lattice.velocity.z) * chunk / length : 0.0;
+      break;
+    }
+  }
+  return perSecond * s.schedule.activeTime(duration) + chunk;
+}
+
 MpmMaterial materialFrom(const ParamSet& p) {
   const std::string& law = p.getString("magnetic.law");
   const double n0 = p.given("magnetic.per_cell")

@@ -50,6 +50,10 @@ ParticlesData mergeParticles(const std::vector<NodeValue>& inputs) {
     const std::uint32_t offset = std::uint32_t(out.materials.size());
     out.materials.insert(out.materials.end(), in.materials.begin(), in.materials.end());
     out.bodies.insert(out.bodies.end(), in.bodies.begin(), in.bodies.end());
+    for (ParticlesData::Emitter e : in.emitters) {
+      e.material += offset;
+      out.emitters.push_back(std::move(e));
+    }
     const MpmParticles& p = in.particles;
     for (std::size_t k = 0; k < p.size(); ++k) {
       const std::size_t q =
@@ -208,6 +212,28 @@ void addFileShapeParams(std::vector<ParamDecl>& q) {
                    "shape", {"mesh"}));
 }
 
+// The sizes of a box, sphere or cylinder (particle_source, particle_emitter,
+// collider), each `size` m by default.
+void addSizeParams(std::vector<ParamDecl>& q, double size) {
+  q.push_back(when(required(positive(vec3Param("half_size", "Half size", {size, size, size}, "m", "Box half-sizes."))),
+                   "shape", {"box"}));
+  q.push_back(when(required(positive(floatParam("radius", "Radius", size, "m", "Sphere or cylinder radius."))), "shape",
+                   {"sphere", "cylinder"}));
+  q.push_back(when(required(positive(floatParam("half_length", "Half length", size, "m", "Cylinder half-length."))),
+                   "shape", {"cylinder"}));
+}
+
+// The emitter lattice (particle_source, particle_emitter).
+void addLatticeParams(std::vector<ParamDecl>& q) {
+  q.push_back(
+      positive(floatParam("cell_size", "Cell size", 0.01, "m",
+                          "MPM grid spacing dx the lattice is fitted to (scene files: domain.dx, not a key).")));
+  q.push_back(intParam("particles_per_cell", "Particles per cell", 8, 1, 1000, "Lattice points per MPM cell."));
+  q.push_back(
+      range(floatParam("jitter", "Jitter", 0.0, "", "Random offset as a fraction of the lattice spacing."), 0, 1));
+  q.push_back(intParam("seed", "Seed", 1, 0, std::int64_t(1) << 62, "Jitter seed."));
+}
+
 NodeDecl particleSourceNode() {
   NodeDecl d;
   d.type = "particle_source";
@@ -224,19 +250,8 @@ NodeDecl particleSourceNode() {
   q.push_back(directionParam("axis", "Axis", {0, 0, 1},
                              "Body z axis (the cylinder's axis); a file shape's z axis is turned onto it."));
   addFileShapeParams(q);
-  q.push_back(when(required(positive(vec3Param("half_size", "Half size", {0.02, 0.02, 0.02}, "m", "Box half-sizes."))),
-                   "shape", {"box"}));
-  q.push_back(when(required(positive(floatParam("radius", "Radius", 0.02, "m", "Sphere or cylinder radius."))), "shape",
-                   {"sphere", "cylinder"}));
-  q.push_back(when(required(positive(floatParam("half_length", "Half length", 0.02, "m", "Cylinder half-length."))),
-                   "shape", {"cylinder"}));
-  q.push_back(
-      positive(floatParam("cell_size", "Cell size", 0.01, "m",
-                          "MPM grid spacing dx the lattice is fitted to (scene files: domain.dx, not a key).")));
-  q.push_back(intParam("particles_per_cell", "Particles per cell", 8, 1, 1000, "Lattice points per MPM cell."));
-  q.push_back(
-      range(floatParam("jitter", "Jitter", 0.0, "", "Random offset as a fraction of the lattice spacing."), 0, 1));
-  q.push_back(intParam("seed", "Seed", 1, 0, std::int64_t(1) << 62, "Jitter seed."));
+  addSizeParams(q, 0.02);
+  addLatticeParams(q);
   q.push_back(vec3Param("velocity", "Velocity", {}, "m/s", "Initial velocity."));
   d.inputs = {{"material", PortType::Material, "The body's material (default: a non-magnetic solid).", true, false}};
   d.outputs = {{"particles", PortType::Particles, "The material points."}};
@@ -255,6 +270,71 @@ NodeDecl particleSourceNode() {
     emitParticles(out.particles, body.shape, body.material.material, 0, body.emit);
     out.materials.push_back(body.material.material);
     out.bodies.push_back(std::move(body));
+    return CookOutputs{{"particles", value(std::move(out))}};
+  };
+  return d;
+}
+
+// ---- particle emitter ---------------------------------------------------------
+NodeDecl particleEmitterNode() {
+  NodeDecl d;
+  d.type = "particle_emitter";
+  d.label = "Particle Emitter";
+  d.category = "particles";
+  d.help =
+      "Emits material over time from a shape (a nozzle is a cylinder along its axis) that may move: whole "
+      "lattice fills of the shape (chunks) at a rate, while the time line is on, each placed where the shape was "
+      "at its birth and moved on by the emission velocity since; points where material already is are left out "
+      "(docs/scenes.md, Emitters).";
+  auto& q = d.params;
+  q.push_back(stringParam("name", "Name", "emitter", "Name of the emitter."));
+  addShapeParams(q, {"box", "sphere", "cylinder"}, "cylinder");
+  q.push_back(required(vec3Param("center", "Center", {}, "m", "Centre of the shape at rest (time 0).")));
+  q.push_back(directionParam("axis", "Axis", {0, 0, 1},
+                             "Body z axis: the nozzle's axis, along which `speed` emits and along which a stream's "
+                             "chunks follow each other."));
+  addSizeParams(q, 0.02);
+  addLatticeParams(q);
+  q.push_back(choiceParam("rate", "Rate", {"volume", "particles", "stream"}, "volume",
+                          "volume: volume_rate; particles: particle_rate; stream: as fast as the material leaves the "
+                          "shape at `speed` (a continuous jet, lattice layers one spacing apart)."));
+  q.push_back(when(required(positive(floatParam("volume_rate", "Volume rate", 1e-5, "m^3/s",
+                                                "Volume emitted per second while on."))),
+                   "rate", {"volume"}));
+  q.push_back(when(required(positive(floatParam("particle_rate", "Particle rate", 1e4, "1/s",
+                                                "Material points emitted per second while on."))),
+                   "rate", {"particles"}));
+  q.push_back(vec3Param("velocity", "Velocity", {}, "m/s", "Emission velocity in the world frame."));
+  q.push_back(positive(floatParam("speed", "Speed", 1.0, "m/s",
+                                  "Emission speed along the axis (turns with a moving emitter); when given, "
+                                  "replaces velocity. Needed by rate stream.")));
+  q.back().replaces = "velocity";
+  q.push_back(boolParam("inherit_motion", "Inherit motion", false,
+                        "Add the emitter's own velocity (motion) to the emitted material; off: material is laid "
+                        "along the emitter's path."));
+  q.push_back(nonNegative(floatParam("start", "Start", 0.0, "s", "Time the emitter switches on.")));
+  q.push_back(nonNegative(floatParam("end", "End", 0.0, "s", "Time it switches off (after start); not given: never.")));
+  q.push_back(nonNegative(floatListParam("intervals", "Intervals", {}, "s", 0, 2000,
+                                         "On/off times [on, off, on, off, ...], increasing; replaces start and end.")));
+  addMotionParams(q);
+  d.inputs = {{"material", PortType::Material, "The emitted material (default: a non-magnetic solid).", true, false}};
+  d.outputs = {{"particles", PortType::Particles, "No points yet: the emitter, which the MPM solver runs."}};
+  d.cook = [](const CookContext& c) {
+    const ParamSet& p = c.params();
+    const auto material = c.input<MaterialData>("material");
+    const MpmMaterial m = material ? material->material : neoHookeanSolid(1e5, 0.3, 1000.0);
+    ParticlesData::Emitter e;
+    e.name = p.getString("name");
+    e.shape = shapeFrom(p);
+    e.settings = rateEmitterSettingsFrom(p, motionFrom(p, e.shape.pose));
+    const double none[3] = {0, 0, 0};
+    requireFitsInMemory(e.name, none, 0,
+                        estimatedParticles(e.shape.volume(), e.settings.lattice.cellSize,
+                                           e.settings.lattice.particlesPerCell));
+    RateEmitter(e.shape, e.settings, m, 0);  // the lattice and the rate, checked now
+    ParticlesData out;
+    out.materials.push_back(m);
+    out.emitters.push_back(std::move(e));
     return CookOutputs{{"particles", value(std::move(out))}};
   };
   return d;
@@ -398,12 +478,7 @@ NodeDecl colliderNode() {
                                   "axis is turned onto."),
                    "shape", {"box", "sphere", "cylinder"}));
   addFileShapeParams(q);
-  q.push_back(when(required(positive(vec3Param("half_size", "Half size", {0.05, 0.05, 0.05}, "m", "Box half-sizes."))),
-                   "shape", {"box"}));
-  q.push_back(when(required(positive(floatParam("radius", "Radius", 0.05, "m", "Sphere or cylinder radius."))), "shape",
-                   {"sphere", "cylinder"}));
-  q.push_back(when(required(positive(floatParam("half_length", "Half length", 0.05, "m", "Cylinder half-length."))),
-                   "shape", {"cylinder"}));
+  addSizeParams(q, 0.05);
   q.push_back(when(boolParam("inverted", "Inverted", false, "Solid outside the shape (a container)."), "shape",
                    {"box", "sphere", "cylinder", "level_set", "mesh"}));
   addBoundaryParams(q, "sticky");
@@ -566,10 +641,15 @@ NodeDecl mpmSolverNode() {
   d.cook = [](const CookContext& c) {
     const ParamSet& p = c.params();
     const ParticlesData all = mergeParticles(c.inputs("particles"));
-    MpmSettings s = mpmSettingsFrom(p, double(all.particles.size()));
+    const int frames = int(p.getInt("time.frames"));
+    double particles = double(all.particles.size());
+    for (const ParticlesData::Emitter& e : all.emitters)
+      particles += estimatedEmittedParticles(e.shape, e.settings, frames / p.getFloat("time.fps"));
+    MpmSettings s = mpmSettingsFrom(p, particles);
     auto solver = std::make_shared<MpmSolver>(s);
     for (const MpmMaterial& m : all.materials) solver->addMaterial(m);
     solver->particles() = all.particles;
+    for (const ParticlesData::Emitter& e : all.emitters) solver->addEmitter(e.shape, e.material, e.settings);
     const SourcesData sources = mergeSources(c.inputs("sources"));
     addSourcesAndColliders(*solver, sources.fields, sources.magnets, mergeColliders(c.inputs("colliders")).colliders);
     SimulationData out;
@@ -586,7 +666,6 @@ NodeDecl mpmSolverNode() {
     };
     out.frameTimes.push_back(solver->time());
     out.centreOfMass.push_back(comMagnetic());
-    const int frames = int(p.getInt("time.frames"));
     for (int f = 0; f < frames; ++f) {
       solver->advanceFrame(1.0 / p.getFloat("time.fps"));
       out.frameTimes.push_back(solver->time());
@@ -624,9 +703,9 @@ NodeDecl vdbExportNode() {
 }  // namespace
 
 std::vector<NodeDecl> buildRegistry() {
-  return {particleSourceNode(), hostParticlesNode(), materialNode(),   magnetNode(),
-          appliedFieldNode(),   transferNode(),      fieldSolveNode(), magneticForceNode(),
-          mpmSolverNode(),      colliderNode(),      vdbExportNode()};
+  return {particleSourceNode(), particleEmitterNode(), hostParticlesNode(), materialNode(),
+          magnetNode(),         appliedFieldNode(),    transferNode(),      fieldSolveNode(),
+          magneticForceNode(),  mpmSolverNode(),       colliderNode(),      vdbExportNode()};
 }
 
 }  // namespace lodestone::plugin

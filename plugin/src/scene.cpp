@@ -170,11 +170,34 @@ Scene sceneFromJson(const nlohmann::json& doc, const std::string& sourceName, co
     b.finish();
     scene.bodies.push_back(std::move(body));
   }
+  // Emitters: `particle_emitter` nodes (the lattice fitted to domain.dx), plus
+  // the scene-only keys `material` and `motion.keyframes`.
+  for (JsonReader& e : optionalArray(root, "emitters")) {
+    SceneEmitter emitter;
+    const std::string material = e.string("material", scene.materialNames);
+    const ParamSet p = readNodeEntry(e, "particle_emitter", {"cell_size", "motion."});
+    emitter.name = p.given("name") ? p.getString("name") : concat("emitter ", scene.emitters.size());
+    emitter.material = std::uint32_t(std::find(scene.materialNames.begin(), scene.materialNames.end(), material) -
+                                     scene.materialNames.begin());
+    emitter.shape = shapeFrom(p);
+    const ColliderMotion motion = readMotion(e, emitter.shape.pose);
+    try {
+      emitter.settings = rateEmitterSettingsFrom(p, motion);
+    } catch (const InvalidArgument& error) {
+      e.fail(error.what());
+    }
+    emitter.settings.lattice.cellSize = scene.settings.grid.dx;
+    e.finish();
+    scene.emitters.push_back(std::move(emitter));
+  }
   // The domain's grid was checked alone above; with the bodies' points too
-  // (estimated from their volumes) before any is emitted.
+  // (estimated from their volumes) and those the emitters add over the run,
+  // before any is emitted.
   double particles = 0;
   for (const SceneBody& b : scene.bodies)
     particles += estimatedParticles(b.shape.volume(), b.emit.cellSize, b.emit.particlesPerCell);
+  for (const SceneEmitter& e : scene.emitters)
+    particles += estimatedEmittedParticles(e.shape, e.settings, scene.frames / scene.fps);
   try {
     mpmSettingsFrom(solverParams, particles);
   } catch (const InvalidArgument& e) {
@@ -284,6 +307,11 @@ std::unique_ptr<MpmSolver> buildSolver(const Scene& scene) {
   auto solver = std::make_unique<MpmSolver>(scene.settings);
   for (const MpmMaterial& m : scene.materials) solver->addMaterial(m);
   const Vec3d lo = solver->domainLower(), hi = solver->domainUpper();
+  const auto point = [](const Vec3d& p) {
+    char text[96];
+    std::snprintf(text, sizeof text, "(%.6g, %.6g, %.6g)", p.x, p.y, p.z);
+    return std::string(text);
+  };
   for (const SceneBody& b : scene.bodies) {
     EmitterSettings s = b.emit;
     s.cellSize = scene.settings.grid.dx;
@@ -295,15 +323,26 @@ std::unique_ptr<MpmSolver> buildSolver(const Scene& scene) {
     const auto inside = [&](const Vec3d& p) {
       return p.x >= lo.x && p.x <= hi.x && p.y >= lo.y && p.y <= hi.y && p.z >= lo.z && p.z <= hi.z;
     };
-    const auto point = [](const Vec3d& p) {
-      char text[96];
-      std::snprintf(text, sizeof text, "(%.6g, %.6g, %.6g)", p.x, p.y, p.z);
-      return std::string(text);
-    };
     if (emitted.particles > 0 && std::none_of(x.begin() + std::ptrdiff_t(first), x.end(), inside))
       throw InvalidArgument(concat(scene.file, ": body '", b.name, "' lies wholly outside the domain ", point(lo),
                                    " .. ", point(hi), " m (where material can be); none of its ", emitted.particles,
                                    " particles is inside"));
+  }
+  for (const SceneEmitter& e : scene.emitters) {
+    RateEmitterSettings s = e.settings;
+    s.lattice.cellSize = scene.settings.grid.dx;
+    try {
+      solver->addEmitter(e.shape, e.material, s);
+    } catch (const InvalidArgument& error) {
+      throw InvalidArgument(concat(scene.file, ": emitter '", e.name, "': ", error.what()));
+    }
+    // An emitter outside the domain when it switches on would emit nothing.
+    const double on = s.schedule.list().front().first;
+    const Vec3d c = solver->emitter(solver->emitterCount() - 1).poseAt(on).position;
+    if (c.x < lo.x || c.x > hi.x || c.y < lo.y || c.y > hi.y || c.z < lo.z || c.z > hi.z)
+      throw InvalidArgument(concat(scene.file, ": emitter '", e.name, "' is centred at ", point(c), " m at t = ", on,
+                                   " s, outside the domain ", point(lo), " .. ", point(hi),
+                                   " m (where material can be)"));
   }
   addSourcesAndColliders(*solver, scene.fields, scene.magnets, scene.colliders);
   return solver;

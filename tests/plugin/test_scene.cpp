@@ -49,7 +49,11 @@ TEST(Scene, EveryExampleSceneValidatesAndBuilds) {
     EXPECT_GT(scene.fullDx, 0.0) << "every paper scene has a full-resolution variant";
     EXPECT_LT(scene.fullDx, scene.settings.grid.dx);
     const auto solver = buildSolver(scene);
-    EXPECT_GT(solver->particles().size(), 1000u);
+    // The bodies' particles, and those the emitters add over the run.
+    double particles = double(solver->particles().size());
+    for (std::size_t e = 0; e < solver->emitterCount(); ++e)
+      particles += solver->emitter(e).particlesBy(scene.frames * scene.frameDuration());
+    EXPECT_GT(particles, 1000);
     bool magnetic = false;
     for (const auto& m : solver->materials()) magnetic = magnetic || m.isMagnetic();
     EXPECT_TRUE(magnetic);
@@ -121,6 +125,45 @@ TEST(Scene, MissingFileIsNamed) {
   } catch (const InvalidArgument& e) {
     EXPECT_NE(std::string(e.what()).find("/nonexistent/scene.json"), std::string::npos) << e.what();
   }
+}
+
+// A scene's emitter pours at its stream rate while on: the particles are
+// those emitted (counted in the frame reports), their volume is the rate
+// times the on-time within one chunk, and none comes after it switches off.
+TEST(Scene, EmitterPoursAtItsRateWhileOn) {
+  // A one-layer box (4 x 4 points of 1e-6 m^3 at dx = 0.02 m) pouring
+  // 2e-3 m^3/s from 0.01 s to 0.05 s: a chunk every 8 ms, carried off at
+  // 1.25 m/s (one layer per chunk period), over a run of 0.1 s.
+  std::string text = replaced(kMinimal, R"("bodies": [ { "material": "jelly", "shape": "box", "center": [0.1, 0.1, 0.1], "half_size": [0.03, 0.03, 0.03] } ])",
+                              R"("emitters": [ { "name": "tap", "material": "jelly", "shape": "box",
+      "center": [0.1, 0.1, 0.15], "axis": [0, 0, -1], "half_size": [0.02, 0.02, 0.005], "rate": "volume",
+      "volume_rate": 2e-3, "speed": 1.25, "start": 0.01, "end": 0.05 } ])");
+  text = replaced(text, R"("frames": 2)", R"("frames": 10)");
+  const Scene scene = parseScene(text, "test.json");
+  ASSERT_EQ(scene.emitters.size(), 1u);
+  EXPECT_EQ(scene.emitters[0].name, "tap");
+  const auto solver = buildSolver(scene);
+  ASSERT_EQ(solver->emitterCount(), 1u);
+  EXPECT_EQ(solver->particles().size(), 0u);
+  const double chunk = solver->emitter(0).chunkVolume();
+  ASSERT_NEAR(chunk, 1.6e-5, 1e-12);
+  std::size_t emitted = 0, blocked = 0;
+  for (int f = 0; f < scene.frames; ++f) {
+    const MpmFrameReport r = solver->advanceFrame(scene.frameDuration());
+    emitted += r.emitted.particles;
+    blocked += r.emitted.blocked + r.emitted.outside;
+    if (solver->time() <= 0.01 + 1e-12 || solver->time() - scene.frameDuration() >= 0.05) {
+      EXPECT_EQ(r.emitted.particles, 0u) << "frame " << f;  // off
+    }
+  }
+  EXPECT_EQ(blocked, 0u);
+  EXPECT_EQ(solver->particles().size(), emitted);
+  double volume = 0;
+  for (double v : solver->particles().volume0) volume += v;
+  // Q a = 8e-5 m^3 (5 chunks) within one chunk.
+  EXPECT_GE(volume, 2e-3 * 0.04 - 1e-15);
+  EXPECT_LT(volume, 2e-3 * 0.04 + chunk);
+  EXPECT_EQ(double(solver->particles().size()), solver->emitter(0).particlesBy(0.1));
 }
 
 TEST(Scene, MagnetThatIsNotAColliderKeepsItsMotion) {

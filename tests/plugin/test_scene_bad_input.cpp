@@ -162,6 +162,59 @@ TEST(SceneBadInput, ABodyWhollyOutsideTheDomainIsRefusedByName) {
   EXPECT_GT(buildSolver(partly)->particles().size(), 0u);
 }
 
+// Emitters: bad rates, time lines and keys are named with the entry; an
+// emitter that would add more particles over the run than memory holds is
+// refused before anything runs; one outside the domain when it switches on
+// is refused by name.
+TEST(SceneBadInput, EmittersAreReadStrictly) {
+  const std::string scene = replaced(kScene, "\"fields\"", R"("emitters": [ { "name": "tap", "material": "ferro",
+      "shape": "cylinder", "center": [0.1, 0.1, 0.15], "axis": [0, 0, -1], "radius": 0.02, "half_length": 0.01,
+      "rate": "volume", "volume_rate": 1e-5, "speed": 0.5, "start": 0.1, "end": 0.5 } ],
+  "fields")");
+  ASSERT_EQ(errorOf(scene), "");
+  const Case cases[] = {
+      {"negative rate", "\"volume_rate\": 1e-5", "\"volume_rate\": -1e-5", {"emitters[0].volume_rate", "m^3/s", "-1e-05"}},
+      {"end before start", "\"end\": 0.5", "\"end\": 0.05", {"emitters[0]", "ends at 0.05 s, not after its start 0.1 s"}},
+      {"unknown key", "\"volume_rate\"", "\"volume_rat\"", {"emitters[0]", "'volume_rat'", "did you mean 'volume_rate'"}},
+      {"unknown rate", "\"rate\": \"volume\"", "\"rate\": \"litres\"", {"emitters[0].rate", "litres"}},
+      {"stream without a speed", "\"rate\": \"volume\", \"volume_rate\": 1e-5, \"speed\": 0.5", "\"rate\": \"stream\"",
+       {"emitters[0]", "a stream rate needs `speed`"}},
+      {"a rate of particles for a volume", "\"volume_rate\": 1e-5", "\"particle_rate\": 100",
+       {"emitters[0]", "missing required key 'volume_rate'"}},
+      {"odd intervals", "\"start\": 0.1, \"end\": 0.5", "\"intervals\": [0.1, 0.2, 0.3]", {"emitters[0]", "even count"}},
+      {"intervals not increasing", "\"start\": 0.1, \"end\": 0.5", "\"intervals\": [0.1, 0.3, 0.2, 0.4]",
+       {"emitters[0]", "interval 1 starts at 0.2 s"}},
+      {"unknown material", "\"material\": \"ferro\",\n      \"shape\"", "\"material\": \"iron\",\n      \"shape\"",
+       {"emitters[0].material", "iron"}},
+  };
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.what);
+    const std::string err = errorOf(replaced(scene, c.from, c.to));
+    ASSERT_FALSE(err.empty()) << "accepted: " << c.to;
+    for (const std::string& e : c.expected) EXPECT_NE(err.find(e), std::string::npos) << err;
+  }
+  // 100 m^3/s for the 0.4 s it is on in a run of 1 s: 3.2e8 particles at dx
+  // = 0.01 m (120 GiB); refused by the memory estimate. Within a run of
+  // 0.02 s it never switches on: accepted.
+  ASSERT_EQ(setenv("LODESTONE_MEMORY_LIMIT_GIB", "25", 1), 0);
+  const std::string flooding =
+      replaced(replaced(scene, "\"volume_rate\": 1e-5", "\"volume_rate\": 100"), "\"dx\": 0.02", "\"dx\": 0.01");
+  const std::string flood = errorOf(replaced(flooding, "\"frames\": 2", "\"frames\": 100"));
+  EXPECT_NE(flood.find(" and 3200"), std::string::npos) << flood;  // 3.2e8 and the body
+  EXPECT_NE(flood.find("particles is too large"), std::string::npos) << flood;
+  EXPECT_EQ(errorOf(flooding), "");
+  ASSERT_EQ(unsetenv("LODESTONE_MEMORY_LIMIT_GIB"), 0);
+  // Outside the domain when it switches on.
+  try {
+    buildSolver(parseScene(replaced(scene, "\"center\": [0.1, 0.1, 0.15]", "\"center\": [0.1, 0.1, 0.5]"), "bad.json"));
+    FAIL() << "an emitter outside the domain was accepted";
+  } catch (const InvalidArgument& e) {
+    EXPECT_NE(std::string(e.what()).find("bad.json: emitter 'tap' is centred at (0.1, 0.1, 0.5) m at t = 0.1 s"),
+              std::string::npos)
+        << e.what();
+  }
+}
+
 TEST(SceneBadInput, ADirectoryOrADeviceAsTheSceneFileIsRefusedWithWhy) {
   const auto messageOf = [](const std::string& path) {
     try {

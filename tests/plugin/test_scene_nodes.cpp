@@ -29,6 +29,7 @@ struct Kind {
 };
 const Kind kKinds[] = {{"materials", "material", {}},
                        {"bodies", "particle_source", {"material"}},
+                       {"emitters", "particle_emitter", {"material", "motion"}},
                        {"magnets", "magnet", {"motion"}},
                        {"fields", "applied_field", {}},
                        {"colliders", "collider", {"motion"}}};
@@ -51,7 +52,8 @@ TEST(SceneNodes, EveryExampleSceneEntryIsANodeThatCooks) {
           entry["file"] = (file.path().parent_path() / entry["file"].get<std::string>()).string();
         Network net;
         net.addNode(kind.node, "n");
-        if (std::string(kind.node) == "particle_source") net.setParam("n", "cell_size", scene.settings.grid.dx);
+        if (std::string(kind.node) == "particle_source" || std::string(kind.node) == "particle_emitter")
+          net.setParam("n", "cell_size", scene.settings.grid.dx);
         ASSERT_NO_THROW(setParamsFromJson(net, "n", entry, concat(kind.list, "[", k, "]")))
             << kind.list << "[" << k << "]";
         const CookOutputs& out = net.cook("n");
@@ -65,6 +67,17 @@ TEST(SceneNodes, EveryExampleSceneEntryIsANodeThatCooks) {
           const auto p = std::get<std::shared_ptr<const ParticlesData>>(out.at("particles"));
           EXPECT_NEAR(p->bodies[0].shape.volume(), scene.bodies[k].shape.volume(), 1e-12);
           EXPECT_EQ(p->bodies[0].emit.particlesPerCell, scene.bodies[k].emit.particlesPerCell);
+        }
+        if (std::string(kind.node) == "particle_emitter") {
+          const auto p = std::get<std::shared_ptr<const ParticlesData>>(out.at("particles"));
+          const SceneEmitter &node = p->emitters[0], &read = scene.emitters[k];
+          EXPECT_NEAR(node.shape.volume(), read.shape.volume(), 1e-15);
+          EXPECT_EQ(node.settings.rateKind, read.settings.rateKind);
+          EXPECT_EQ(node.settings.rate, read.settings.rate);
+          EXPECT_EQ(node.settings.lattice.velocity, read.settings.lattice.velocity);
+          EXPECT_EQ(node.settings.velocityInBodyFrame, read.settings.velocityInBodyFrame);
+          EXPECT_EQ(node.settings.schedule.list(), read.settings.schedule.list());
+          EXPECT_EQ(p->particles.size(), 0u);  // it emits in the solver, over time
         }
         if (std::string(kind.node) == "magnet") {
           const auto s = std::get<std::shared_ptr<const SourcesData>>(out.at("sources"));
@@ -176,6 +189,42 @@ TEST(SceneNodes, SceneSettingsAreTheMpmSolverNodesSettings) {
     EXPECT_EQ(scene.frames, net.params("sim").getInt("time.frames"));
     EXPECT_EQ(scene.fps, net.params("sim").getFloat("time.fps"));
   }
+}
+
+// A particle_emitter node feeding an mpm_solver node emits in the solver as
+// the scene's emitter does: the same particles after the same frames.
+TEST(SceneNodes, AnEmitterNodeEmitsInTheSolverNodeAsTheSceneDoes) {
+  const char* text = R"({
+    "name": "jet",
+    "domain": { "min": [0, 0, 0], "max": [0.16, 0.1, 0.16], "dx": 0.01 },
+    "time": { "frames": 3, "fps": 50 },
+    "materials": [ { "name": "goo", "model": "fluid", "density": 1000, "viscosity": 0.5, "bulk_modulus": 2e4 } ],
+    "emitters": [ { "material": "goo", "shape": "cylinder", "center": [0.05, 0.05, 0.12], "axis": [0, 0, -1],
+                    "radius": 0.012, "half_length": 0.005, "rate": "stream", "speed": 0.6, "end": 0.04,
+                    "motion": { "velocity": [0.5, 0, 0] } } ]
+  })";
+  const Scene scene = parseScene(text, "jet.json");
+  const auto solver = buildSolver(scene);
+  for (int f = 0; f < scene.frames; ++f) solver->advanceFrame(scene.frameDuration());
+
+  Network net;
+  net.addNode("material", "goo");
+  setParamsFromJson(net, "goo", nlohmann::json::parse(R"({"name": "goo", "model": "fluid", "density": 1000,
+                    "viscosity": 0.5, "bulk_modulus": 2e4})"), "goo");
+  net.addNode("particle_emitter", "jet");
+  setParamsFromJson(net, "jet", nlohmann::json::parse(R"({"shape": "cylinder", "center": [0.05, 0.05, 0.12],
+                    "axis": [0, 0, -1], "radius": 0.012, "half_length": 0.005, "rate": "stream", "speed": 0.6,
+                    "end": 0.04, "cell_size": 0.01, "motion": {"velocity": [0.5, 0, 0]}})"), "jet");
+  net.addNode("mpm_solver", "sim");
+  setParamsFromJson(net, "sim", nlohmann::json::parse(R"({"domain": {"min": [0, 0, 0], "max": [0.16, 0.1, 0.16],
+                    "dx": 0.01}, "time": {"frames": 3, "fps": 50}})"), "sim");
+  net.connect("goo", "material", "jet", "material");
+  net.connect("jet", "particles", "sim", "particles");
+  const auto sim = std::get<std::shared_ptr<const SimulationData>>(net.cook("sim").at("simulation"));
+  const MpmParticles &a = solver->particles(), &b = sim->solver->particles();
+  ASSERT_GT(a.size(), 0u);
+  ASSERT_EQ(a.size(), b.size());
+  for (std::size_t q = 0; q < a.size(); ++q) ASSERT_EQ(a.x[q], b.x[q]) << q;
 }
 
 // A grid too large is refused by the one settings builder, before any int

@@ -90,6 +90,8 @@ struct Outcome {
   // max over substeps of E(t) - E(0) - B(t) (J; <= energyAllowance), and
   // E(t) - E(0) and B(t) at that substep.
   double energyExcess = -std::numeric_limits<double>::infinity(), growthAtExcess = 0, boundAtExcess = 0;
+  double injected = 0;  // mechanical energy the rate emitters brought in (kinetic + gravitational at emission), J
+  std::size_t blocked = 0;  // emitter points left out: space full of material or outside the domain
   double impulse = 0;  // sum of |magnetic impulse| over frames, N s
   std::vector<double> frameImpulse;  // |magnetic impulse| of each frame, N s
   std::vector<std::string> messages;
@@ -117,8 +119,16 @@ Outcome run(MpmSolver& solver, int frames, double duration) {
   o.energy0 = view.energies().total();
   const GridSpec& g = view.settings().grid;
   o.energyAllowance = 0.01 * view.particles().totalMass() * norm(view.settings().gravity) * (g.dims.k - 1) * g.dx;
+  std::uint64_t nextId = view.particles().nextId;
+  // Energy the emitters bring in with the points they add (ids from nextId on).
+  const auto countInjected = [&]() {
+    const MpmParticles& p = view.particles();
+    for (std::size_t q = 0; q < p.size(); ++q)
+      if (p.id[q] >= nextId) o.injected += 0.5 * p.mass[q] * norm2(p.v[q]) - p.mass[q] * dot(view.settings().gravity, p.x[q]);
+    nextId = p.nextId;
+  };
   const auto checkEnergy = [&](double t) {
-    const double growth = view.energies().total() - o.energy0, bound = magneticWorkBound(view, t);
+    const double growth = view.energies().total() - o.energy0 - o.injected, bound = magneticWorkBound(view, t);
     if (growth - bound > o.energyExcess) {
       o.energyExcess = growth - bound;
       o.growthAtExcess = growth;
@@ -135,6 +145,7 @@ Outcome run(MpmSolver& solver, int frames, double duration) {
       double vmax = 0;
       for (const Vec3d& v : view.particles().v) vmax = std::max(vmax, norm(v));
       o.maxCellsPerSubstep = std::max(o.maxCellsPerSubstep, vmax * dt / dx);
+      if (view.particles().nextId != nextId) countInjected();
       checkEnergy(p.time);
       return true;
     });
@@ -149,6 +160,8 @@ Outcome run(MpmSolver& solver, int frames, double duration) {
     o.removed += r.removed;
     o.clamped += r.clamped;
     o.nonFinite += r.nonFinite;
+    o.emitted += r.emitted.particles;
+    o.blocked += r.emitted.blocked + r.emitted.outside;
     o.impulse += norm(r.magneticImpulse);
     o.frameImpulse.push_back(norm(r.magneticImpulse));
     o.maxEnergy = std::max(o.maxEnergy, r.energies.total());
@@ -516,6 +529,82 @@ TEST(Stability, ParticlesLeavingTheDomainAreClampedOrRemovedAndCounted) {
       EXPECT_LT(s->particles().size(), o.emitted);
     }
   }
+}
+
+// ---------------------------------------------------------------------------
+// Emission over time (mpm/rate_emitter.h)
+
+namespace {
+// A magnetic-fluid nozzle pointing down at the top of the box, 0.5 m/s.
+RateEmitterSettings nozzle(EmissionRateKind kind, double rate) {
+  RateEmitterSettings r;
+  r.rateKind = kind;
+  r.rate = rate;
+  r.lattice.velocity = {0, 0, 0.5};
+  r.velocityInBodyFrame = true;
+  return r;
+}
+EmitterShape nozzleShape() {
+  const double c = centre();
+  return EmitterShape::cylinder(Pose::fromAxisAngle({c, c, 0.11}, {1, 0, 0}, kPi), 0.015, 0.005);
+}
+}  // namespace
+
+// An emitter whose space is already full of material (a box filling the
+// domain, the nozzle inside it) adds nothing and runs as before.
+TEST(Stability, EmitterIntoAFullDomainAddsNothing) {
+  auto s = std::make_unique<MpmSolver>(smallSettings());
+  const std::uint32_t m = s->addMaterial(ferrofluid());
+  const double c = centre();
+  s->emit(EmitterShape::box(Pose::at({c, c, c}), {0.06, 0.06, 0.06}), m, emitSettings());
+  s->addEmitter(nozzleShape(), m, nozzle(EmissionRateKind::Stream, 0));
+  s->sources().add(std::make_unique<UniformField>(Vec3d{0, 0, 1e4}));
+  const std::size_t before = s->particles().size();
+  const Outcome o = run(*s, 3, 0.01);
+  expectStable(*s, o, "emitter into a full domain");
+  EXPECT_EQ(s->particles().size(), before);
+  EXPECT_GT(o.blocked, 0u);
+}
+
+// Pouring at 100 times what the nozzle passes: the points that find the
+// nozzle full are left out, so the material grows no faster than the stream
+// carries it away and stays finite and in the box.
+TEST(Stability, EmitterAtAHundredTimesItsStreamRateIsCappedByFullSpace) {
+  auto s = std::make_unique<MpmSolver>(smallSettings());
+  const std::uint32_t m = s->addMaterial(ferrofluid());
+  RateEmitterSettings matched = nozzle(EmissionRateKind::Stream, 0);
+  matched.lattice.cellSize = kDx;
+  const double stream = RateEmitter(nozzleShape(), matched, ferrofluid(), m).volumeRate();  // m^3/s
+  s->addEmitter(nozzleShape(), m, nozzle(EmissionRateKind::VolumePerSecond, 100 * stream));
+  s->sources().add(std::make_unique<UniformField>(Vec3d{0, 0, 1e4}));
+  const Outcome o = run(*s, 4, 0.01);
+  expectStable(*s, o, "emitter at 100x its stream rate");
+  double volume = 0;
+  for (double v : s->particles().volume0) volume += v;
+  // At most what the stream passes in 0.04 s (plus the chunks in flight),
+  // where the unchecked rate would give 100 times that.
+  std::printf(
+      "[stability] emitter at 100x: %.4g m^3 emitted in 0.04 s; the stream passes %.4g m^3, the rate asks %.4g m^3; "
+      "%zu points blocked\n",
+      volume, stream * 0.04, 100 * stream * 0.04, o.blocked);
+  EXPECT_LT(volume, 1.5 * stream * 0.04 + 2 * s->emitter(0).chunkVolume());
+  EXPECT_GT(o.blocked, 10 * s->particles().size());
+}
+
+// A rate far beyond anything a substep can place is refused before a point
+// is added, with the numbers, not a memory blow-up.
+TEST(Stability, EmitterAtAHugeRateIsRefusedNamingIt) {
+  auto s = std::make_unique<MpmSolver>(smallSettings());
+  const std::uint32_t m = s->addMaterial(ferrofluid());
+  s->addEmitter(nozzleShape(), m, nozzle(EmissionRateKind::VolumePerSecond, 1e4));
+  try {
+    s->advanceFrame(0.01);
+    FAIL() << "a rate of 1e4 m^3/s was emitted";
+  } catch (const InvalidArgument& e) {
+    EXPECT_NE(std::string(e.what()).find("particles are due in one substep"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("10000 m^3/s"), std::string::npos) << e.what();
+  }
+  EXPECT_EQ(s->particles().size(), 0u);
 }
 
 TEST(Stability, EmptySceneRunsWithNoSolve) {

@@ -137,13 +137,9 @@ void EmitterSettings::validate() const {
           angularVelocity.y, ", ", angularVelocity.z, ")");
 }
 
-EmitReport emitParticles(MpmParticles& particles, const EmitterShape& shape, const MpmMaterial& material,
-                         std::uint32_t materialIndex, const EmitterSettings& settings) {
+EmitterLattice emitterLattice(const EmitterShape& shape, const EmitterSettings& settings) {
   settings.validate();
   shape.validate();
-  material.validate();
-  particles.checkSizes();
-
   const double h = settings.cellSize / std::cbrt(double(settings.particlesPerCell));
   // Lattice: cell counts and spacings per axis, and the first cell centre.
   int n[3] = {1, 1, 1};
@@ -188,15 +184,11 @@ EmitReport emitParticles(MpmParticles& particles, const EmitterShape& shape, con
   require(double(n[0]) * n[1] * n[2] <= 2e9, "emitter: ", n[0], " x ", n[1], " x ", n[2],
           " lattice cells is too many; use a larger cell size or fewer particles per cell");
 
-  const double vp = hs[0] * hs[1] * hs[2];  // m^3 per point
-  const double mp = material.density * vp;  // kg
-  const double np = material.isMagnetic() ? material.magnetic.numberDensity * vp : 0.0;
-  require(mp > 0 && std::isfinite(mp), "emitter: particle mass rho V_p = ", mp, " kg is not positive and finite");
+  EmitterLattice lattice;
+  lattice.spacing = {hs[0], hs[1], hs[2]};
+  lattice.cells = {n[0], n[1], n[2]};
+  lattice.pointVolume = hs[0] * hs[1] * hs[2];
   SplitMix64 rng{settings.seed};
-
-  EmitReport rep;
-  rep.spacing = (hs[0] + hs[1] + hs[2]) / 3;
-  const std::size_t before = particles.size();
   // Lattice cells are visited in blocks of c^3 (c = round(ppc^(1/3)), about
   // one grid cell), so the points of a cell are contiguous in memory and the
   // particle-to-grid transfer, which visits them cell by cell, reads them in
@@ -214,23 +206,49 @@ EmitReport emitParticles(MpmParticles& particles, const EmitterShape& shape, con
                 const double ox = rng.uniform() - 0.5, oy = rng.uniform() - 0.5, oz = rng.uniform() - 0.5;
                 xb += settings.jitter * Vec3d{ox * hs[0], oy * hs[1], oz * hs[2]};
               }
-              const Vec3d x = shape.pose.toWorld(xb);
-              const Vec3d v = settings.velocity + cross(settings.angularVelocity, x - shape.pose.position);
-              const std::size_t q = particles.add(x, v, mp, vp, np, materialIndex);
-              // The affine matrix is the velocity gradient of the spin, [w]x, so the
-              // first P2G carries the rigid rotation exactly (APIC).
-              Mat3d& C = particles.C[q];
-              const Vec3d& w = settings.angularVelocity;
-              C(0, 1) = -w.z;
-              C(0, 2) = w.y;
-              C(1, 0) = w.z;
-              C(1, 2) = -w.x;
-              C(2, 0) = -w.y;
-              C(2, 1) = w.x;
-              rep.volume += vp;
-              rep.mass += mp;
-              rep.count += np;
+              lattice.points.push_back(xb);
             }
+  return lattice;
+}
+
+EmittedPoint emittedPoint(const MpmMaterial& material, double volume) {
+  EmittedPoint e;
+  e.volume = volume;
+  e.mass = material.density * volume;
+  e.count = material.isMagnetic() ? material.magnetic.numberDensity * volume : 0.0;
+  require(e.mass > 0 && std::isfinite(e.mass), "emitter: particle mass rho V_p = ", e.mass,
+          " kg is not positive and finite");
+  return e;
+}
+
+EmitReport emitParticles(MpmParticles& particles, const EmitterShape& shape, const MpmMaterial& material,
+                         std::uint32_t materialIndex, const EmitterSettings& settings) {
+  material.validate();
+  particles.checkSizes();
+  const EmitterLattice lattice = emitterLattice(shape, settings);
+  const EmittedPoint point = emittedPoint(material, lattice.pointVolume);
+
+  EmitReport rep;
+  rep.spacing = (lattice.spacing.x + lattice.spacing.y + lattice.spacing.z) / 3;
+  const std::size_t before = particles.size();
+  const Vec3d& w = settings.angularVelocity;
+  for (const Vec3d& xb : lattice.points) {
+    const Vec3d x = shape.pose.toWorld(xb);
+    const Vec3d v = settings.velocity + cross(w, x - shape.pose.position);
+    const std::size_t q = particles.add(x, v, point.mass, point.volume, point.count, materialIndex);
+    // The affine matrix is the velocity gradient of the spin, [w]x, so the
+    // first P2G carries the rigid rotation exactly (APIC).
+    Mat3d& C = particles.C[q];
+    C(0, 1) = -w.z;
+    C(0, 2) = w.y;
+    C(1, 0) = w.z;
+    C(1, 2) = -w.x;
+    C(2, 0) = -w.y;
+    C(2, 1) = w.x;
+    rep.volume += point.volume;
+    rep.mass += point.mass;
+    rep.count += point.count;
+  }
   rep.particles = particles.size() - before;
   return rep;
 }

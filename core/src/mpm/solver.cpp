@@ -156,6 +156,9 @@ std::string MpmFrameReport::summary() const {
      << "), pushed out of colliders " << projected << "\n";
   if (dtLimitedByColliders)
     os << dtLimitedByColliders << " substep(s) shortened so that no particle crosses a collider's half-thickness\n";
+  if (emitted.chunks > 0)
+    os << "emitted " << emitted.particles << " particles (" << emitted.volume << " m^3) in " << emitted.chunks
+       << " chunks; " << emitted.blocked << " points blocked by material, " << emitted.outside << " outside\n";
   os << "energy: kinetic " << energies.kinetic << " J, gravitational " << energies.gravitational << " J, elastic "
      << energies.elastic << " J, total " << energies.total() << " J\n";
   for (const auto& w : warnings) os << "warning: " << w << "\n";
@@ -197,6 +200,31 @@ EmitReport MpmSolver::emit(const EmitterShape& shape, std::uint32_t material, Em
           " materials)");
   if (settings.cellSize == 0) settings.cellSize = settings_.grid.dx;
   return emitParticles(particles_, shape, materials_[material], material, settings);
+}
+
+std::size_t MpmSolver::addEmitter(const EmitterShape& shape, std::uint32_t material, RateEmitterSettings settings) {
+  require(material < materials_.size(), "MPM solver: material index ", material, " out of range (", materials_.size(),
+          " materials)");
+  if (settings.lattice.cellSize == 0) settings.lattice.cellSize = settings_.grid.dx;
+  emitters_.emplace_back(shape, settings, materials_[material], material);
+  return emitters_.size() - 1;
+}
+
+const RateEmitter& MpmSolver::emitter(std::size_t i) const {
+  require(i < emitters_.size(), "MPM solver: emitter ", i, " out of range (", emitters_.size(), " emitters)");
+  return emitters_[i];
+}
+
+void MpmSolver::emitFromEmitters(double dt, MpmStepReport& rep) {
+  if (emitters_.empty()) return;
+  const ParticleBounds bounds = domainBounds();
+  for (const RateEmitter& e : emitters_) rep.emitted += e.emitBetween(particles_, time_, time_ + dt, bounds);
+}
+
+double MpmSolver::maxEmissionSpeed() const {
+  double speed = 0;
+  for (const RateEmitter& e : emitters_) speed = std::max(speed, e.emissionSpeed(time_, time_ + settings_.dtMax));
+  return speed;
 }
 
 std::size_t MpmSolver::addCollider(const MpmCollider& collider) {
@@ -323,7 +351,7 @@ double MpmSolver::cflDt(double cfl, bool bound) const {
     nu = std::max(nu, m.kinematicViscosity());
   }
   const double dx = settings_.grid.dx;
-  const double speed = vmax + c;
+  const double speed = std::max(vmax, maxEmissionSpeed()) + c;  // material about to be emitted counts
   // The crossing limit of thin colliders (the projection after advection
   // pushes a particle back out through the face it entered by only while it
   // is less than the half-thickness deep).
@@ -736,6 +764,8 @@ MpmStepReport MpmSolver::step(double dt) {
   ++stepsSinceSolve_;
   if (!removedAfterP2G && particleReorderDue(settings_.reorderInterval, substeps_))
     reorderParticles(grid_.binnedOrder(), particles_, reuse_);
+  // 8. The rate emitters: the chunks born in (t, t + dt], at their place at t + dt.
+  emitFromEmitters(dt, rep);
   rep.secondsG2P = secondsSince(t);
 
   time_ += dt;
@@ -871,6 +901,7 @@ MpmFrameReport MpmSolver::advanceFrame(double frameDuration, const MpmProgressCa
     fr.removed += r.removed;
     fr.nonFinite += r.nonFinite;
     fr.projected += r.projected;
+    fr.emitted += r.emitted;
     if (r.magneticSolved) {
       if (!r.magnetic.converged())
         fr.warnings.push_back(

@@ -8,6 +8,7 @@
 #include "lodestone/core/base/pose.h"
 #include "lodestone/core/mpm/collider.h"
 #include "lodestone/core/mpm/emitter.h"
+#include "lodestone/core/mpm/rate_emitter.h"
 #include "lodestone/core/mpm/sampled_sdf.h"
 #include "lodestone/core/mpm/solver.h"
 #include "lodestone/core/sources/field_source.h"
@@ -36,6 +37,19 @@ EmitterShape shapeFrom(const ParamSet& params);
 /// The emission of particle_source parameters (cell_size, particles_per_cell,
 /// jitter, seed, velocity).
 EmitterSettings emitterSettingsFrom(const ParamSet& params);
+
+/// The emission of particle_emitter parameters: the lattice (cell_size,
+/// particles_per_cell, jitter, seed), the rate (rate, volume_rate,
+/// particle_rate), the velocity (velocity in the world frame, or speed along
+/// the axis), inherit_motion and the time line (start and end, or
+/// intervals), with the emitter's `motion`. Throws InvalidArgument naming a
+/// bad time line.
+RateEmitterSettings rateEmitterSettingsFrom(const ParamSet& params, const ColliderMotion& motion);
+
+/// The material points an emitter adds by time `duration` (s) when none is
+/// blocked, estimated from volumes before its lattice is built (for the
+/// memory check): its points per second times its on-time, plus one chunk.
+double estimatedEmittedParticles(const EmitterShape& shape, const RateEmitterSettings& settings, double duration);
 
 /// The MPM material of material parameters (model, density, moduli, magnetic.*).
 MpmMaterial materialFrom(const ParamSet& params);

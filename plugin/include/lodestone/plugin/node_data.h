@@ -14,6 +14,7 @@
 #include "lodestone/core/mpm/emitter.h"
 #include "lodestone/core/mpm/material.h"
 #include "lodestone/core/mpm/particles.h"
+#include "lodestone/core/mpm/rate_emitter.h"
 
 namespace lodestone {
 inline namespace mpm {
@@ -42,9 +43,18 @@ struct ParticlesData {
     EmitterShape shape;
     EmitterSettings emit;
   };
+  /// A source that emits material over time (a particle_emitter node; the
+  /// scene's `emitters`); the MPM solver node adds it to the solver.
+  struct Emitter {
+    std::string name;
+    std::uint32_t material = 0;  ///< index into materials
+    EmitterShape shape;          ///< at its rest pose
+    RateEmitterSettings settings;
+  };
   std::vector<Body> bodies;
+  std::vector<Emitter> emitters;
   MpmParticles particles;
-  std::vector<MpmMaterial> materials;  ///< indexed by particles.material
+  std::vector<MpmMaterial> materials;  ///< indexed by particles.material and Emitter::material
 };
 
 /// Applied-field sources: fields (uniform, dipole, VDB...) and magnets, which

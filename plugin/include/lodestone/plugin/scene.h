@@ -1,12 +1,13 @@
 #pragma once
 // Scene files: a JSON description of an MLS-MPM simulation with magnetism
-// (domain, materials, bodies, magnets, applied fields, colliders, time
-// stepping, outputs), read strictly (json_reader.h): unknown keys, wrong
+// (domain, materials, bodies, emitters, magnets, applied fields, colliders,
+// time stepping, outputs), read strictly (json_reader.h): unknown keys, wrong
 // types and out-of-range values are rejected with the path of the entry and
 // what was expected. The format is documented in docs/scenes.md. A scene is a
 // network of the node library's nodes (docs/nodes.md) written out: the
-// entries of materials, bodies, magnets, fields and colliders are material,
-// particle_source, magnet, applied_field and collider nodes, and the domain,
+// entries of materials, bodies, emitters, magnets, fields and colliders are
+// material, particle_source, particle_emitter, magnet, applied_field and
+// collider nodes, and the domain,
 // time, gravity and magnetic objects are the mpm_solver node's settings;
 // their keys are those nodes' declared parameters, read and checked from the
 // declarations (param_json.h) and built by the nodes' own builders
@@ -33,6 +34,9 @@ struct SceneBody {
   EmitterShape shape;
   EmitterSettings emit;
 };
+
+/// A source emitting material over time (a particle_emitter node).
+using SceneEmitter = ParticlesData::Emitter;
 
 /// A permanent magnet: a field source, and an obstacle for the material
 /// unless `collider` is false (what a magnet node gives).
@@ -62,6 +66,7 @@ struct Scene {
   std::vector<std::string> materialNames;
   std::vector<MpmMaterial> materials;
   std::vector<SceneBody> bodies;
+  std::vector<SceneEmitter> emitters;
   std::vector<SceneMagnet> magnets;
   FieldSourceSet fields;
   std::vector<MpmCollider> colliders;
@@ -103,8 +108,10 @@ Scene loadScene(const std::string& path, const SceneOptions& options = {});
 /// relative file paths are resolved against).
 Scene parseScene(const std::string& text, const std::string& sourceName, const SceneOptions& options = {});
 
-/// A solver with the scene's materials, bodies, magnets, fields and colliders
-/// (the particles emitted at the scene's dx).
+/// A solver with the scene's materials, bodies, emitters, magnets, fields and
+/// colliders (the particles emitted at the scene's dx). Throws
+/// InvalidArgument for a body wholly outside the domain, or an emitter whose
+/// centre is outside it when it first switches on.
 std::unique_ptr<MpmSolver> buildSolver(const Scene& scene);
 
 }  // namespace lodestone::plugin

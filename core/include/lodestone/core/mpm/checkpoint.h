@@ -12,7 +12,9 @@
 // (A) when a stage exists. Colliders and
 // magnets move by analytic motions of time, so time restores them; the
 // materials, colliders and sources come from the scene and are checked by
-// count and grid. The restored stage (on its saved grid) starts its next
+// count and grid. Rate emitters need no state either: the chunks they have
+// emitted by time t are a function of t (mpm/rate_emitter.h), and what they
+// emitted is in the particles. The restored stage (on its saved grid) starts its next
 // solve from phi = 0:
 // callers that want a resumed run to repeat the uninterrupted one bit for bit
 // call MpmSolver::resetMagneticWarmStart() after saving (the saved phi is

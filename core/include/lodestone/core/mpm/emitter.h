@@ -24,9 +24,11 @@
 #include <cstddef>
 #include <cstdint>
 #include <memory>
+#include <vector>
 
 #include "lodestone/core/mpm/material.h"
 #include "lodestone/core/mpm/particles.h"
+#include "lodestone/core/base/grid.h"
 #include "lodestone/core/base/pose.h"
 #include "lodestone/core/mpm/sampled_sdf.h"
 
@@ -75,6 +77,26 @@ struct EmitReport {
   double count = 0;           ///< sum of n_p (micro-particles)
   double spacing = 0;         ///< lattice spacing h, m (mean over axes for boxes)
 };
+
+/// The lattice of an emission in the shape's body frame: the (jittered)
+/// points inside the shape, in the order emitParticles adds them.
+struct EmitterLattice {
+  std::vector<Vec3d> points;  ///< body frame, m
+  Vec3d spacing;              ///< lattice spacing per body axis, m
+  Index3 cells;               ///< lattice cells per body axis (of the shape's bounding box)
+  double pointVolume = 0;     ///< V_p of each point, m^3
+};
+
+/// The lattice emitParticles fills `shape` with (validates both arguments).
+EmitterLattice emitterLattice(const EmitterShape& shape, const EmitterSettings& settings);
+
+/// Volume (m^3), mass rho V_p (kg) and micro-particles n0 V_p of one point.
+struct EmittedPoint {
+  double volume = 0, mass = 0, count = 0;
+};
+/// The point of `volume` (m^3) of `material`; throws InvalidArgument for a
+/// mass that is not positive and finite.
+EmittedPoint emittedPoint(const MpmMaterial& material, double volume);
 
 /// Appends points filling `shape` to `particles` with material index
 /// `materialIndex` (whose parameters are `material`). Throws InvalidArgument

@@ -79,6 +79,7 @@
 #include "lodestone/core/mpm/grid.h"
 #include "lodestone/core/mpm/material.h"
 #include "lodestone/core/mpm/particles.h"
+#include "lodestone/core/mpm/rate_emitter.h"
 
 namespace lodestone {
 inline namespace mpm {
@@ -169,6 +170,7 @@ struct MpmStepReport {
   std::size_t nonFinite = 0;     ///< of the removed, those with a non-finite state
   std::size_t projected = 0;     ///< particles pushed out of a collider (MpmSettings::colliderProjection)
   double maxSpeed = 0;           ///< max |v_p| after G2P, m/s
+  RateEmitReport emitted;        ///< what the rate emitters added (8.)
 };
 
 /// Outcome of advanceFrame.
@@ -185,6 +187,7 @@ struct MpmFrameReport {
   std::size_t clamped = 0, removed = 0, nonFinite = 0;
   std::size_t projected = 0;  ///< particle pushes out of colliders, summed over the substeps
   int dtLimitedByColliders = 0;  ///< substeps whose CFL step was set by a collider's thickness
+  RateEmitReport emitted;  ///< what the rate emitters added, summed over the substeps
   MpmEnergies energies;    ///< at the end of the frame
   bool cancelled = false;  ///< the progress callback asked to stop
   std::vector<std::string> warnings;
@@ -226,6 +229,12 @@ class MpmSolver {
   /// Fills a shape with particles of material `material` (an index from
   /// addMaterial); a zero settings.cellSize means the MPM grid's dx.
   EmitReport emit(const EmitterShape& shape, std::uint32_t material, EmitterSettings settings);
+
+  /// Adds a source that emits material of `material` over time (mpm/rate_emitter.h);
+  /// a zero settings.lattice.cellSize means the MPM grid's dx. Returns its index.
+  std::size_t addEmitter(const EmitterShape& shape, std::uint32_t material, RateEmitterSettings settings);
+  std::size_t emitterCount() const { return emitters_.size(); }
+  const RateEmitter& emitter(std::size_t i) const;
 
   std::size_t addCollider(const MpmCollider& collider);
   std::size_t colliderCount() const { return colliders_.size(); }
@@ -337,6 +346,8 @@ class MpmSolver {
   std::size_t projectOutOfColliders(double dt, std::size_t& outside);  // particles pushed out; outside: now beyond the domain
   double maxParticleSpeed() const;                     // m/s
   void solveMagnetic(MpmStepReport& rep);
+  void emitFromEmitters(double dt, MpmStepReport& rep);  // 8.
+  double maxEmissionSpeed() const;                       // m/s, of the emitters on within the next dtMax
   bool lastSolveHolds();  // the planner's reuse test (field_reuse.h); poses the magnets when it samples the field
   bool isMagneticPoint(std::size_t p) const;    // a particle with n_p > 0 of a magnetic material
   const MagneticMaterial* magneticLaw() const;  // the (shared) law of the magnetic materials, or null
@@ -352,6 +363,7 @@ class MpmSolver {
   MpmParticles particles_;
   std::vector<MpmMaterial> materials_;
   std::vector<MpmCollider> colliders_;
+  std::vector<RateEmitter> emitters_;
   FieldSourceSet sources_;
   std::vector<std::unique_ptr<MagnetSource>> magnets_;
   static constexpr std::size_t kNoCollider = ~std::size_t(0);
