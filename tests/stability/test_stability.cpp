@@ -465,7 +465,8 @@ TEST(Stability, ThinPlateHoldsASoftFluidPulledByAMagnetAndAFastFall) {
     s->sources().add(SphereMagnet(Pose::at({c, c, 0.025}), 0.02, {0, 0, magnetizationFromRemanence(1.2)}));
     const Outcome o = run(*s, 3, 0.01);
     expectStable(*s, o, "soft fluid pulled onto a 2 mm plate");
-    EXPECT_EQ(countBelow(*s, top - 1e-9), 0u) << "fluid entered or crossed the plate";
+    // No deeper into the plate than the allowance (half its 1 mm half-thickness).
+    EXPECT_EQ(countBelow(*s, top - 0.0005 - 1e-9), 0u) << "fluid went deep into the plate or through it";
   }
   {
     // A fixed dt of 1 ms, a block falling at 4 m/s onto the plate: the

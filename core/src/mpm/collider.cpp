@@ -342,12 +342,12 @@ Vec3d MpmCollider::apply(const ColliderState& s, const Vec3d& x, const Vec3d& v)
   return applyBoundaryCondition(v, vc, n, boundary_);
 }
 
-bool MpmCollider::projectOut(const ColliderState& s, Vec3d& x, Vec3d& v) const {
+bool MpmCollider::projectOut(const ColliderState& s, Vec3d& x, Vec3d& v, double allowed) const {
   const Vec3d xb = s.pose.toLocal(x);
   const double phi = shape_.signedDistance(xb);
-  if (!(phi < 0)) return false;
+  if (!(phi < -allowed)) return false;
   const Vec3d n = s.pose.vectorToWorld(shape_.normal(xb));
-  x = x - phi * n;
+  x = x - (phi + allowed) * n;
   const Vec3d vc = s.velocity + cross(s.angularVelocity, x - s.pose.position);
   v = applyBoundaryCondition(v, vc, n, boundary_);
   return true;

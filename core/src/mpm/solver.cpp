@@ -328,7 +328,8 @@ double MpmSolver::colliderCrossingDt() const {
   const double vmax = maxParticleSpeed();
   const GridSpec& g = settings_.grid;
   const Vec3d lo = g.origin, hi = g.maxCorner();
-  for (const MpmCollider& c : colliders_) {
+  for (std::size_t k = 0; k < colliders_.size(); ++k) {
+    const MpmCollider& c = colliders_[k];
     const double half = c.shape().halfThickness();
     if (!std::isfinite(half)) continue;
     const ColliderState st = c.stateAt(time_);
@@ -338,9 +339,13 @@ double MpmSolver::colliderCrossingDt() const {
       reach = std::max(reach, norm(x - st.pose.position));
     }
     const double speed = vmax + norm(st.velocity) + norm(st.angularVelocity) * reach;
-    if (speed > 0) dt = std::min(dt, half / speed);
+    if (speed > 0) dt = std::min(dt, (half - colliderAllowance(k)) / speed);
   }
   return dt;
+}
+
+double MpmSolver::colliderAllowance(std::size_t c) const {
+  return std::min(0.5 * settings_.grid.dx, 0.5 * collider(c).shape().halfThickness());
 }
 
 double MpmSolver::cflDt(double cfl, bool bound) const {
@@ -827,7 +832,11 @@ std::size_t MpmSolver::projectOutOfColliders(double dt, std::size_t& outside) {
   if (colliders_.empty()) return 0;
   // The colliders where the grid update placed them: at the end of the substep.
   std::vector<ColliderState> states(colliders_.size());
-  for (std::size_t c = 0; c < colliders_.size(); ++c) states[c] = colliders_[c].stateAt(time_ + dt);
+  std::vector<double> allowed(colliders_.size());
+  for (std::size_t c = 0; c < colliders_.size(); ++c) {
+    states[c] = colliders_[c].stateAt(time_ + dt);
+    allowed[c] = colliderAllowance(c);
+  }
   const ParticleBounds bounds = domainBounds();
   Vec3d* X = particles_.x.data();
   Vec3d* V = particles_.v.data();
@@ -842,7 +851,7 @@ std::size_t MpmSolver::projectOutOfColliders(double dt, std::size_t& outside) {
   const Count n = deterministicSum<Count>(particles_.size(), [&](std::size_t p) {
     Count k;
     for (std::size_t c = 0; c < colliders_.size(); ++c) {
-      if (!colliders_[c].projectOut(states[c], X[p], V[p])) continue;
+      if (!colliders_[c].projectOut(states[c], X[p], V[p], allowed[c])) continue;
       ++k.pushed;
       const Vec3d& x = X[p];
       if (x.x < bounds.lo.x || x.y < bounds.lo.y || x.z < bounds.lo.z || x.x > bounds.hi.x || x.y > bounds.hi.y ||

@@ -281,13 +281,14 @@ class MpmCollider {
   /// As the above, with the state evaluated once (for loops over nodes).
   double signedDistance(const ColliderState& s, const Vec3d& x) const;
   Vec3d apply(const ColliderState& s, const Vec3d& x, const Vec3d& v) const;
-  /// A particle at x (m) with velocity v (m/s) found inside the solid
-  /// (phi < 0) at state s is moved out along the normal by -phi, onto the
-  /// surface, and the boundary condition is applied to its velocity relative
-  /// to the collider there. Returns false, changing nothing, when x is not
-  /// inside. This is what keeps particles out of walls thinner than the
-  /// grid's reach (MpmSolver's collider projection).
-  bool projectOut(const ColliderState& s, Vec3d& x, Vec3d& v) const;
+  /// A particle at x (m) with velocity v (m/s) found deeper than `allowed`
+  /// (m, >= 0) inside the solid (phi < -allowed) at state s is moved out
+  /// along the normal to that depth (phi = -allowed; 0: onto the surface),
+  /// and the boundary condition is applied to its velocity relative to the
+  /// collider there. Returns false, changing nothing, otherwise. This is
+  /// what keeps particles out of walls thinner than the grid's reach
+  /// (MpmSolver's collider projection).
+  bool projectOut(const ColliderState& s, Vec3d& x, Vec3d& v, double allowed = 0.0) const;
 
  private:
   ColliderShape shape_;

@@ -17,8 +17,8 @@
 //      and the domain walls' boundary conditions;
 //   5-7. G2P (APIC), MLS update of F or J, advection (mpm/grid.h); advected
 //      particles leaving the domain are clamped or removed, non-finite ones
-//      removed, and counted in the report; particles that ended inside a
-//      collider are pushed back onto its surface (colliderProjection).
+//      removed, and counted in the report; particles that ended deeper
+//      inside a collider than its allowance are pushed back (colliderProjection).
 //      Every `reorderInterval` substeps
 //      the particles are then sorted by cell (mpm/particle_order.h).
 //
@@ -125,17 +125,21 @@ struct MpmSettings {
   /// extra pass over the particles and the active grid per substep.
   bool checkFinite = false;
 
-  /// After advection, particles found inside a collider are pushed back onto
-  /// its surface along the normal, with the collider's boundary condition
-  /// applied to their velocity (MpmCollider::projectOut), and the substep is
-  /// limited so that no particle moves, relative to a collider, more than
-  /// the collider's thinnest half-thickness (ColliderShape::halfThickness)
-  /// in one substep: material then cannot cross a wall however thin it is or
-  /// however hard it is pushed. Off: only the grid nodes inside a collider
-  /// see its boundary condition, which holds for walls a few cells thick
-  /// and gentle loads but lets strongly pushed material seep into walls and
-  /// through walls thinner than about two cells. One signed-distance
-  /// evaluation per particle and collider per substep.
+  /// After advection, particles found deeper inside a collider than
+  /// colliderAllowance() are pushed back out along the normal to that depth,
+  /// with the collider's boundary condition applied to their velocity
+  /// (MpmCollider::projectOut), and the substep is limited so that no
+  /// particle moves, relative to a collider, more than the rest of the
+  /// collider's thinnest half-thickness (ColliderShape::halfThickness) in
+  /// one substep: material then cannot cross a wall however thin it is or
+  /// however hard it is pushed. The allowance leaves the shallow contact
+  /// layer to the grid's boundary condition, so that moving particles
+  /// (which does not change their deformation) does not set a pressed
+  /// elastic body. Off: only the grid nodes inside a collider see its
+  /// boundary condition, which holds for walls a few cells thick and gentle
+  /// loads but lets strongly pushed material seep into walls and through
+  /// walls thinner than about two cells. One signed-distance evaluation per
+  /// particle and collider per substep.
   bool colliderProjection = true;
 
   /// Throws InvalidArgument naming the first bad value.
@@ -275,12 +279,17 @@ class MpmSolver {
   /// it (counted in MpmFrameReport::dtLimitedByCfl, with a warning).
   double stabilityLimitDt() const;
   /// The time (s) in which the fastest particle, relative to a collider's
-  /// fastest point, would cross the collider's thinnest half-thickness:
-  /// min over colliders of halfThickness / (max|v_p| + |v_c| + |w_c| r),
+  /// fastest point, would cross the collider's thinnest half-thickness less
+  /// its allowance: min over colliders of (halfThickness - allowance) /
+  /// (max|v_p| + |v_c| + |w_c| r),
   /// r the distance from the collider's origin to the farthest domain
   /// corner. Infinite without colliders, with only planes and inverted
   /// analytic shapes, or when nothing moves.
   double colliderCrossingDt() const;
+  /// How deep (m) particles may lie inside collider `c` before the
+  /// projection moves them: min(dx / 2, halfThickness / 2), the depth the
+  /// grid's boundary condition alone lets material seep to.
+  double colliderAllowance(std::size_t c) const;
   /// One substep of dt (s, finite, > 0).
   MpmStepReport step(double dt);
   /// Substeps until the time has advanced by frameDuration (s); the last
