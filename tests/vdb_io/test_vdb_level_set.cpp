@@ -440,13 +440,8 @@ TEST(VdbLevelSet, SceneShapesFromFiles) {
       {"shape": "level_set", "file": "ball.vdb", "grid": "ball", "center": [0.1, 0.1, 0.1], "boundary": "slip"}
     ]
   })";
+  // Without readers installed the scene uses the node library's (vdb_io's).
   plugin::SceneOptions options;
-  options.loaders.levelSet = [](const std::string& p, const std::string& grid) {
-    return std::make_shared<const SampledSdf>(readLevelSetVdb(p, grid));
-  };
-  options.loaders.mesh = [](const std::string& p, double voxel) {
-    return std::make_shared<const SampledSdf>(levelSetFromObj(p, voxel));
-  };
   const std::string source = (dir / "scene.json").string();
   const plugin::Scene scene = plugin::parseScene(text, source, options);
   ASSERT_EQ(scene.bodies.size(), 2u);
@@ -458,11 +453,24 @@ TEST(VdbLevelSet, SceneShapesFromFiles) {
   EXPECT_NEAR(scene.colliders[0].signedDistance({0.1, 0.1, 0.1}, 0.0), -0.0075, 1e-6);  // -background (3 voxels)
   const auto solver = plugin::buildSolver(scene);
   EXPECT_GT(solver->particles().size(), 100u);
-  // Errors name the scene entry and the file; without readers the shapes are refused.
+  // Errors name the scene entry and the file.
   std::string wrongGrid = text;
   wrongGrid.replace(wrongGrid.find("\"grid\": \"ball\""), 14, "\"grid\": \"cube\"");
   expectMessageNames([&] { plugin::parseScene(wrongGrid, source, options); }, {"bodies[0]", "ball.vdb", "'cube'"});
-  expectMessageNames([&] { plugin::parseScene(text, source, {}); }, {"bodies[0]", "OpenVDB"});
+  // A host's own readers, when installed, are used instead (here: counted).
+  int levelSets = 0, meshes = 0;
+  options.loaders.levelSet = [&](const std::string& p, const std::string& grid) {
+    ++levelSets;
+    return std::make_shared<const SampledSdf>(readLevelSetVdb(p, grid));
+  };
+  options.loaders.mesh = [&](const std::string& p, double voxel) {
+    ++meshes;
+    return std::make_shared<const SampledSdf>(levelSetFromObj(p, voxel));
+  };
+  const plugin::Scene hosted = plugin::parseScene(text, source, options);
+  EXPECT_EQ(levelSets, 2);
+  EXPECT_EQ(meshes, 1);
+  EXPECT_EQ(hosted.bodies[0].shape.volume(), scene.bodies[0].shape.volume());
 }
 #endif
 
