@@ -62,6 +62,17 @@ namespace {
 // MPM cost per particle and substep (P2G, grid update, G2P), s: measured on
 // the spike scene (13,392 particles, 2.5 ms a substep on 2 cores).
 constexpr double kSecondsPerParticleSubstep = 1.9e-7;
+// The elastoplastic solid's substep costs about 4 times that (two 3x3
+// eigen-decompositions per particle; docs/accuracy_vs_time.md).
+constexpr double kElastoplasticCostFactor = 4;
+
+// The MPM cost per particle and substep of the scene's costliest material, s.
+double secondsPerParticleSubstep(const MpmSolver& solver) {
+  double factor = 1;
+  for (const MpmMaterial& m : solver.materials())
+    if (m.model == MpmModel::ElastoplasticSolid) factor = std::max(factor, kElastoplasticCostFactor);
+  return factor * kSecondsPerParticleSubstep;
+}
 
 // Smallest half-width (m) of the bounding box of the magnetic material; 0 when there is none.
 double magneticHalfWidth(const MpmSolver& solver) {
@@ -215,7 +226,7 @@ void printPlan(const plugin::Scene& scene, const MpmSolver& solver, std::FILE* o
 
   // Run time: the MPM substeps plus the field solves.
   const double mpmSeconds =
-      kSecondsPerParticleSubstep * (double(solver.particles().size()) + emittedMean) * substeps;
+      secondsPerParticleSubstep(solver) * (double(solver.particles().size()) + emittedMean) * substeps;
   std::fprintf(out, "  %.4g substeps per frame (%s = %.3g s)", substeps,
                scene.settings.fixedDt > 0 ? "time.dt" : "first CFL step", solver.suggestedDt());
   if (magnetic) {
