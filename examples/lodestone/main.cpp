@@ -244,12 +244,17 @@ std::string substepText(const Scene& scene, const MpmSolver& solver) {
   return text;
 }
 
-/// Refuses a time step that needs more than --max-substeps substeps per frame.
+/// Refuses a time step that needs more than --max-substeps (or the scene's
+/// time.max_substeps) substeps per frame.
 void checkSubsteps(const Args& a, const Scene& scene, const MpmSolver& solver) {
   if (substepsPerFrame(scene, solver) > double(a.maxSubsteps))
     throw InvalidArgument(concat(a.scene, ": ", substepText(scene, solver), ", more than --max-substeps ",
                                  a.maxSubsteps, ": raise time.dt (or lower the scene's stiffness), or allow them with "
                                                 "--max-substeps N"));
+  const int limit = scene.settings.maxSubsteps;
+  if (limit > 0 && substepsPerFrame(scene, solver) > double(limit))
+    throw InvalidArgument(concat(a.scene, ": ", substepText(scene, solver), ", more than time.max_substeps ", limit,
+                                 ": raise time.dt (or lower the scene's stiffness), or raise time.max_substeps"));
 }
 
 void printSceneSummary(const Scene& scene, const MpmSolver& solver) {

@@ -55,7 +55,8 @@ std::string emitterTimeline(const plugin::Scene& scene, const MpmSolver& solver,
 }
 
 double substepsPerFrame(const plugin::Scene& scene, const MpmSolver& solver) {
-  return std::ceil(scene.frameDuration() / solver.suggestedDt() - 1e-9);
+  return std::max(std::ceil(scene.frameDuration() / solver.suggestedDt() - 1e-9),
+                  double(scene.settings.minSubsteps));
 }
 
 namespace {

@@ -315,6 +315,11 @@ MpmSettings mpmSettingsFrom(const ParamSet& p, double particles) {
   s.fixedDt = p.getFloat("time.dt");
   s.cfl = p.getFloat("time.cfl");
   s.dtMax = p.getFloat("time.dt_max");
+  s.minSubsteps = int(p.getInt("time.min_substeps"));
+  s.maxSubsteps = int(p.getInt("time.max_substeps"));
+  if (s.maxSubsteps > 0 && s.maxSubsteps < s.minSubsteps)
+    throw InvalidArgument(concat("time.max_substeps = ", s.maxSubsteps, " is below time.min_substeps = ",
+                                 s.minSubsteps, " (0: no limit)"));
   s.magneticSolveInterval = int(p.getInt("time.field_solve_every"));
   s.magneticSolveDistance = p.getFloat("time.field_solve_distance");
   s.gravity = p.getVec3("gravity");

@@ -624,6 +624,11 @@ NodeDecl mpmSolverNode() {
   q.push_back(range(floatParam("time.dt", "Time step", 0.0, "s", "Fixed substep; 0: CFL-adaptive."), 0, 1));
   q.push_back(range(floatParam("time.cfl", "CFL", 0.4, "", "Fraction of a cell crossed per substep."), 0.01, 1));
   q.push_back(positive(floatParam("time.dt_max", "Largest step", 1e-3, "s", "Largest CFL substep.")));
+  q.push_back(intParam("time.min_substeps", "Min substeps", 1, 1, 1000000,
+                       "Substeps per frame at the least (the step is at most the frame over this)."));
+  q.push_back(intParam("time.max_substeps", "Max substeps", 0, 0, 100000000,
+                       "Substeps per frame at the most; a frame that needs more stops the run with a message naming "
+                       "the step and the fastest particle (0: no limit)."));
   q.push_back(intParam("time.field_solve_every", "Solve interval", 0, 0, 1000000,
                        "Substeps between field solves; 0: automatic (see time.field_solve_distance)."));
   q.push_back(range(floatParam("time.field_solve_distance", "Solve distance", 0.25, "cells",

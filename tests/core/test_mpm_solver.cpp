@@ -291,3 +291,63 @@ TEST(MpmSolver, ParticlesLeavingTheDomainAreClampedOrRemovedAndCounted) {
     }
   }
 }
+
+TEST(MpmSolver, SubstepsPerFrameStayWithinTheLimits) {
+  // A stiff block (c = sqrt((lambda + 2 mu)/rho) = 11.6 m/s for E = 1e5 Pa,
+  // nu = 0.3, rho = 1000 kg/m^3) on a 1 cm grid: the CFL step is 0.4 cm /
+  // 11.6 m/s = 0.345 ms, 121 substeps in a 1/24 s frame (no gravity: the
+  // block stays at rest and the step stays the same).
+  MpmSettings s;
+  s.grid = boxGrid(16, 0.01);
+  s.gravity = {0, 0, 0};
+  const auto block = [](MpmSolver& solver) {
+    const std::uint32_t m = solver.addMaterial(neoHookeanSolid(1e5, 0.3, 1000));
+    solver.emit(EmitterShape::box(Pose::at({0.075, 0.075, 0.05}), {0.03, 0.03, 0.03}), m, {});
+  };
+  const double frame = 1.0 / 24;
+  {
+    MpmSolver free(s);
+    block(free);
+    const MpmFrameReport r = free.advanceFrame(frame);
+    EXPECT_NEAR(r.substeps, std::ceil(frame / (0.4 * 0.01 / std::sqrt((1e5 * 0.3 / (1.3 * 0.4) + 1e5 / 1.3) / 1000))),
+                2);
+  }
+  {
+    // At least 500 substeps: no step longer than frame / 500, and no more
+    // substeps than that needs.
+    MpmSettings m = s;
+    m.minSubsteps = 500;
+    MpmSolver fine(m);
+    block(fine);
+    const MpmFrameReport r = fine.advanceFrame(frame);
+    EXPECT_LE(r.maxDt, frame / 500 * (1 + 1e-12));
+    EXPECT_GE(r.substeps, 500);
+    EXPECT_LE(r.substeps, 501);
+  }
+  {
+    // At most 50: the frame stops with a message naming the limit, the
+    // step and the fastest particle; the solver holds a consistent state.
+    MpmSettings m = s;
+    m.maxSubsteps = 50;
+    MpmSolver capped(m);
+    block(capped);
+    try {
+      capped.advanceFrame(frame);
+      FAIL() << "a frame of about 121 substeps ran under a limit of 50";
+    } catch (const Error& e) {
+      const std::string w = e.what();
+      EXPECT_NE(w.find("50 substeps reached the limit of 50 per frame"), std::string::npos) << w;
+      EXPECT_NE(w.find("m/s"), std::string::npos) << w;
+      EXPECT_NE(w.find("time.max_substeps"), std::string::npos) << w;
+    }
+    EXPECT_EQ(capped.substepCount(), 50);
+  }
+  {
+    MpmSettings b = s;
+    b.minSubsteps = 0;
+    EXPECT_THROW(MpmSolver bad(b), InvalidArgument);
+    b.minSubsteps = 10;
+    b.maxSubsteps = 5;
+    EXPECT_THROW(MpmSolver bad(b), InvalidArgument);
+  }
+}

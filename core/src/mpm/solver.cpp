@@ -15,6 +15,7 @@
 #include "lodestone/core/sources/cuboid_magnet.h"
 #include "lodestone/core/sources/cylinder_magnet.h"
 #include "lodestone/core/base/error.h"
+#include "lodestone/core/base/number_text.h"
 #include "lodestone/core/stage/magnetic_force.h"
 #include "lodestone/core/mpm/constitutive.h"
 #include "lodestone/core/mpm/particle_order.h"
@@ -132,6 +133,10 @@ void MpmSettings::validate() const {
   require(std::isfinite(dtMax) && dtMax > 0, "MPM settings: dtMax must be a positive finite time in s, got ", dtMax);
   require(std::isfinite(dtMin) && dtMin > 0 && dtMin <= dtMax,
           "MPM settings: dtMin must be a positive finite time in s, at most dtMax = ", dtMax, " s, got ", dtMin);
+  require(minSubsteps >= 1, "MPM settings: minSubsteps must be >= 1 substep per frame, got ", minSubsteps);
+  require(maxSubsteps == 0 || maxSubsteps >= minSubsteps,
+          "MPM settings: maxSubsteps must be 0 (no limit) or >= minSubsteps = ", minSubsteps,
+          " substeps per frame, got ", maxSubsteps);
   require(reorderInterval >= 0, "MPM settings: reorderInterval must be >= 0 substeps, got ", reorderInterval);
   require(magneticSolveInterval >= 0,
           "MPM settings: magneticSolveInterval must be >= 0 substeps (0 = automatic), got ", magneticSolveInterval);
@@ -872,8 +877,17 @@ MpmFrameReport MpmSolver::advanceFrame(double frameDuration, const MpmProgressCa
   const double tEnd = time_ + frameDuration;
   frameStart_ = true;
   bool first = true;
+  const double longest = frameDuration / settings_.minSubsteps;  // s: minSubsteps per frame
   while (time_ < tEnd) {
-    double dt = suggestedDt();
+    if (settings_.maxSubsteps > 0 && fr.substeps >= settings_.maxSubsteps)
+      throw Error(concat("MPM frame from t = ", numberText(t0, 6), " s: ", fr.substeps,
+                         " substeps reached the limit of ", settings_.maxSubsteps, " per frame at t = ",
+                         numberText(time_, 6), " s with ", numberText((tEnd - time_) / frameDuration * 100, 3),
+                         "% of the frame left; its substeps took ", numberText(fr.minDt, 4), " .. ",
+                         numberText(fr.maxDt, 4), " s (the step now is ", numberText(suggestedDt(), 4),
+                         " s, the fastest particle moves at ", numberText(maxParticleSpeed(), 4),
+                         " m/s); raise the limit (time.max_substeps) or find what sped up or stiffened"));
+    double dt = std::min(suggestedDt(), longest);
     if (settings_.fixedDt == 0 && dt <= settings_.dtMin) ++fr.dtAtMinimum;
     if (settings_.fixedDt == 0 && settings_.colliderProjection && !colliders_.empty() &&
         settings_.cfl * colliderCrossingDt() <= dt * (1 + 1e-12) && dt > settings_.dtMin)

@@ -101,6 +101,14 @@ struct MpmSettings {
   double cfl = 0.4;     ///< fraction of a cell a wave or particle may cross per substep
   double dtMax = 1e-3;  ///< s
   double dtMin = 1e-7;  ///< s; a smaller CFL step is raised to this (and reported)
+  /// Substeps per frame: advanceFrame takes at least minSubsteps (dt <=
+  /// frame / minSubsteps, e.g. for smoother collider motion or sub-frame
+  /// output), and throws lodestone::Error naming the frame, the substep
+  /// count and the step that set it when a frame would need more than
+  /// maxSubsteps (0: no limit): a scene that stiffens or speeds up past what
+  /// the artist budgeted stops with a message instead of running on for hours.
+  int minSubsteps = 1;
+  int maxSubsteps = 0;
 
   int reorderInterval = 20;  ///< substeps between sorts of the particles by grid cell, for memory locality in P2G
                              ///< (0 = never: indices stay stable; MpmParticles::id survives either way)
