@@ -24,8 +24,11 @@ EmissionSchedule EmissionSchedule::intervals(std::vector<std::pair<double, doubl
             " s; a start must be a finite time >= 0 s");
     require(!std::isnan(off) && off > on, "emitter time line: interval ", i, " ends at ", off,
             " s, not after its start ", on, " s");
-    require(i == 0 || on >= onOff[i - 1].second, "emitter time line: interval ", i, " starts at ", on,
-            " s, before interval ", i - 1, " ends (", onOff[i - 1].second, " s)");
+    if (i > 0) {  // (require evaluates its message's arguments even when the check holds)
+      const double previousOff = onOff[i - 1].second;
+      require(on >= previousOff, "emitter time line: interval ", i, " starts at ", on, " s, before interval ", i - 1,
+              " ends (", previousOff, " s)");
+    }
     onOff[i].second = std::min(off, kForever);
   }
   EmissionSchedule s;
