@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "lodestone/core/base/constants.h"
 #include "lodestone/core/base/error.h"
@@ -16,8 +17,18 @@ std::vector<StageDecision> mechanicsDecisions(const plugin::Scene& scene, const 
   const bool gravity = norm(scene.settings.gravity) > 0;
   d.push_back({"gravity", gravity, gravity ? "on" : "idle", gravity ? "the scene sets g" : "g = 0 in the scene", 0, 0});
   const std::size_t colliders = solver.colliderCount();
-  d.push_back({"colliders", colliders > 0, colliders > 0 ? concat(colliders, " collider(s)") : "idle",
-               colliders > 0 ? "the scene has colliders or magnets" : "no collider or magnet", 0, 0});
+  std::string reason = colliders > 0 ? "the scene has colliders or magnets" : "no collider or magnet";
+  double thinnest = std::numeric_limits<double>::infinity(), allowance = 0;
+  for (std::size_t c = 0; c < colliders; ++c)
+    if (solver.collider(c).shape().halfThickness() < thinnest) {
+      thinnest = solver.collider(c).shape().halfThickness();
+      allowance = solver.colliderAllowance(c);
+    }
+  if (std::isfinite(thinnest) && scene.settings.colliderProjection)
+    reason += concat("; thinnest wall half-thickness ", numberText(thinnest, 3), " m: particles deeper than ",
+                     numberText(allowance, 3), " m are pushed back, and no substep moves one more than ",
+                     numberText(thinnest - allowance, 3), " m relative to it (docs/physics.md, \"Colliders that hold\")");
+  d.push_back({"colliders", colliders > 0, colliders > 0 ? concat(colliders, " collider(s)") : "idle", reason, 0, 0});
   bool fluid = false, solid = false;
   for (const MpmMaterial& m : solver.materials()) (m.isFluid() ? fluid : solid) = true;
   d.push_back({"fluid pressure and viscosity", fluid, fluid ? "on" : "idle",
