@@ -33,7 +33,13 @@ std::vector<StageDecision> mechanicsDecisions(const plugin::Scene& scene, const 
   for (const MpmMaterial& m : solver.materials()) (m.isFluid() ? fluid : solid) = true;
   d.push_back({"fluid pressure and viscosity", fluid, fluid ? "on" : "idle",
                fluid ? "a fluid material is used" : "no fluid material", 0, 0});
-  d.push_back({"elastic stress", solid, solid ? "on" : "idle", solid ? "a solid material is used" : "no solid material",
+  bool plastic = false;
+  for (const MpmMaterial& m : solver.materials()) plastic = plastic || m.model == MpmModel::ElastoplasticSolid;
+  d.push_back({"elastic stress", solid, solid ? "on" : "idle",
+               !solid    ? "no solid material"
+               : plastic ? "a solid material is used; the elastoplastic one adds its return mapping and damping "
+                           "(about 4x the substep cost)"
+                         : "a solid material is used",
                0, 0});
   const double end = solver.time() + scene.frames * scene.frameDuration();
   std::size_t on = 0;
