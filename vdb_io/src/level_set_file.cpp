@@ -3,6 +3,7 @@
 
 #include <cerrno>
 #include <cstdlib>
+#include <filesystem>
 #include <fstream>
 #include <sstream>
 
@@ -150,6 +151,8 @@ TriangleMesh parseObj(const std::string& text, const std::string& sourceName) {
 }
 
 TriangleMesh readObj(const std::string& path) {
+  std::error_code ec;
+  require(std::filesystem::is_regular_file(path, ec), "OBJ file '", path, "': not found or not a regular file");
   std::ifstream in(path, std::ios::binary);
   require(bool(in), "OBJ file '", path, "': cannot open");
   std::ostringstream text;
