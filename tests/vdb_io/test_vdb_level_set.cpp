@@ -247,6 +247,9 @@ TEST(VdbLevelSet, ObjReaderTriangulatesAndRejectsBadInput) {
   expectMessageNames([] { parseObj("v 0 0\n", "short.obj"); }, {"short.obj:1"});
   expectMessageNames([] { parseObj("v 0 0 0\n", "nofaces.obj"); }, {"nofaces.obj", "no faces"});
   expectMessageNames([] { readObj("/nonexistent/dir/mesh.obj"); }, {"/nonexistent/dir/mesh.obj"});
+  // A device (endless) or a directory is refused before it is read.
+  expectMessageNames([] { readObj("/dev/zero"); }, {"/dev/zero", "not a regular file"});
+  expectMessageNames([] { readObj("/tmp"); }, {"/tmp", "not a regular file"});
   // Bad voxel size names the mesh.
   MeshLevelSetOptions o;
   o.voxelSize = -1;
