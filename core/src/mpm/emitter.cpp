@@ -238,13 +238,7 @@ EmitReport emitParticles(MpmParticles& particles, const EmitterShape& shape, con
     const std::size_t q = particles.add(x, v, point.mass, point.volume, point.count, materialIndex);
     // The affine matrix is the velocity gradient of the spin, [w]x, so the
     // first P2G carries the rigid rotation exactly (APIC).
-    Mat3d& C = particles.C[q];
-    C(0, 1) = -w.z;
-    C(0, 2) = w.y;
-    C(1, 0) = w.z;
-    C(1, 2) = -w.x;
-    C(2, 0) = -w.y;
-    C(2, 1) = w.x;
+    particles.C[q] = Mat3d::cross(w);
     rep.volume += point.volume;
     rep.mass += point.mass;
     rep.count += point.count;

@@ -123,13 +123,7 @@ inline Vec3d dipoleReference(const Vec3d& m, const Vec3d& r) {
 inline Mat3d rotation(Vec3d axis, double angle) {
   axis = axis / norm(axis);
   const double c = std::cos(angle), s = std::sin(angle);
-  Mat3d K;
-  K(0, 1) = -axis.z;
-  K(0, 2) = axis.y;
-  K(1, 0) = axis.z;
-  K(1, 2) = -axis.x;
-  K(2, 0) = -axis.y;
-  K(2, 1) = axis.x;
+  const Mat3d K = Mat3d::cross(axis);
   Mat3d R = Mat3d::identity();
   const Mat3d K2 = K * K;
   for (int i = 0; i < 3; ++i)

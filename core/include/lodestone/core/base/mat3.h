@@ -22,6 +22,17 @@ struct Mat3 {
       for (int j = 0; j < 3; ++j) r.m[i][j] = a[i] * b[j];
     return r;
   }
+  /// The cross-product matrix [w]x: [w]x v = w x v (the velocity gradient of a spin w).
+  LODESTONE_HOSTDEV static constexpr Mat3 cross(const Vec3<T>& w) {
+    Mat3 r;
+    r.m[0][1] = -w.z;
+    r.m[0][2] = w.y;
+    r.m[1][0] = w.z;
+    r.m[1][2] = -w.x;
+    r.m[2][0] = -w.y;
+    r.m[2][1] = w.x;
+    return r;
+  }
   LODESTONE_HOSTDEV constexpr T& operator()(int i, int j) { return m[i][j]; }
   LODESTONE_HOSTDEV constexpr const T& operator()(int i, int j) const { return m[i][j]; }
 

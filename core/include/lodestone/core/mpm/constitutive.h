@@ -186,10 +186,7 @@ template <typename T>
 LODESTONE_HOSTDEV inline HenckyStrain<T> henckyStrain(const Mat3<T>& F) {
   using std::log;
   using std::sqrt;
-  Mat3<T> b;
-  for (int i = 0; i < 3; ++i)
-    for (int j = 0; j < 3; ++j) b(i, j) = F(i, 0) * F(j, 0) + F(i, 1) * F(j, 1) + F(i, 2) * F(j, 2);
-  const SymmetricEigen3<T> e = symmetricEigen(b);
+  const SymmetricEigen3<T> e = symmetricEigen(F * F.transposed());  // b = F F^T
   HenckyStrain<T> h;
   h.U = e.vectors;
   const T floor2 = T(kMinStretch) * T(kMinStretch);
