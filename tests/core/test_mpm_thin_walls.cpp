@@ -233,9 +233,10 @@ TEST(ThinWalls, AFastThinPaddleSweepsTheFluidInsteadOfPassingThrough) {
               on, limited, off);
   ASSERT_GT(off, 100u);  // the paddle slips through the layer without the projection
   EXPECT_EQ(on, 0u);
-  // The crossing limit set the substep: 0.4 * 1.5 mm / (3 m/s + the swept
-  // fluid's speed) <= 0.2 ms, below the fluid's own CFL step (0.4 * 1 cm /
-  // (10 m/s sound speed + 3 m/s) = 0.31 ms).
+  // The crossing limit set the substep: 0.4 * (1.5 - 0.75) mm (the
+  // half-thickness less the allowance) / (3 m/s + the swept fluid's speed)
+  // <= 0.1 ms, below the fluid's own CFL step (0.4 * 1 cm / (10 m/s sound
+  // speed + 3 m/s) = 0.31 ms).
   EXPECT_GT(limited, 0);
 }
 

@@ -348,7 +348,10 @@ class MpmSolver {
  private:
   friend struct MpmCheckpointAccess;  // checkpoint.cpp reads and restores the private state
   void checkFiniteParticles(const char* where) const;
-  double cflDt(double cfl, bool bound) const;
+  /// The CFL step (or, with `bound`, the stability bound); *byColliders is
+  /// set when the collider crossing limit is the one that binds.
+  double cflDt(double cfl, bool bound, bool* byColliders = nullptr) const;
+  double colliderCrossingDt(double vmax) const;  // with the fastest particle's speed (m/s) given
   void checkFiniteGrid(const char* where) const;
   class SceneField;
   std::size_t enforceDomain(std::size_t& removedOut, std::size_t& nonFiniteOut);
