@@ -31,5 +31,27 @@ Pose Pose::fromAxisAngle(const Vec3d& position, const Vec3d& axis, double angle)
   return fromQuaternion(position, std::cos(0.5 * angle), axis.x * s, axis.y * s, axis.z * s);
 }
 
+Mat3d rotationFromVector(const Vec3d& r) {
+  const double angle = norm(r);
+  if (angle == 0) return Mat3d::identity();
+  return Pose::fromAxisAngle({}, r, angle).rotation;
+}
+
+Mat3d orthonormalized(const Mat3d& R) {
+  // Gram-Schmidt on the columns; the third is the cross product of the first two.
+  Vec3d c0{R(0, 0), R(1, 0), R(2, 0)}, c1{R(0, 1), R(1, 1), R(2, 1)};
+  c0 = c0 / norm(c0);
+  c1 = c1 - dot(c0, c1) * c0;
+  c1 = c1 / norm(c1);
+  const Vec3d c2 = cross(c0, c1);
+  Mat3d Q;
+  for (int i = 0; i < 3; ++i) {
+    Q(i, 0) = c0[i];
+    Q(i, 1) = c1[i];
+    Q(i, 2) = c2[i];
+  }
+  return Q;
+}
+
 }  // namespace base
 }  // namespace lodestone

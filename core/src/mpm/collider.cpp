@@ -64,13 +64,6 @@ Vec3d rotationVector(Quat q) {
   return v * (2 * std::atan2(s, q.w) / s);
 }
 
-/// Rotation matrix exp([r]) of the rotation vector r (rad).
-Mat3d rotationFromVector(const Vec3d& r) {
-  const double angle = norm(r);
-  if (angle == 0) return Mat3d::identity();
-  return Pose::fromAxisAngle({}, r, angle).rotation;
-}
-
 /// Shortest-arc spherical interpolation between unit quaternions, s in [0, 1].
 Quat slerp(const Quat& a, Quat b, double s) {
   double c = a.w * b.w + a.x * b.x + a.y * b.y + a.z * b.z;
@@ -186,6 +179,29 @@ double ColliderShape::halfThickness() const {
   return infinite;
 }
 
+double ColliderShape::boundingRadius() const {
+  const double infinite = std::numeric_limits<double>::infinity();
+  if (inverted) return infinite;
+  switch (kind) {
+    case ColliderShapeKind::Plane:
+      return infinite;
+    case ColliderShapeKind::Sphere:
+      return radius;
+    case ColliderShapeKind::Box:
+      return norm(halfSize);
+    case ColliderShapeKind::Cylinder:
+      return std::sqrt(radius * radius + halfLength * halfLength);
+    case ColliderShapeKind::LevelSet: {
+      Vec3d lo, hi;
+      levelSet->interiorBounds(lo, hi);
+      double r = 0;
+      for (int c = 0; c < 8; ++c) r = std::max(r, norm(Vec3d{c & 1 ? hi.x : lo.x, c & 2 ? hi.y : lo.y, c & 4 ? hi.z : lo.z}));
+      return r;
+    }
+  }
+  return infinite;
+}
+
 void ColliderShape::validate(const char* who) const {
   switch (kind) {
     case ColliderShapeKind::Plane:
@@ -256,9 +272,16 @@ ColliderMotion ColliderMotion::constantVelocity(const Pose& pose, const Vec3d& v
   return m;
 }
 
+ColliderMotion ColliderMotion::dynamic(const Pose& pose, const Vec3d& velocity, const Vec3d& angularVelocity) {
+  ColliderMotion m = constantVelocity(pose, velocity, angularVelocity);
+  m.kind_ = Kind::Dynamic;
+  return m;
+}
+
 Pose ColliderMotion::poseAt(double t) const {
   switch (kind_) {
     case Kind::Static:
+    case Kind::Dynamic:
       return pose_;
     case Kind::ConstantVelocity: {
       const double tau = t - t0_;
@@ -291,6 +314,7 @@ void ColliderMotion::velocityAt(double t, Vec3d& linear, Vec3d& angular) const {
     case Kind::Static:
       return;
     case Kind::ConstantVelocity:
+    case Kind::Dynamic:
       linear = velocity_;
       angular = angular_;
       return;
@@ -316,6 +340,31 @@ MpmCollider::MpmCollider(const ColliderShape& shape, const ColliderMotion& motio
     : shape_(shape), motion_(motion), boundary_(boundary) {
   shape_.validate("collider");
   boundary_.validate("collider");
+}
+
+void MpmCollider::setMotion(const ColliderMotion& motion) {
+  if (!body_ || motion.kind() == ColliderMotion::Kind::Dynamic) {
+    motion_ = motion;
+    return;
+  }
+  Vec3d v, w;
+  motion.velocityAt(0.0, v, w);
+  motion_ = ColliderMotion::dynamic(motion.poseAt(0.0), v, w);
+}
+
+void MpmCollider::setDynamics(const RigidBodySettings& settings, double time) {
+  require(std::isfinite(time), "dynamic collider: time must be finite (s), got ", time);
+  body_ = RigidBody::of(shape_, settings);
+  if (motion_.kind() == ColliderMotion::Kind::Dynamic) return;
+  Vec3d v, w;
+  motion_.velocityAt(time, v, w);
+  motion_ = ColliderMotion::dynamic(motion_.poseAt(time), v, w);
+}
+
+const RigidBody& MpmCollider::body() const {
+  require(body_.has_value(), "collider: not a dynamic rigid body (a ", toString(shape_.kind), " moving ",
+          motion_.kind() == ColliderMotion::Kind::Static ? "nowhere" : "as scripted", ")");
+  return *body_;
 }
 
 void MpmCollider::setBoundary(const BoundaryCondition& boundary) {

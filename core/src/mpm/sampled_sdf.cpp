@@ -90,18 +90,10 @@ void SampledSdf::findRidges() {
 }
 
 double SampledSdf::volume() const {
-  // V = sum_i (1 - H_eps(phi_i)) h^3 with the smoothed Heaviside
-  // H_eps(phi) = 1/2 + phi / (2 eps) + sin(pi phi / eps) / (2 pi), |phi| <= eps.
+  // V = sum_i (1 - H_eps(phi_i)) h^3, eps = 1.5 h.
   const double h = spec_.dx, eps = 1.5 * h;
   double inside = 0;
-  for (const float f : values_) {
-    const double phi = f;
-    if (phi <= -eps) {
-      inside += 1;
-    } else if (phi < eps) {
-      inside += 0.5 - phi / (2 * eps) - std::sin(kPi * phi / eps) / (2 * kPi);
-    }
-  }
+  for (const float f : values_) inside += smoothedInsideFraction(f, eps);
   return inside * h * h * h;
 }
 

@@ -579,7 +579,8 @@ void MpmSolver::gridUpdate(double dt, MpmStepReport& rep) {
         Vec3d v = p / m + dg;
         if (!colliders_.empty()) {
           const Vec3d x = g.nodePosition(i, j, k);
-          for (std::size_t c = 0; c < colliders_.size(); ++c) v = colliders_[c].apply(states[c], x, v);
+          for (std::size_t c = 0; c < colliders_.size(); ++c)
+            if (!colliders_[c].isDynamic()) v = colliders_[c].apply(states[c], x, v);
         }
         if (W > 0) {
           const int idx[3] = {i, j, k};
@@ -596,6 +597,7 @@ void MpmSolver::gridUpdate(double dt, MpmStepReport& rep) {
     for (const Vec3d& I : rowImpulse) total += I;
     rep.magneticImpulse = total;
   }
+  if (anyDynamicBodies()) exchangeWithRigidBodies(dt);
 }
 
 // ---------------------------------------------------------------------------
@@ -682,8 +684,14 @@ MpmStepReport MpmSolver::step(double dt) {
 
   // 4. Grid update: v_i = ((m v)_i + dt f_i) / m_i + dt g, then the
   // colliders' and the walls' boundary conditions.
+  // With dynamic rigid bodies: gravity, magnetic forces and contacts first,
+  // the momentum exchange with the grid inside the grid update, then their
+  // poses advance ("Rigid bodies" in solver.h).
   t = Clock::now();
+  const bool bodies = anyDynamicBodies();
+  if (bodies) predictRigidBodies(dt);
   gridUpdate(dt, rep);
+  if (bodies) advanceRigidBodies(dt);
   if (settings_.checkFinite) checkFiniteGrid("after the grid update");
   rep.secondsGridUpdate = secondsSince(t);
 
@@ -769,28 +777,46 @@ std::size_t MpmSolver::projectOutOfColliders(double dt, std::size_t& outside) {
   const ParticleBounds bounds = domainBounds();
   Vec3d* X = particles_.x.data();
   Vec3d* V = particles_.v.data();
+  const double* mass = particles_.mass.data();
   struct Count {
     std::size_t pushed = 0, outside = 0;
+    Vec3d P, L;  // momentum (kg m/s) given to the pushed particles, and its moment about the origin
     Count& operator+=(const Count& o) {
       pushed += o.pushed;
       outside += o.outside;
+      P += o.P;
+      L += o.L;
       return *this;
     }
   };
-  const Count n = deterministicSum<Count>(particles_.size(), [&](std::size_t p) {
-    Count k;
-    for (std::size_t c = 0; c < colliders_.size(); ++c) {
-      if (!colliders_[c].projectOut(states[c], X[p], V[p], allowed[c])) continue;
+  std::size_t pushed = 0;
+  for (std::size_t c = 0; c < colliders_.size(); ++c) {
+    const Count n = deterministicSum<Count>(particles_.size(), [&](std::size_t p) {
+      Count k;
+      const Vec3d v0 = V[p];
+      if (!colliders_[c].projectOut(states[c], X[p], V[p], allowed[c])) return k;
       ++k.pushed;
       const Vec3d& x = X[p];
       if (x.x < bounds.lo.x || x.y < bounds.lo.y || x.z < bounds.lo.z || x.x > bounds.hi.x || x.y > bounds.hi.y ||
           x.z > bounds.hi.z)
         ++k.outside;
+      k.P = mass[p] * (V[p] - v0);
+      k.L = cross(x, k.P);
+      return k;
+    });
+    pushed += n.pushed;
+    outside += n.outside;
+    if (n.pushed > 0 && colliders_[c].isDynamic()) {
+      // The body takes the opposite momentum and angular momentum.
+      RigidBodyState b = RigidBodyState::dynamic(colliders_[c].body(), states[c]);
+      b.v -= b.inverseMass * n.P;
+      b.w -= b.inverseInertia * (n.L - cross(b.x, n.P));
+      const ColliderState s = b.colliderState();
+      colliders_[c].setMotion(ColliderMotion::dynamic(s.pose, s.velocity, s.angularVelocity));
+      if (c < materialImpulse_.size()) materialImpulse_[c] -= n.P;
     }
-    return k;
-  });
-  outside = n.outside;
-  return n.pushed;
+  }
+  return pushed;
 }
 
 Vec3d MpmSolver::domainLower() const {

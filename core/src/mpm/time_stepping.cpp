@@ -103,6 +103,8 @@ MpmFrameReport MpmSolver::advanceFrame(double frameDuration, const MpmProgressCa
   const double t0 = time_;
   const double tEnd = time_ + frameDuration;
   frameStart_ = true;
+  for (Vec3d& p : materialImpulse_) p = Vec3d{};
+  for (Vec3d& p : contactImpulse_) p = Vec3d{};
   bool first = true;
   const double longest = frameDuration / settings_.minSubsteps;  // s: minSubsteps per frame
   while (time_ < tEnd) {
@@ -185,6 +187,7 @@ MpmFrameReport MpmSolver::advanceFrame(double frameDuration, const MpmProgressCa
                                  "shortened to cfl times the bound"));
   fr.time = time_;
   fr.energies = energies();
+  fr.bodies = rigidBodies();
   return fr;
 }
 

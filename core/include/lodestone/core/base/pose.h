@@ -22,5 +22,11 @@ struct Pose {
   Vec3d vectorToWorld(const Vec3d& v) const { return rotation * v; }
 };
 
+/// The rotation exp([r]) of the rotation vector r (axis times angle, rad).
+Mat3d rotationFromVector(const Vec3d& r);
+/// The proper rotation nearest a rotation matrix that has drifted by
+/// round-off (Gram-Schmidt on its columns).
+Mat3d orthonormalized(const Mat3d& R);
+
 }  // namespace base
 }  // namespace lodestone

@@ -29,10 +29,12 @@
 // |v_t| shrinks by mu |v_n|, and to zero if that exceeds it.
 #include <cmath>
 #include <memory>
+#include <optional>
 #include <vector>
 
 #include "lodestone/core/base/hostdev.h"
 #include "lodestone/core/base/pose.h"
+#include "lodestone/core/mpm/rigid_body.h"
 #include "lodestone/core/mpm/sampled_sdf.h"
 #include "lodestone/core/base/vec3.h"
 
@@ -121,6 +123,9 @@ struct ColliderShape {
   /// (SampledSdf::insideRidgeDepth / outsideRidgeDepth); infinite for a plane
   /// and for the inverted analytic shapes (their solid has no far side).
   double halfThickness() const;
+  /// Radius (m) of a sphere about the body origin that holds the solid:
+  /// infinite for a plane and the inverted shapes.
+  double boundingRadius() const;
   /// Outward unit normal of the solid (body frame) at body-frame point xb:
   /// the gradient of signedDistance where it is defined, a consistent choice
   /// on ridges and the centre.
@@ -215,7 +220,8 @@ LODESTONE_HOSTDEV inline Vec3d ColliderShape::normal(const Vec3d& xb) const {
 /// Rigid motion of a collider: Pose(t) and the velocity of its body origin.
 class ColliderMotion {
  public:
-  enum class Kind : int { Static = 0, Keyframed = 1, ConstantVelocity = 2 };
+  /// Dynamic: moved by the solver (mpm/rigid_body.h), not by time.
+  enum class Kind : int { Static = 0, Keyframed = 1, ConstantVelocity = 2, Dynamic = 3 };
 
   /// At rest at `pose` (identity at the origin by default).
   ColliderMotion() = default;
@@ -231,6 +237,10 @@ class ColliderMotion {
   static ColliderMotion constantVelocity(const Pose& pose, const Vec3d& velocity, const Vec3d& angularVelocity,
                                          double t0 = 0.0);
 
+  /// The state of a dynamic body: the pose, the velocity of the body origin
+  /// (m/s) and the angular velocity (rad/s, world frame), whatever the time.
+  static ColliderMotion dynamic(const Pose& pose, const Vec3d& velocity, const Vec3d& angularVelocity);
+
   Kind kind() const { return kind_; }
   /// Body-to-world pose at time t (s).
   Pose poseAt(double t) const;
@@ -241,8 +251,8 @@ class ColliderMotion {
 
  private:
   Kind kind_ = Kind::Static;
-  Pose pose_;                 // Static, and ConstantVelocity at t0
-  Vec3d velocity_, angular_;  // ConstantVelocity
+  Pose pose_;                 // Static, Dynamic, and ConstantVelocity at t0
+  Vec3d velocity_, angular_;  // ConstantVelocity, Dynamic
   double t0_ = 0;
   std::vector<double> times_;  // Keyframed
   std::vector<Pose> poses_;
@@ -264,8 +274,19 @@ class MpmCollider {
   const ColliderShape& shape() const { return shape_; }
   const ColliderMotion& motion() const { return motion_; }
   const BoundaryCondition& boundary() const { return boundary_; }
-  void setMotion(const ColliderMotion& motion) { motion_ = motion; }
+  /// A dynamic collider keeps its dynamics: `motion` then sets its state
+  /// (a Dynamic motion, or any motion's pose and velocity at time 0).
+  void setMotion(const ColliderMotion& motion);
   void setBoundary(const BoundaryCondition& boundary);
+
+  /// Makes the collider a dynamic rigid body (mpm/rigid_body.h) that starts
+  /// from its motion's pose and velocities at `time` (s): a constant-velocity
+  /// motion gives it an initial velocity and spin. Throws InvalidArgument for
+  /// a plane or an inverted shape, or bad settings (naming the value).
+  void setDynamics(const RigidBodySettings& settings, double time = 0.0);
+  bool isDynamic() const { return body_.has_value(); }
+  /// The body's mass properties and settings; throws unless isDynamic().
+  const RigidBody& body() const;
 
   ColliderState stateAt(double t) const;
   /// Signed distance (m) of world point x at time t (s), negative inside.
@@ -294,6 +315,7 @@ class MpmCollider {
   ColliderShape shape_;
   ColliderMotion motion_;
   BoundaryCondition boundary_;
+  std::optional<RigidBody> body_;
 };
 
 }  // namespace mpm

@@ -22,11 +22,21 @@
 #include <string>
 #include <vector>
 
+#include "lodestone/core/base/constants.h"
 #include "lodestone/core/base/grid.h"
 #include "lodestone/core/base/vec3.h"
 
 namespace lodestone {
 inline namespace mpm {
+
+/// The inside fraction 1 - H_eps(phi) of a sample at signed distance phi
+/// (m) with the smoothed Heaviside of width eps (m) (Osher and Fedkiw 2003,
+/// eq. 1.23): 1 for phi <= -eps, 0 for phi >= eps.
+inline double smoothedInsideFraction(double phi, double eps) {
+  if (phi <= -eps) return 1;
+  if (phi >= eps) return 0;
+  return 0.5 - phi / (2 * eps) - std::sin(kPi * phi / eps) / (2 * kPi);
+}
 
 class SampledSdf {
  public:

@@ -80,6 +80,9 @@
 #include "lodestone/core/mpm/material.h"
 #include "lodestone/core/mpm/particles.h"
 #include "lodestone/core/mpm/rate_emitter.h"
+#include "lodestone/core/mpm/rigid_body.h"
+#include "lodestone/core/mpm/rigid_contact.h"
+#include "lodestone/core/sources/magnet_interaction.h"
 
 namespace lodestone {
 inline namespace mpm {
@@ -185,6 +188,20 @@ struct MpmStepReport {
   RateEmitReport emitted;        ///< what the rate emitters added (8.)
 };
 
+/// A dynamic rigid body (MpmCollider::setDynamics) at the end of a frame,
+/// with what acted on it during the frame.
+struct RigidBodyReport {
+  std::size_t collider = 0;       ///< collider index
+  long magnet = -1;               ///< magnet index, -1 for a collider that is not a magnet
+  Pose pose;                      ///< of the body origin
+  Vec3d velocity;                 ///< of the centre of mass, m/s
+  Vec3d angularVelocity;          ///< world frame, rad/s
+  Vec3d magneticForce;            ///< N, at the last substep (material's reaction + other magnets)
+  Vec3d magneticTorque;           ///< N*m about the centre of mass, at the last substep
+  Vec3d materialImpulse;          ///< N*s the material exerted over the frame (grid exchange and projection)
+  Vec3d contactImpulse;           ///< N*s from contacts with bodies, colliders and walls over the frame
+};
+
 /// Outcome of advanceFrame.
 struct MpmFrameReport {
   int substeps = 0;
@@ -202,6 +219,7 @@ struct MpmFrameReport {
   RateEmitReport emitted;  ///< what the rate emitters added, summed over the substeps
   MpmEnergies energies;    ///< at the end of the frame
   bool cancelled = false;  ///< the progress callback asked to stop
+  std::vector<RigidBodyReport> bodies;  ///< the dynamic rigid bodies, in collider order
   std::vector<std::string> warnings;
   /// Multi-line summary with units.
   std::string summary() const;
@@ -248,6 +266,8 @@ class MpmSolver {
   std::size_t emitterCount() const { return emitters_.size(); }
   const RateEmitter& emitter(std::size_t i) const;
 
+  /// Adds a collider (kinematic, or dynamic after MpmCollider::setDynamics:
+  /// see "Rigid bodies" below).
   std::size_t addCollider(const MpmCollider& collider);
   std::size_t colliderCount() const { return colliders_.size(); }
   MpmCollider& collider(std::size_t i);
@@ -308,6 +328,35 @@ class MpmSolver {
   double time() const { return time_; }
   void setTime(double t);
 
+  // Rigid bodies. A dynamic collider (MpmCollider::setDynamics; a colliding
+  // magnet made dynamic with collider(c).setDynamics) is moved every substep,
+  // two-way coupled with the material:
+  //   a. its velocity takes gravity and, for a magnet, the magnetic force and
+  //      torque (magnetWrench): the reaction of the material it magnetizes
+  //      and the pull of the other magnets (magnet_interaction.h);
+  //   b. contacts with the other bodies, the kinematic colliders and the
+  //      domain walls (rigid_contact.h);
+  //   c. in the grid update, the body and the grid nodes inside it with mass
+  //      exchange momentum: the body's velocity V = (v, w) solves
+  //        (M + sum_i m_i J_i^T P_i J_i) V = M V_pred + sum_i m_i J_i^T P_i v_i,
+  //      J_i V = v + w x (x_i - x_c) the body's velocity at node i, P_i = I
+  //      (sticky), n n^T (slip, and separate where the node approaches),
+  //      which is the momentum balance with the nodes taking the body's
+  //      normal velocity; the collider's boundary condition (with friction)
+  //      is then applied with that velocity and the body takes exactly the
+  //      opposite of the nodes' momentum change, so material + body conserve
+  //      linear and angular momentum. Implicit in V: stable for bodies much
+  //      lighter than the material around them;
+  //   d. its pose advances (rigid_body.h); particles the projection pushes out
+  //      of it give it the opposite of their momentum change.
+
+  /// The dynamic bodies now (their last frame's impulses are not kept here:
+  /// advanceFrame reports them).
+  std::vector<RigidBodyReport> rigidBodies() const;
+  /// Force (N) and torque (N*m, about its centre) of the field on magnet m
+  /// as last computed (zero unless the magnet is dynamic).
+  MagnetWrench magnetWrench(std::size_t m) const;
+
   MpmEnergies energies() const;
   /// Where the wall layers act, m: a wall made of the nodes below index W
   /// (W = wallNodes) stops material at about W - 1/2 nodes from the face, so
@@ -365,6 +414,13 @@ class MpmSolver {
   bool gridToParticle(double dt, MpmStepReport& rep);  // 5-7.; true when particles were removed after it
   std::size_t projectOutOfColliders(double dt, std::size_t& outside);  // particles pushed out; outside: now beyond the domain
   double maxParticleSpeed() const;                     // m/s
+  // Rigid bodies (rigid_coupling.cpp).
+  bool anyDynamicBodies() const;
+  void predictRigidBodies(double dt);                       // a.-b.
+  void exchangeWithRigidBodies(double dt);                  // c. (in the grid update)
+  void advanceRigidBodies(double dt);                       // d.
+  void updateMagnetWrenches();                              // magnetWrench_ of the dynamic magnets
+  std::size_t colliderMagnet(std::size_t c) const;          // magnet index of collider c, or magnetCount()
   void solveMagnetic(MpmStepReport& rep);
   void emitFromEmitters(double dt, MpmStepReport& rep);  // 8.
   double maxEmissionSpeed() const;                       // m/s, of the emitters on within the next dtMax
@@ -399,6 +455,10 @@ class MpmSolver {
   bool particlesDirty_ = true;
   int stepsSinceSolve_ = 0;
   MagneticPlan lastPlan_;
+  std::vector<RigidBodyState> rigid_;                 // the substep's body states: one per collider, then the walls
+  std::vector<std::vector<Vec3d>> contactSamples_;  // per collider (computed on first use)
+  std::vector<MagnetWrench> magnetWrench_;          // per magnet
+  std::vector<Vec3d> materialImpulse_, contactImpulse_;  // per collider, since the frame started
   FieldReuse reuse_;  // the last solve's record for the planner's reuse test, permuted with the particles
   long long substeps_ = 0;
   double time_ = 0;

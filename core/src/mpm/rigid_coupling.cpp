@@ -1,0 +1,332 @@
+// The MPM solver's dynamic rigid bodies: external forces, contacts, the
+// momentum exchange with the grid and the pose update. See "Rigid bodies" in
+// mpm/solver.h.
+#include <algorithm>
+#include <cmath>
+
+#include "lodestone/core/base/error.h"
+#include "lodestone/core/mpm/solver.h"
+#include "lodestone/core/sources/sphere_magnet.h"
+
+namespace lodestone {
+inline namespace mpm {
+
+namespace {
+
+/// Solves the symmetric positive definite 6x6 system A x = b in place
+/// (Cholesky); false when A is not positive definite.
+bool solveSpd6(double A[6][6], double b[6]) {
+  for (int j = 0; j < 6; ++j) {
+    double d = A[j][j];
+    for (int k = 0; k < j; ++k) d -= A[j][k] * A[j][k];
+    if (!(d > 0)) return false;
+    A[j][j] = std::sqrt(d);
+    for (int i = j + 1; i < 6; ++i) {
+      double s = A[i][j];
+      for (int k = 0; k < j; ++k) s -= A[i][k] * A[j][k];
+      A[i][j] = s / A[j][j];
+    }
+  }
+  for (int i = 0; i < 6; ++i) {
+    double s = b[i];
+    for (int k = 0; k < i; ++k) s -= A[i][k] * b[k];
+    b[i] = s / A[i][i];
+  }
+  for (int i = 5; i >= 0; --i) {
+    double s = b[i];
+    for (int k = i + 1; k < 6; ++k) s -= A[k][i] * b[k];
+    b[i] = s / A[i][i];
+  }
+  return true;
+}
+
+/// Inverse of a symmetric positive definite 3x3 matrix (the world inverse inertia's inverse).
+Mat3d inverse3(const Mat3d& a) {
+  Mat3d r;
+  r(0, 0) = a(1, 1) * a(2, 2) - a(1, 2) * a(2, 1);
+  r(0, 1) = a(0, 2) * a(2, 1) - a(0, 1) * a(2, 2);
+  r(0, 2) = a(0, 1) * a(1, 2) - a(0, 2) * a(1, 1);
+  r(1, 0) = a(1, 2) * a(2, 0) - a(1, 0) * a(2, 2);
+  r(1, 1) = a(0, 0) * a(2, 2) - a(0, 2) * a(2, 0);
+  r(1, 2) = a(0, 2) * a(1, 0) - a(0, 0) * a(1, 2);
+  r(2, 0) = a(1, 0) * a(2, 1) - a(1, 1) * a(2, 0);
+  r(2, 1) = a(0, 1) * a(2, 0) - a(0, 0) * a(2, 1);
+  r(2, 2) = a(0, 0) * a(1, 1) - a(0, 1) * a(1, 0);
+  const double det = a(0, 0) * r(0, 0) + a(0, 1) * r(1, 0) + a(0, 2) * r(2, 0);
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) r(i, j) /= det;
+  return r;
+}
+
+/// Force and torque of magnet a on magnet b, for bodies that may touch or
+/// overlap slightly in contact: two spheres by their dipoles (exact while
+/// they are apart); other shapes by the surface-charge integral of order 8
+/// (about 1e-7 relative at 1.5 edge lengths, docs/physics.md), and by their
+/// dipoles where contact made them overlap (the integral refuses overlap).
+MagnetWrench touchingMagnetInteraction(const MagnetSource& a, const MagnetSource& b, double t) {
+  const bool spheres = dynamic_cast<const SphereMagnet*>(&a) && dynamic_cast<const SphereMagnet*>(&b);
+  if (!spheres) {
+    try {
+      return magnetInteraction(a, b, t, MagnetInteractionMethod::SurfaceCharge, 8);
+    } catch (const InvalidArgument&) {
+      // overlapping in contact: the dipoles below
+    }
+  }
+  const Vec3d r = b.pose().position - a.pose().position;
+  if (!(norm(r) > 0)) return {};
+  return {dipoleDipoleForce(a.moment(t), b.moment(t), r), dipoleDipoleTorque(a.moment(t), b.moment(t), r)};
+}
+
+}  // namespace
+
+bool MpmSolver::anyDynamicBodies() const {
+  for (const MpmCollider& c : colliders_)
+    if (c.isDynamic()) return true;
+  return false;
+}
+
+std::size_t MpmSolver::colliderMagnet(std::size_t c) const {
+  for (std::size_t m = 0; m < magnetCollider_.size(); ++m)
+    if (magnetCollider_[m] == c) return m;
+  return magnets_.size();
+}
+
+MagnetWrench MpmSolver::magnetWrench(std::size_t m) const {
+  require(m < magnets_.size(), "MPM solver: magnet ", m, " out of range (", magnets_.size(), " magnets)");
+  return m < magnetWrench_.size() ? magnetWrench_[m] : MagnetWrench{};
+}
+
+void MpmSolver::updateMagnetWrenches() {
+  magnetWrench_.assign(magnets_.size(), MagnetWrench{});
+  std::vector<bool> dynamic(magnets_.size(), false);
+  bool any = false;
+  for (std::size_t m = 0; m < magnets_.size(); ++m) {
+    dynamic[m] = magnetCollider_[m] != kNoCollider && colliders_[magnetCollider_[m]].isDynamic();
+    any = any || dynamic[m];
+  }
+  if (!any) return;
+  poseMagnetsAt(time_);
+  for (std::size_t a = 0; a < magnets_.size(); ++a)
+    for (std::size_t b = 0; b < magnets_.size(); ++b) {
+      if (a == b || !dynamic[b]) continue;
+      const MagnetWrench w = touchingMagnetInteraction(*magnets_[a], *magnets_[b], time_);
+      magnetWrench_[b].force += w.force;
+      magnetWrench_[b].torque += w.torque;
+    }
+}
+
+void MpmSolver::predictRigidBodies(double dt) {
+  const std::size_t nc = colliders_.size();
+  rigid_.assign(nc + 1, RigidBodyState{});
+  if (materialImpulse_.size() != nc) {
+    materialImpulse_.assign(nc, Vec3d{});
+    contactImpulse_.assign(nc, Vec3d{});
+  }
+  if (contactSamples_.size() != nc) contactSamples_.assign(nc, {});
+  updateMagnetWrenches();
+  const double spacing = 0.5 * settings_.grid.dx;
+  for (std::size_t c = 0; c < nc; ++c) {
+    const MpmCollider& col = colliders_[c];
+    if (!col.isDynamic()) {
+      rigid_[c] = RigidBodyState::kinematic(col.stateAt(time_));
+      continue;
+    }
+    RigidBodyState& b = rigid_[c];
+    b = RigidBodyState::dynamic(col.body(), col.stateAt(time_));
+    b.v += dt * settings_.gravity;
+    const std::size_t m = colliderMagnet(c);
+    if (m < magnets_.size()) {
+      b.v += (dt * b.inverseMass) * magnetWrench_[m].force;
+      b.w += b.inverseInertia * (dt * magnetWrench_[m].torque);
+    }
+  }
+  // The domain walls: the solid outside the domain box.
+  const Vec3d lo = domainLower(), hi = domainUpper();
+  const ColliderShape walls = ColliderShape::box(0.5 * (hi - lo)).invertedShape();
+  ColliderState wallState;
+  wallState.pose = Pose::at(0.5 * (lo + hi));
+  rigid_[nc] = RigidBodyState::kinematic(wallState);
+
+  std::vector<RigidContact> contacts;
+  const auto bodyOf = [&](std::size_t c) {
+    RigidContactBody b;
+    b.shape = &colliders_[c].shape();
+    b.state = colliders_[c].stateAt(time_);
+    if (contactSamples_[c].empty() && colliders_[c].isDynamic())
+      contactSamples_[c] = contactSamples(colliders_[c].shape(), spacing);
+    b.samples = &contactSamples_[c];
+    return b;
+  };
+  for (std::size_t a = 0; a < nc; ++a) {
+    if (!colliders_[a].isDynamic()) continue;
+    const RigidBodySettings& sa = colliders_[a].body().settings;
+    const RigidContactBody A = bodyOf(a);
+    for (std::size_t b = 0; b < nc; ++b) {
+      if (b == a || (colliders_[b].isDynamic() && b < a)) continue;
+      const RigidContactBody B = bodyOf(b);
+      double mu = sa.friction, e = sa.restitution;
+      if (colliders_[b].isDynamic()) {
+        const RigidBodySettings& sb = colliders_[b].body().settings;
+        mu = std::sqrt(sa.friction * sb.friction);
+        e = std::max(sa.restitution, sb.restitution);
+      }
+      findContacts(A, a, B, b, mu, e, contacts);
+      findContacts(B, b, A, a, mu, e, contacts);
+    }
+    if (settings_.wallNodes > 0) {
+      RigidContactBody W;
+      W.shape = &walls;
+      W.state = wallState;
+      findContacts(A, a, W, nc, sa.friction, sa.restitution, contacts);
+    }
+  }
+  if (contacts.empty()) return;
+  std::vector<Vec3d> before(nc);
+  for (std::size_t c = 0; c < nc; ++c) before[c] = rigid_[c].momentum();
+  RigidContactSettings cs;
+  cs.slop = 0.01 * settings_.grid.dx;
+  cs.restitutionSpeed = 2 * norm(settings_.gravity) * dt + 1e-6;
+  solveContacts(rigid_, contacts, dt, cs);
+  for (std::size_t c = 0; c < nc; ++c) contactImpulse_[c] += rigid_[c].momentum() - before[c];
+}
+
+void MpmSolver::exchangeWithRigidBodies(double dt) {
+  (void)dt;
+  const GridSpec& g = settings_.grid;
+  const Index3 lo = grid_.activeLo(), hi = grid_.activeHi();
+  const std::vector<MpmNode>& nodes = grid_.nodes();
+  std::vector<Vec3d>& vel = grid_.velocity();
+  struct Node {
+    std::size_t index;
+    double m;
+    Vec3d x, n, v;
+  };
+  std::vector<Node> inside;
+  for (std::size_t c = 0; c < colliders_.size(); ++c) {
+    const MpmCollider& col = colliders_[c];
+    if (!col.isDynamic()) continue;
+    RigidBodyState& body = rigid_[c];
+    const ColliderState pose = body.colliderState();
+    // The nodes with mass inside the body (phi < 0), within its bounding sphere.
+    const double R = col.shape().boundingRadius() + g.dx;
+    const Vec3d o = pose.pose.position;
+    int from[3], to[3];
+    const int alo[3] = {lo.i, lo.j, lo.k}, ahi[3] = {hi.i, hi.j, hi.k};
+    for (int a = 0; a < 3; ++a) {
+      from[a] = std::max(alo[a], int(std::floor((o[a] - R - g.origin[a]) / g.dx)));
+      to[a] = std::min(ahi[a], int(std::ceil((o[a] + R - g.origin[a]) / g.dx)) + 1);
+    }
+    inside.clear();
+    for (int k = from[2]; k < to[2]; ++k)
+      for (int j = from[1]; j < to[1]; ++j)
+        for (int i = from[0]; i < to[0]; ++i) {
+          const std::size_t n = g.index(i, j, k);
+          if (!(nodes[n].mass > 0)) continue;
+          const Vec3d x = g.nodePosition(i, j, k);
+          const Vec3d xb = pose.pose.toLocal(x);
+          if (!(col.shape().signedDistance(xb) < 0)) continue;
+          inside.push_back({n, nodes[n].mass, x, pose.pose.vectorToWorld(col.shape().normal(xb)), vel[n]});
+        }
+    if (inside.empty()) continue;
+    // The coupled velocity V = (v, w): (M + sum m J^T P J) V = M V_pred + sum m J^T P v_i.
+    const BoundaryCondition& bc = col.boundary();
+    const Mat3d Iw = inverse3(body.inverseInertia);
+    double A[6][6] = {}, b[6] = {};
+    const double mass = 1 / body.inverseMass;
+    for (int a = 0; a < 3; ++a) {
+      A[a][a] = mass;
+      for (int e = 0; e < 3; ++e) A[3 + a][3 + e] = Iw(a, e);
+    }
+    const Vec3d L = Iw * body.w;
+    for (int a = 0; a < 3; ++a) {
+      b[a] = mass * body.v[a];
+      b[3 + a] = L[a];
+    }
+    for (const Node& nd : inside) {
+      const Vec3d r = nd.x - body.x;
+      Mat3d P;
+      if (bc.mode == BoundaryMode::Sticky) {
+        P = Mat3d::identity();
+      } else {
+        if (bc.mode == BoundaryMode::Separate && dot(nd.v - body.velocityAt(nd.x), nd.n) >= 0) continue;
+        P = Mat3d::outer(nd.n, nd.n);
+      }
+      // J = [I, -[r]x]; J^T P J = [[P, -P[r]x], [[r]x P, -[r]x P [r]x]].
+      const Mat3d Rx = Mat3d::cross(r);
+      const Mat3d PR = P * Rx, RP = Rx * P, RPR = Rx * P * Rx;
+      const Vec3d Pv = P * nd.v, rPv = cross(r, Pv);
+      for (int a = 0; a < 3; ++a) {
+        for (int e = 0; e < 3; ++e) {
+          A[a][e] += nd.m * P(a, e);
+          A[a][3 + e] -= nd.m * PR(a, e);
+          A[3 + a][e] += nd.m * RP(a, e);
+          A[3 + a][3 + e] -= nd.m * RPR(a, e);
+        }
+        b[a] += nd.m * Pv[a];
+        b[3 + a] += nd.m * rPv[a];
+      }
+    }
+    if (!solveSpd6(A, b)) throw Error(concat("rigid body of collider ", c, ": the coupled momentum system is singular"));
+    RigidBodyState coupled = body;
+    coupled.v = {b[0], b[1], b[2]};
+    coupled.w = {b[3], b[4], b[5]};
+    // The boundary condition with the coupled velocity; the body takes the
+    // opposite of the nodes' momentum change.
+    Vec3d P{}, Lc{};
+    for (const Node& nd : inside) {
+      const Vec3d v = applyBoundaryCondition(nd.v, coupled.velocityAt(nd.x), nd.n, bc);
+      const Vec3d dp = nd.m * (v - nd.v);
+      vel[nd.index] = v;
+      P += dp;
+      Lc += cross(nd.x - body.x, dp);
+    }
+    body.v -= body.inverseMass * P;
+    body.w -= body.inverseInertia * Lc;
+    materialImpulse_[c] -= P;
+  }
+}
+
+void MpmSolver::advanceRigidBodies(double dt) {
+  for (std::size_t c = 0; c < colliders_.size(); ++c) {
+    MpmCollider& col = colliders_[c];
+    if (!col.isDynamic()) continue;
+    RigidBodyState& b = rigid_[c];
+    b.advance(col.body(), dt);
+    if (!isFinite(b.x) || !isFinite(b.v) || !isFinite(b.w))
+      throw Error(concat("rigid body of collider ", c, " (", toString(col.shape().kind), ", ", col.body().mass.mass,
+                         " kg): non-finite state at t = ", time_ + dt, " s"));
+    const ColliderState s = b.colliderState();
+    col.setMotion(ColliderMotion::dynamic(s.pose, s.velocity, s.angularVelocity));
+  }
+}
+
+std::vector<RigidBodyReport> MpmSolver::rigidBodies() const {
+  std::vector<RigidBodyReport> out;
+  for (std::size_t c = 0; c < colliders_.size(); ++c) {
+    const MpmCollider& col = colliders_[c];
+    if (!col.isDynamic()) continue;
+    RigidBodyReport r;
+    r.collider = c;
+    const std::size_t m = colliderMagnet(c);
+    const RigidBodyState s = RigidBodyState::dynamic(col.body(), col.stateAt(time_));
+    r.pose = col.stateAt(time_).pose;
+    r.velocity = s.v;
+    r.angularVelocity = s.w;
+    if (m < magnets_.size()) {
+      r.magnet = long(m);
+      if (m < magnetWrench_.size()) {
+        r.magneticForce = magnetWrench_[m].force;
+        r.magneticTorque = magnetWrench_[m].torque;
+      }
+    }
+    if (c < materialImpulse_.size()) {
+      r.materialImpulse = materialImpulse_[c];
+      r.contactImpulse = contactImpulse_[c];
+    }
+    out.push_back(r);
+  }
+  return out;
+}
+
+}  // namespace mpm
+}  // namespace lodestone
