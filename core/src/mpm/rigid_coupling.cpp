@@ -191,7 +191,6 @@ void MpmSolver::predictRigidBodies(double dt) {
 }
 
 void MpmSolver::exchangeWithRigidBodies(double dt) {
-  (void)dt;
   const GridSpec& g = settings_.grid;
   const Index3 lo = grid_.activeLo(), hi = grid_.activeHi();
   const std::vector<MpmNode>& nodes = grid_.nodes();
@@ -207,7 +206,10 @@ void MpmSolver::exchangeWithRigidBodies(double dt) {
     if (!col.isDynamic()) continue;
     RigidBodyState& body = rigid_[c];
     const ColliderState pose = body.colliderState();
-    // The nodes with mass inside the body (phi < 0), within its bounding sphere.
+    // The nodes with mass inside the body (phi <= 0), within its bounding
+    // sphere, without the substep's gravity: their mass is the kernels'
+    // reach of material outside, and with its weight the body would carry
+    // the weight of the material around it (a box that floats sank).
     const double R = col.shape().boundingRadius() + g.dx;
     const Vec3d o = pose.pose.position;
     int from[3], to[3];
@@ -224,8 +226,8 @@ void MpmSolver::exchangeWithRigidBodies(double dt) {
           if (!(nodes[n].mass > 0)) continue;
           const Vec3d x = g.nodePosition(i, j, k);
           const Vec3d xb = pose.pose.toLocal(x);
-          if (!(col.shape().signedDistance(xb) < 0)) continue;
-          inside.push_back({n, nodes[n].mass, x, pose.pose.vectorToWorld(col.shape().normal(xb)), vel[n]});
+          if (col.shape().signedDistance(xb) > 0) continue;  // as MpmCollider::apply: on the surface counts
+          inside.push_back({n, nodes[n].mass, x, pose.pose.vectorToWorld(col.shape().normal(xb)), vel[n] - dt * settings_.gravity});
         }
     if (inside.empty()) continue;
     // The coupled velocity V = (v, w): (M + sum m J^T P J) V = M V_pred + sum m J^T P v_i.

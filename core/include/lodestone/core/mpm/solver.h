@@ -339,13 +339,18 @@ class MpmSolver {
   //   c. in the grid update, the body and the grid nodes inside it with mass
   //      exchange momentum: the body's velocity V = (v, w) solves
   //        (M + sum_i m_i J_i^T P_i J_i) V = M V_pred + sum_i m_i J_i^T P_i v_i,
-  //      J_i V = v + w x (x_i - x_c) the body's velocity at node i, P_i = I
+  //      J_i V = v + w x (x_i - x_c) the body's velocity at node i, v_i the
+  //      node's velocity without the substep's gravity (its mass is the
+  //      kernels' reach of material outside the body, whose weight the
+  //      material's pressure carries, not the body), P_i = I
   //      (sticky), n n^T (slip, and separate where the node approaches),
   //      which is the momentum balance with the nodes taking the body's
   //      normal velocity; the collider's boundary condition (with friction)
   //      is then applied with that velocity and the body takes exactly the
   //      opposite of the nodes' momentum change, so material + body conserve
-  //      linear and angular momentum. Implicit in V: stable for bodies much
+  //      linear and angular momentum (without gravity exactly; with it, up
+  //      to the weight of the material mass on nodes inside bodies).
+  //      Implicit in V: stable for bodies much
   //      lighter than the material around them;
   //   d. its pose advances (rigid_body.h); particles the projection pushes out
   //      of it give it the opposite of their momentum change.
