@@ -105,6 +105,8 @@ void MpmSolver::updateMagnetWrenches() {
     any = any || dynamic[m];
   }
   if (!any) return;
+  for (std::size_t m = 0; m < magnets_.size() && m < magnetReaction_.size(); ++m)
+    if (dynamic[m]) magnetWrench_[m] = magnetReaction_[m];
   poseMagnetsAt(time_);
   for (std::size_t a = 0; a < magnets_.size(); ++a)
     for (std::size_t b = 0; b < magnets_.size(); ++b) {

@@ -469,6 +469,7 @@ void MpmSolver::solveMagnetic(MpmStepReport& rep) {
   magneticDropped_ = {};
   haveMagneticForce_ = false;
   stepsSinceSolve_ = 0;
+  magnetReaction_.assign(magnets_.size(), MagnetWrench{});
   if (index.empty() || !law || scene_->empty()) return;
 
   poseMagnetsAt(time_);
@@ -531,6 +532,10 @@ void MpmSolver::solveMagnetic(MpmStepReport& rep) {
     stage_->particleForces(view, forces.data());
     for (std::size_t q = 0; q < index.size(); ++q) particles_.magneticForce[index[q]] = forces[q];
   }
+  // The material's pull on the dynamic magnets (kept, like the force, until the next solve).
+  for (std::size_t m = 0; m < magnets_.size(); ++m)
+    if (magnetCollider_[m] != kNoCollider && colliders_[magnetCollider_[m]].isDynamic())
+      magnetReaction_[m] = stage_->reactionOn(*magnets_[m], *scene_, magnets_[m]->pose().position, time_);
   haveMagneticForce_ = true;
   rep.secondsMagnetic = secondsSince(t0);
 }

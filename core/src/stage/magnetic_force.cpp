@@ -11,6 +11,7 @@
 
 #include "lodestone/core/base/constants.h"
 #include "lodestone/core/base/error.h"
+#include "lodestone/core/base/parallel.h"
 #include "lodestone/core/sources/field_source.h"
 
 namespace lodestone {
@@ -22,6 +23,61 @@ const char* toString(ForceMask mask) {
     case ForceMask::None: return "none";
   }
   return "unknown";
+}
+
+Vec3d appliedFieldForceDensity(const FieldSource& source, const Vec3d& x, const Vec3d& M, double dx, double time) {
+  // (M . grad) H_s as the directional derivative along M over +-h, h = 1e-3
+  // dx, of the field the material sees (the source's field, continued
+  // through a magnet's faces inside it: continuous across them, so a node on
+  // a face does not take in the jump of H_s, which gave a force ~1/h too
+  // large): exact up to O(h^2 H'''). Where the continuation itself changes
+  // between the two points (a node within h of a face, or of the surface
+  // inside a magnet where the nearest face changes), the derivative is taken
+  // one-sided, second order, from the side of the smaller continuation.
+  const double Mn = norm(M);
+  if (!(Mn > 0)) return {};
+  const double h = 1e-3 * dx;
+  const Vec3d d = (h / Mn) * M;
+  const auto seen = [&](const Vec3d& y) { return source.field(y, time) + source.exteriorContinuation(y, time); };
+  const Vec3d cUp = source.exteriorContinuation(x + d, time), cDn = source.exteriorContinuation(x - d, time);
+  Vec3d dH;  // derivative along M / |M|, A/m^2
+  if (cUp == cDn) {  // the continuation cancels
+    dH = (source.field(x + d, time) - source.field(x - d, time)) / (2 * h);
+  } else {
+    const double side = norm2(cUp) < norm2(cDn) ? 1.0 : -1.0;
+    const Vec3d e = side * d;
+    dH = (-side / h) * (2.5 * seen(x + e) - 4.0 * seen(x + 2.0 * e) + 1.5 * seen(x + 3.0 * e));
+  }
+  return (kMu0 * Mn) * dH;
+}
+
+MagnetWrench sourceReaction(GridView<const Vec3d> materialM, const FieldSource& source, const Vec3d& centre,
+                            double time) {
+  require(std::isfinite(time), "sourceReaction: time must be finite, got ", time, " s");
+  struct Sum {
+    Vec3d force, torque;
+    Sum& operator+=(const Sum& o) {
+      force += o.force;
+      torque += o.torque;
+      return *this;
+    }
+  };
+  const GridSpec& g = materialM.spec;
+  const double cell = g.cellVolume();
+  const std::size_t plane = std::size_t(g.dims.i) * std::size_t(g.dims.j);
+  const Sum sum = deterministicSum<Sum>(g.nodeCount(), [&](std::size_t m) {
+    Sum w;
+    const Vec3d& M = materialM[m];
+    if (M == Vec3d{}) return w;
+    const int k = int(m / plane), j = int((m % plane) / std::size_t(g.dims.i)), i = int(m % std::size_t(g.dims.i));
+    const Vec3d x = g.nodePosition(i, j, k);
+    const Vec3d f = cell * appliedFieldForceDensity(source, x, M, g.dx, time);
+    const Vec3d Hs = source.field(x, time) + source.exteriorContinuation(x, time);
+    w.force = -1.0 * f;
+    w.torque = -1.0 * (cross(x - centre, f) + (kMu0 * cell) * cross(M, Hs));
+    return w;
+  });
+  return {sum.force, sum.torque};
 }
 
 void stressDivergence(GridView<const Vec3d> H, GridView<const Vec3d> B, GridView<const Vec3d> Hext,
@@ -96,36 +152,7 @@ void stressDivergence(GridView<const Vec3d> H, GridView<const Vec3d> B, GridView
           div += (row(up, a) - row(dn, a)) / span;
           if (!applied) div += (kMu0 * M[a] / span) * (Hext[up] - Hext[dn]);
         }
-        if (applied) {
-          // (M . grad) H_ext as the directional derivative along M over +-h,
-          // h = 1e-3 dx, of the field the material sees (the source's field,
-          // continued through a magnet's faces inside it: continuous across
-          // them, so a node on a face does not take in the jump of H_ext,
-          // which gave a force ~1/h too large): exact up to O(h^2 H''').
-          // Where the continuation itself changes between the two points
-          // (a node within h of a face, or of the surface inside a magnet
-          // where the nearest face changes), the derivative is taken
-          // one-sided, second order, from the side of the smaller continuation.
-          const double Mn = norm(M);
-          if (Mn > 0) {
-            const double h = 1e-3 * g.dx;
-            const Vec3d x = g.nodePosition(i, j, k), d = (h / Mn) * M;
-            const auto seen = [&](const Vec3d& y) {
-              return applied->field(y, time) + applied->exteriorContinuation(y, time);
-            };
-            const Vec3d cUp = applied->exteriorContinuation(x + d, time),
-                        cDn = applied->exteriorContinuation(x - d, time);
-            Vec3d dH;  // derivative along M / |M|, A/m^2
-            if (cUp == cDn) {  // the continuation cancels
-              dH = (applied->field(x + d, time) - applied->field(x - d, time)) / (2 * h);
-            } else {
-              const double side = norm2(cUp) < norm2(cDn) ? 1.0 : -1.0;
-              const Vec3d e = side * d;
-              dH = (-side / h) * (2.5 * seen(x + e) - 4.0 * seen(x + 2.0 * e) + 1.5 * seen(x + 3.0 * e));
-            }
-            div += (kMu0 * Mn) * dH;
-          }
-        }
+        if (applied) div += appliedFieldForceDensity(*applied, g.nodePosition(i, j, k), M, g.dx, time);
         t[m] = div;
       }
   });

@@ -198,6 +198,21 @@ MagneticStageReport MagneticForceStage::solveAndForce(const FieldSource& sources
   return rep;
 }
 
+MagnetWrench MagneticForceStage::reactionOn(const FieldSource& source, const FieldSource& allSources,
+                                            const Vec3d& centre, double time) const {
+  DenseGrid<Vec3d> material(grid_);
+  tbb::parallel_for(0, grid_.dims.k, [&](int k) {
+    for (int j = 0; j < grid_.dims.j; ++j)
+      for (int i = 0; i < grid_.dims.i; ++i) {
+        const std::size_t m = grid_.index(i, j, k);
+        if (m_[m] == Vec3d{}) continue;
+        // n = 0: no material (a magnet's own M only).
+        material[m] = n_[m] > 0 ? m_[m] - allSources.magnetization(grid_.nodePosition(i, j, k), time) : Vec3d{};
+      }
+  });
+  return sourceReaction(material.view(), source, centre, time);
+}
+
 TransferReport MagneticForceStage::sampleForceDensity(const Vec3d* positions, std::size_t count, Vec3d* out) const {
   TransferReport r = sampleToParticles(f_.view(), positions, count, out, settings_.outOfGrid);
   const double inv = 1.0 / grid_.cellVolume();

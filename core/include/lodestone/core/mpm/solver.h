@@ -462,7 +462,8 @@ class MpmSolver {
   MagneticPlan lastPlan_;
   std::vector<RigidBodyState> rigid_;                 // the substep's body states: one per collider, then the walls
   std::vector<std::vector<Vec3d>> contactSamples_;  // per collider (computed on first use)
-  std::vector<MagnetWrench> magnetWrench_;          // per magnet
+  std::vector<MagnetWrench> magnetWrench_;          // per magnet: reaction + other magnets
+  std::vector<MagnetWrench> magnetReaction_;        // per magnet: the material's pull at the last field solve
   std::vector<Vec3d> materialImpulse_, contactImpulse_;  // per collider, since the frame started
   FieldReuse reuse_;  // the last solve's record for the planner's reuse test, permuted with the particles
   long long substeps_ = 0;

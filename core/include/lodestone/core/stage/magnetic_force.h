@@ -15,6 +15,7 @@
 #include "lodestone/core/base/grid.h"
 #include "lodestone/core/base/grid_scratch.h"
 #include "lodestone/core/base/vec3.h"
+#include "lodestone/core/sources/magnet_interaction.h"
 
 namespace lodestone {
 inline namespace sources {
@@ -56,6 +57,23 @@ const char* toString(ForceMask mask);
 void stressDivergence(GridView<const Vec3d> H, GridView<const Vec3d> B, GridView<const Vec3d> Hext,
                       GridView<const double> n, ForceMask mask, GridView<Vec3d> t, int dilation = 2,
                       const FieldSource* applied = nullptr, double time = 0.0);
+
+/// mu0 (M . grad) H_s (N/m^3): the Kelvin force density that `source`
+/// exerts on magnetization M (A/m) at x (m), the derivative taken of the
+/// field the material sees (field + exteriorContinuation) over +-1e-3 dx
+/// (one-sided where the continuation changes). The applied-field term of
+/// stressDivergence.
+Vec3d appliedFieldForceDensity(const FieldSource& source, const Vec3d& x, const Vec3d& M, double dx, double time);
+
+/// The reaction of magnetized material on one field source: minus the force
+/// (N) that `source` exerts on the material, the sum over nodes of dx^3 mu0
+/// (M . grad) H_s, and minus its torque (N*m) about `centre`, the sum of
+/// dx^3 [(x - c) x mu0 (M . grad) H_s + mu0 M x H_s] (the couple term: the
+/// material's total couple M x H vanishes for the total field only).
+/// materialM: the material's magnetization at the nodes (A/m), zero where
+/// there is none. Independent of the thread count.
+MagnetWrench sourceReaction(GridView<const Vec3d> materialM, const FieldSource& source, const Vec3d& centre,
+                            double time);
 
 /// Moves nodal forces f (N) that lie outside the support of the density
 /// (n = 0) onto it: a node at distance L (26-connected node steps) splits its

@@ -114,6 +114,15 @@ class MagneticForceStage {
   GridView<const Vec3d> forceDensity() const { return t_.view(); }        ///< t = div T, N/m^3
   GridView<const Vec3d> nodalForce() const { return f_.view(); }          ///< f = R t, N
 
+  /// The reaction of the material on `source` (sourceReaction): force (N)
+  /// and torque (N*m about `centre`) after the last run. `allSources` and
+  /// `time` must be those of that run (the magnets' own magnetization,
+  /// which magnetization() includes inside them, is taken out with them).
+  /// `source` is typically one member of `allSources`, a free magnet. One
+  /// directional derivative of `source` per material node.
+  MagnetWrench reactionOn(const FieldSource& source, const FieldSource& allSources, const Vec3d& centre,
+                          double time) const;
+
  private:
   MagneticStageReport solveAndForce(const FieldSource& sources, double time, MagneticStageReport rep);
 
