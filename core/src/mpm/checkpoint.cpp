@@ -182,6 +182,22 @@ struct MpmCheckpointAccess {
       w.putVec(m->pose().position);
       w.putMat(m->pose().rotation);
     }
+    // The dynamic colliders' states and the material's pull on each magnet
+    // at the last field solve (kept until the next).
+    for (const MpmCollider& c : s.colliders_) {
+      w.put(std::uint8_t(c.isDynamic()));
+      if (!c.isDynamic()) continue;
+      const ColliderState st = c.stateAt(s.time_);
+      w.putVec(st.pose.position);
+      w.putMat(st.pose.rotation);
+      w.putVec(st.velocity);
+      w.putVec(st.angularVelocity);
+    }
+    for (std::size_t m = 0; m < s.magnets_.size(); ++m) {
+      const MagnetWrench r = m < s.magnetReaction_.size() ? s.magnetReaction_[m] : MagnetWrench{};
+      w.putVec(r.force);
+      w.putVec(r.torque);
+    }
     w.putVec(s.magneticDropped_);
 
     const std::size_t n = P.size();
@@ -268,6 +284,27 @@ struct MpmCheckpointAccess {
       for (int i = 0; i < 3; ++i)
         for (int j = 0; j < 3; ++j) finite = finite && std::isfinite(p.rotation(i, j));
       if (!finite) throw InvalidArgument("checkpoint: a magnet pose is not finite");
+    }
+    std::vector<ColliderState> bodies(colliders);
+    for (std::size_t c = 0; c < colliders; ++c) {
+      const bool dynamic = r.get<std::uint8_t>("collider kind") != 0;
+      if (dynamic != s.colliders_[c].isDynamic())
+        throw InvalidArgument(concat("checkpoint: collider ", c, " is ", dynamic ? "dynamic" : "kinematic",
+                                     " in it and ", dynamic ? "kinematic" : "dynamic", " in the solver"));
+      if (!dynamic) continue;
+      ColliderState& st = bodies[c];
+      st.pose.position = r.getVec("rigid body pose");
+      st.pose.rotation = r.getMat("rigid body pose");
+      st.velocity = r.getVec("rigid body velocity");
+      st.angularVelocity = r.getVec("rigid body angular velocity");
+      validatePose(st.pose, "checkpoint: rigid body");
+      if (!isFinite(st.velocity) || !isFinite(st.angularVelocity))
+        throw InvalidArgument(concat("checkpoint: rigid body ", c, " has a non-finite velocity"));
+    }
+    std::vector<MagnetWrench> reactions(magnets);
+    for (MagnetWrench& m : reactions) {
+      m.force = r.getVec("magnet reaction");
+      m.torque = r.getVec("magnet reaction");
     }
     const Vec3d dropped = r.getVec("dropped magnetic force");
 
@@ -366,6 +403,10 @@ struct MpmCheckpointAccess {
     s.particlesDirty_ = true;
     s.magneticDropped_ = dropped;
     for (std::size_t m = 0; m < poses.size(); ++m) s.magnets_[m]->setPose(poses[m]);
+    for (std::size_t c = 0; c < bodies.size(); ++c)
+      if (s.colliders_[c].isDynamic())
+        s.colliders_[c].setMotion(ColliderMotion::dynamic(bodies[c].pose, bodies[c].velocity, bodies[c].angularVelocity));
+    s.magnetReaction_ = std::move(reactions);
     s.sameGrid_ = sameGrid;
     if (nf > 0) {
       if (s.magneticForce_.empty() || !(s.magneticForce_.spec() == s.settings_.grid))
@@ -406,12 +447,20 @@ MpmCheckpointInfo readMpmCheckpointInfo(const std::uint8_t* data, std::size_t si
   (void)r.getGrid("MPM grid");
   (void)r.getGrid("magnetic grid");
   (void)r.get<std::uint64_t>("material count");
-  (void)r.get<std::uint64_t>("collider count");
+  const std::uint64_t colliders = r.get<std::uint64_t>("collider count");
   const std::uint64_t magnets = r.get<std::uint64_t>("magnet count");
   for (std::uint64_t m = 0; m < magnets; ++m) {
     (void)r.getVec("magnet pose");
     (void)r.getMat("magnet pose");
   }
+  for (std::uint64_t c = 0; c < colliders; ++c) {
+    if (r.get<std::uint8_t>("collider kind") == 0) continue;
+    (void)r.getVec("rigid body pose");
+    (void)r.getMat("rigid body pose");
+    (void)r.getVec("rigid body velocity");
+    (void)r.getVec("rigid body angular velocity");
+  }
+  for (std::uint64_t m = 0; m < 2 * magnets; ++m) (void)r.getVec("magnet reaction");
   (void)r.getVec("dropped magnetic force");
   info.particles = r.getCount(1, "particle count");
   return info;

@@ -7,9 +7,11 @@
 // Contents: the particles (x, v, C, F, J, mass, V^0, n_p, material, id, the
 // per-particle magnetic force, the next id), time, frame, substep counters,
 // the cached magnetic nodal force and its bookkeeping (reused between field
-// solves when magneticSolveInterval > 0), the magnets' poses, the effects
+// solves when magneticSolveInterval > 0), the magnets' poses, the dynamic
+// rigid bodies' poses and velocities, the material's pull on each magnet at
+// the last field solve, the effects
 // planner's reuse records, and the magnetic stage's grid and potential phi
-// (A) when a stage exists. Colliders and
+// (A) when a stage exists. Kinematic colliders and
 // magnets move by analytic motions of time, so time restores them; the
 // materials, colliders and sources come from the scene and are checked by
 // count and grid. Rate emitters need no state either: the chunks they have
@@ -40,7 +42,7 @@
 namespace lodestone {
 inline namespace mpm {
 
-inline constexpr std::uint32_t kMpmCheckpointVersion = 1;
+inline constexpr std::uint32_t kMpmCheckpointVersion = 2;
 
 /// What a checkpoint says about itself.
 struct MpmCheckpointInfo {
