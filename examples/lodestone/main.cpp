@@ -330,6 +330,28 @@ nlohmann::json frameJson(int frame, const MpmFrameReport& r, std::size_t particl
   putQuantity(e, "gravitational", r.energies.gravitational, "J");
   putQuantity(e, "elastic", r.energies.elastic, "J");
   f["energy"] = e;
+  if (!r.bodies.empty()) {
+    // The dynamic rigid bodies at the end of the frame and what acted on them.
+    nlohmann::json bodies = nlohmann::json::array();
+    for (const RigidBodyReport& b : r.bodies) {
+      nlohmann::json j;
+      j["collider"] = b.collider;
+      if (b.magnet >= 0) j["magnet"] = b.magnet;
+      putQuantity(j, "position", b.pose.position, "m");
+      const Mat3d& R = b.pose.rotation;
+      j["rotation"] = {{jsonNumber(R(0, 0)), jsonNumber(R(0, 1)), jsonNumber(R(0, 2))},
+                       {jsonNumber(R(1, 0)), jsonNumber(R(1, 1)), jsonNumber(R(1, 2))},
+                       {jsonNumber(R(2, 0)), jsonNumber(R(2, 1)), jsonNumber(R(2, 2))}};
+      putQuantity(j, "velocity", b.velocity, "m/s");
+      putQuantity(j, "angular_velocity", b.angularVelocity, "rad/s");
+      putQuantity(j, "magnetic_force", b.magneticForce, "N");
+      putQuantity(j, "magnetic_torque", b.magneticTorque, "N*m");
+      putQuantity(j, "material_impulse", b.materialImpulse, "N*s");
+      putQuantity(j, "contact_impulse", b.contactImpulse, "N*s");
+      bodies.push_back(j);
+    }
+    f["rigid_bodies"] = bodies;
+  }
   f["warnings"] = r.warnings;
   return f;
 }

@@ -69,6 +69,17 @@ ColliderMotion motionFrom(const ParamSet& p, const Pose& rest) {
   return ColliderMotion::constantVelocity(rest, v, w);
 }
 
+std::optional<RigidBodySettings> rigidBodyFrom(const ParamSet& p) {
+  if (!p.getBool("dynamic")) return std::nullopt;
+  RigidBodySettings b;
+  b.density = p.getFloat("density");
+  b.mass = p.getFloat("mass");
+  b.restitution = p.getFloat("restitution");
+  b.friction = p.getFloat("contact_friction");
+  b.validate("rigid body");
+  return b;
+}
+
 SourcesData::Magnet magnetFrom(const ParamSet& p, Pose* restPose) {
   SourcesData::Magnet m;
   const Pose pose = poseAlong(p.getVec3("center"), p.getVec3("axis"));
@@ -76,6 +87,9 @@ SourcesData::Magnet magnetFrom(const ParamSet& p, Pose* restPose) {
   m.motion = motionFrom(p, pose);
   m.collider = p.getBool("collider");
   m.boundary = boundaryFrom(p);
+  m.dynamics = rigidBodyFrom(p);
+  if (m.dynamics && !m.collider)
+    throw InvalidArgument("magnet: a dynamic magnet must be a collider (collider = true): its body is what moves");
   if (restPose) *restPose = pose;
   return m;
 }
@@ -354,9 +368,10 @@ void addSourcesAndColliders(MpmSolver& solver, const FieldSourceSet& fields,
                             const std::vector<MpmCollider>& colliders) {
   solver.setSources(fields);
   for (const SourcesData::Magnet& m : magnets) {
-    if (m.collider)
-      solver.addMagnet(*m.magnet, m.motion, m.boundary);
-    else
+    if (m.collider) {
+      const std::size_t c = solver.addMagnet(*m.magnet, m.motion, m.boundary);
+      if (m.dynamics) solver.collider(c).setDynamics(*m.dynamics, solver.time());
+    } else
       solver.addNonCollidingMagnet(*m.magnet, m.motion);
   }
   for (const MpmCollider& c : colliders) solver.addCollider(c);

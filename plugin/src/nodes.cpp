@@ -37,6 +37,27 @@ void addMotionParams(std::vector<ParamDecl>& params) {
                              "Constant angular velocity about the body origin (world frame)."));
 }
 
+/// `dynamic` and the rigid-body parameters (mpm/rigid_body.h) of a collider or magnet.
+void addRigidBodyParams(std::vector<ParamDecl>& params, double density) {
+  params.push_back(boolParam("dynamic", "Dynamic", false,
+                             "A free rigid body, two-way coupled: moved by the material, gravity, contacts and (a "
+                             "magnet) magnetic forces; motion.velocity and motion.angular_velocity are its initial "
+                             "velocities, keyframes its starting pose."));
+  params.push_back(range(floatParam("density", "Density", density, "kg/m^3",
+                                    "Density of a dynamic body; its mass and inertia follow from the shape."),
+                         1e-3, 1e6));
+  params.push_back(range(floatParam("mass", "Mass", 0.0, "kg",
+                                    "Mass of a dynamic body; > 0 replaces the density's (inertia scaled with it)."),
+                         0, 1e6));
+  params.push_back(range(floatParam("restitution", "Restitution", 0.2, "",
+                                    "Bounce of a dynamic body's contacts with bodies, colliders and walls (0..1)."),
+                         0, 1));
+  params.push_back(range(floatParam("contact_friction", "Contact friction", 0.4, "",
+                                    "Coulomb coefficient of a dynamic body's contacts with bodies, colliders and "
+                                    "walls (the material's friction on it is `friction`)."),
+                         0, 10));
+}
+
 template <typename T>
 NodeValue value(T&& data) {
   return std::shared_ptr<const std::decay_t<T>>(std::make_shared<std::decay_t<T>>(std::forward<T>(data)));
@@ -416,6 +437,7 @@ NodeDecl magnetNode() {
   q.push_back(boolParam("collider", "Collider", true, "Also an obstacle for the material."));
   addBoundaryParams(q, "sticky");
   addMotionParams(q);
+  addRigidBodyParams(q, 7500);
   d.inputs = {{"sources", PortType::Sources, "Sources to add this magnet to.", true, true}};
   d.outputs = {{"sources", PortType::Sources, "The input sources plus this magnet."}};
   d.cook = [](const CookContext& c) {
@@ -464,7 +486,9 @@ NodeDecl colliderNode() {
   d.type = "collider";
   d.label = "Collider";
   d.category = "mpm";
-  d.help = "An analytic obstacle of the MPM (plane, box, sphere, cylinder; inverted for containers), static or moving.";
+  d.help =
+      "An obstacle of the MPM (plane, box, sphere, cylinder, level set or mesh; inverted for containers): static, "
+      "moving as scripted, or a dynamic rigid body that the material and contacts move.";
   auto& q = d.params;
   addShapeParams(q, {"plane", "box", "sphere", "cylinder", "level_set", "mesh"}, "plane");
   q.push_back(
@@ -483,6 +507,7 @@ NodeDecl colliderNode() {
                    {"box", "sphere", "cylinder", "level_set", "mesh"}));
   addBoundaryParams(q, "sticky");
   addMotionParams(q);
+  addRigidBodyParams(q, 1000);
   d.inputs = {{"colliders", PortType::Colliders, "Colliders to add this one to.", true, true}};
   d.outputs = {{"colliders", PortType::Colliders, "The input colliders plus this one."}};
   d.cook = [](const CookContext& c) {
@@ -491,6 +516,7 @@ NodeDecl colliderNode() {
     Pose pose;
     const ColliderShape cs = colliderShapeFrom(p, pose);
     out.colliders.emplace_back(cs, motionFrom(p, pose), boundaryFrom(p));
+    if (const std::optional<RigidBodySettings> body = rigidBodyFrom(p)) out.colliders.back().setDynamics(*body);
     return CookOutputs{{"colliders", value(std::move(out))}};
   };
   return d;

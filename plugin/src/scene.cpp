@@ -211,6 +211,8 @@ Scene sceneFromJson(const nlohmann::json& doc, const std::string& sourceName, co
     if (p.given("remanence") && p.given("magnetization")) m.fail("give magnetization or remanence, not both");
     if (!p.given("remanence"))  // magnetization is required then (missing: named with its declared unit and range)
       readParam(m, "magnetization", *requireNode("magnet").param("magnetization"));
+    if (p.getBool("dynamic") && !p.getBool("collider"))
+      m.failAt("dynamic", "a dynamic magnet must be a collider (collider = true): its body is what moves");
     Pose pose;
     SceneMagnet sm = magnetFrom(p, &pose);
     sm.motion = readMotion(m, pose);
@@ -248,8 +250,14 @@ Scene sceneFromJson(const nlohmann::json& doc, const std::string& sourceName, co
     }
     const ColliderMotion motion = readMotion(c, pose);
     const BoundaryCondition bc = boundaryFrom(p);
+    MpmCollider collider(cs, motion, bc);
+    try {
+      if (const std::optional<RigidBodySettings> body = rigidBodyFrom(p)) collider.setDynamics(*body);
+    } catch (const InvalidArgument& e) {
+      c.failAt("dynamic", e.what());
+    }
     c.finish();
-    scene.colliders.emplace_back(cs, motion, bc);
+    scene.colliders.push_back(std::move(collider));
   }
 
   // Outputs.

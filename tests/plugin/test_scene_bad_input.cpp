@@ -238,3 +238,49 @@ TEST(SceneBadInput, TheContentHashFollowsTheSceneText) {
   EXPECT_EQ(a.contentHash, b.contentHash);
   EXPECT_NE(a.contentHash, c.contentHash);
 }
+
+TEST(SceneBadInput, DynamicBodiesAreReadAndTheirBadValuesNamed) {
+  // A dynamic box and a free magnet are read into dynamic colliders with the
+  // given mass properties and contact parameters.
+  const std::string ok = replaced(kScene, "\"fields\"", R"("colliders": [ { "shape": "box", "center": [0.1, 0.1, 0.16],
+    "half_size": [0.02, 0.02, 0.01], "dynamic": true, "density": 500, "restitution": 0.5, "contact_friction": 0.3 } ],
+  "magnets": [ { "shape": "sphere", "center": [0.1, 0.1, 0.04], "radius": 0.01, "remanence": 1.0,
+    "dynamic": true, "mass": 0.05 } ],
+  "fields")");
+  ASSERT_EQ(errorOf(ok), "");
+  const plugin::Scene scene = parseScene(ok, "ok.json");
+  ASSERT_EQ(scene.colliders.size(), 1u);
+  ASSERT_TRUE(scene.colliders[0].isDynamic());
+  EXPECT_NEAR(scene.colliders[0].body().mass.mass, 500 * 0.04 * 0.04 * 0.02, 1e-12);
+  EXPECT_EQ(scene.colliders[0].body().settings.restitution, 0.5);
+  EXPECT_EQ(scene.colliders[0].body().settings.friction, 0.3);
+  ASSERT_EQ(scene.magnets.size(), 1u);
+  ASSERT_TRUE(scene.magnets[0].dynamics.has_value());
+  EXPECT_EQ(scene.magnets[0].dynamics->mass, 0.05);
+  auto solver = buildSolver(scene);
+  ASSERT_EQ(solver->colliderCount(), 2u);  // the magnet's collider first
+  EXPECT_NEAR(solver->collider(0).body().mass.mass, 0.05, 1e-15);
+  EXPECT_TRUE(solver->collider(1).isDynamic());
+
+  const Case cases[] = {
+      {"dynamic plane", "\"fields\"", R"("colliders": [ { "shape": "plane", "point": [0, 0, 0.05], "normal": [0, 0, 1], "dynamic": true } ], "fields")",
+       {"colliders[0].dynamic", "plane", "infinite mass"}},
+      {"dynamic container", "\"fields\"",
+       R"("colliders": [ { "shape": "box", "center": [0.1, 0.1, 0.1], "half_size": [0.1, 0.1, 0.1], "inverted": true,
+                           "dynamic": true } ], "fields")",
+       {"colliders[0].dynamic", "inverted"}},
+      {"restitution above 1", "\"fields\"",
+       R"("colliders": [ { "shape": "sphere", "center": [0.1, 0.1, 0.1], "radius": 0.01, "dynamic": true,
+                           "restitution": 1.5 } ], "fields")",
+       {"colliders[0].restitution", "1.5"}},
+      {"free magnet that is not a collider", "\"fields\"",
+       R"("magnets": [ { "shape": "sphere", "center": [0.1, 0.1, 0.02], "radius": 0.01, "remanence": 1,
+                         "dynamic": true, "collider": false } ], "fields")",
+       {"magnets[0].dynamic", "collider"}},
+  };
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.what);
+    const std::string message = errorOf(replaced(kScene, c.from, c.to));
+    for (const std::string& e : c.expected) EXPECT_NE(message.find(e), std::string::npos) << e << " in: " << message;
+  }
+}

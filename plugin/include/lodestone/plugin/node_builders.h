@@ -3,6 +3,7 @@
 // nodes' cooks and scene files (whose entries are nodes' parameters). Each
 // builder is the only place its parameters become a core object.
 #include <memory>
+#include <optional>
 #include <vector>
 
 #include "lodestone/core/base/pose.h"
@@ -75,6 +76,9 @@ std::unique_ptr<MagnetSource> makeMagnet(const ParamSet& params, const Pose& pos
 /// The motion of motion.velocity and motion.angular_velocity parameters
 /// (m/s, rad/s about the body origin) from the rest pose; fixed when both are zero.
 ColliderMotion motionFrom(const ParamSet& params, const Pose& rest);
+/// The rigid-body settings of a collider or magnet node whose `dynamic` is
+/// on (density, mass, restitution, contact_friction); empty when it is off.
+std::optional<RigidBodySettings> rigidBodyFrom(const ParamSet& params);
 
 /// A magnet node's magnet: the source at its pose (center, axis), its motion,
 /// whether it is also a collider and its boundary condition; the rest pose

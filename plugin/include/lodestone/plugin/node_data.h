@@ -3,6 +3,7 @@
 // types; values are immutable once a node has cooked them (shared, never
 // copied on the way downstream).
 #include <memory>
+#include <optional>
 #include <string>
 #include <variant>
 #include <vector>
@@ -65,6 +66,9 @@ struct SourcesData {
     ColliderMotion motion;
     BoundaryCondition boundary{BoundaryMode::Sticky, 0.0};
     bool collider = true;
+    /// Set: a free magnet, moved by the material's pull, the other magnets,
+    /// gravity and contacts (MpmSolver's rigid bodies).
+    std::optional<RigidBodySettings> dynamics;
   };
   FieldSourceSet fields;
   std::vector<Magnet> magnets;
