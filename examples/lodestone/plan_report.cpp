@@ -41,6 +41,15 @@ std::vector<StageDecision> mechanicsDecisions(const plugin::Scene& scene, const 
                            "(about 4x the substep cost)"
                          : "a solid material is used",
                0, 0});
+  std::size_t dynamic = 0, freeMagnets = 0;
+  for (std::size_t c = 0; c < solver.colliderCount(); ++c) dynamic += solver.collider(c).isDynamic() ? 1 : 0;
+  for (const RigidBodyReport& b : solver.rigidBodies()) freeMagnets += b.magnet >= 0 ? 1 : 0;
+  d.push_back({"rigid bodies", dynamic > 0, dynamic > 0 ? concat(dynamic, " dynamic") : "idle",
+               dynamic > 0 ? concat(dynamic, " dynamic collider(s), ", freeMagnets,
+                                    " of them free magnets: contacts, momentum exchange with the grid nodes inside "
+                                    "them", freeMagnets > 0 ? ", the material's pull on each free magnet at every field solve" : "")
+                           : "no dynamic collider or magnet: every collider moves as scripted",
+               0, 0});
   const double end = solver.time() + scene.frames * scene.frameDuration();
   std::size_t on = 0;
   for (std::size_t e = 0; e < solver.emitterCount(); ++e)

@@ -7,7 +7,10 @@
 // (an analytic box, or its signed distance sampled every 2 mm) lies under the
 // block, and each case runs with the collider projection off and on
 // (MpmSettings::colliderProjection) in the same run: its price is the
-// difference. Prints a table and writes CSV. Not a test: timings are
+// difference. With --bodies N1,N2,... a further table times a fluid block
+// with N spheres (1 cm, 500 kg/m^3) resting in it, kinematic and dynamic in
+// the same run: the price of the two-way coupling per substep is the
+// difference. Prints tables and writes CSV. Not a test: timings are
 // machine-dependent.
 // `lodestone-bench-mpm-step --help` lists the options.
 #include <algorithm>
@@ -106,6 +109,36 @@ Timing run(bool fluid, double targetParticles, int steps, int nodes, int reorder
   return t;
 }
 
+/// Mean seconds per substep of a fluid block (about `particles`) with
+/// `bodies` spheres of 1 cm radius on a lattice inside it, dynamic or kinematic.
+double bodiesRun(double particles, int bodies, bool dynamic, int steps, int nodes) {
+  MpmSettings s;
+  s.grid.dx = 7.8e-3;
+  s.grid.dims = {nodes, nodes, nodes};
+  MpmSolver solver(s);
+  const std::uint32_t m = solver.addMaterial(viscousFluid(1.0, 1e5, 1000));
+  const int n = std::max(2, int(std::lround(std::cbrt(particles / 8.0))));
+  const double half = 0.5 * n * s.grid.dx;
+  const Vec3d lo = solver.domainLower(), hi = solver.domainUpper();
+  const Vec3d centre{0.5 * (lo.x + hi.x), 0.5 * (lo.y + hi.y), lo.z + half};
+  solver.emit(EmitterShape::box(Pose::at(centre), {half, half, half}), m, {});
+  const int per = std::max(1, int(std::ceil(std::cbrt(double(bodies)))));
+  RigidBodySettings b;
+  b.density = 500;
+  for (int k = 0; k < bodies; ++k) {
+    const Vec3d f{(k % per + 0.5) / per, (k / per % per + 0.5) / per, (k / (per * per) + 0.5) / per};
+    const Vec3d at = centre + 2 * half * (f - Vec3d{0.5, 0.5, 0.5});
+    MpmCollider c(ColliderShape::sphere(0.01), ColliderMotion::fixed(Pose::at(at)));
+    if (dynamic) c.setDynamics(b);
+    solver.addCollider(c);
+  }
+  const double dt = solver.suggestedDt();
+  for (int w = 0; w < 2; ++w) solver.step(dt);
+  double total = 0;
+  for (int k = 0; k < steps; ++k) total += solver.step(dt).secondsTotal;
+  return total / steps;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -113,6 +146,7 @@ int main(int argc, char** argv) {
     std::vector<double> counts{1e5, 1e6};
     int steps = 20, nodes = 128, threads = 0, reorder = MpmSettings{}.reorderInterval, age = 0;
     std::string csvPath = "bench_mpm_step.csv", collider = "none";
+    std::vector<double> bodies;
     CLI::App app("lodestone-bench-mpm-step: times one MLS-MPM substep (no magnetism)", "lodestone-bench-mpm-step");
     cli::helpLayout(app, 28);
     cli::addNumberList(app, "--particles", counts, "target particle counts, 8 per cell (each 8..1e9)");
@@ -140,6 +174,8 @@ int main(int argc, char** argv) {
                    "runs with the collider projection off and on)")
         ->check(CLI::IsMember({"none", "box", "level_set"}))
         ->capture_default_str();
+    cli::addNumberList(app, "--bodies", bodies,
+                       "also time a fluid block with this many 1 cm spheres in it, kinematic and dynamic (e.g. 1,20,100)");
     app.add_option("--csv", csvPath, "CSV output")->type_name("FILE")->capture_default_str();
     if (const std::optional<int> code = cli::parse(app, argc, argv)) return *code;
     for (double c : counts) require(c >= 8 && c <= 1e9, "--particles: ", c, " is not in 8..1e9");
@@ -170,6 +206,21 @@ int main(int argc, char** argv) {
               << collider << ',' << proj << ',' << t.dt << ',' << 1e3 * t.total << ',' << 1e3 * t.p2g << ','
               << 1e3 * t.binning << ',' << 1e3 * t.grid << ',' << 1e3 * t.g2p << ',' << ns << ',' << threads << '\n';
         }
+    if (!bodies.empty()) {
+      std::printf("\nrigid bodies in a fluid block of %.3g particles: ms per substep\n%8s %12s %12s %10s\n", counts.front(),
+                  "bodies", "kinematic", "dynamic", "coupling");
+      for (double nb : bodies) {
+        require(nb >= 1 && nb <= 10000 && nb == std::floor(nb), "--bodies: ", nb, " is not a whole number in 1..10000");
+        const double k = bodiesRun(counts.front(), int(nb), false, steps, nodes);
+        const double d = bodiesRun(counts.front(), int(nb), true, steps, nodes);
+        std::printf("%8d %12.2f %12.2f %9.1f%%\n", int(nb), 1e3 * k, 1e3 * d, 100 * (d / k - 1));
+        std::fflush(stdout);
+        csv << "fluid+bodies," << counts.front() << ',' << nodes << ',' << steps << ",0," << reorder << ",spheres:" << nb
+            << ",kinematic,0," << 1e3 * k << ",,,,,," << threads << '\n';
+        csv << "fluid+bodies," << counts.front() << ',' << nodes << ',' << steps << ",0," << reorder << ",spheres:" << nb
+            << ",dynamic,0," << 1e3 * d << ",,,,,," << threads << '\n';
+      }
+    }
     std::printf("CSV written to %s\n", csvPath.c_str());
     return 0;
   } catch (const std::exception& e) {

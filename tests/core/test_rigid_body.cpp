@@ -210,3 +210,31 @@ TEST(RigidBody, ABoxDroppedOnTheFloorComesToRestFlatOnIt) {
   EXPECT_LT(norm(s.velocity), 1e-3);
   EXPECT_LT(norm(s.angularVelocity), 1e-2);
 }
+
+TEST(RigidBody, TheMomentumExchangeIsImplicitForALightBody) {
+  // A 1 g ball among four 1 kg material points moving at 1 m/s: sticky, it
+  // takes their velocity (not a thousandfold kick); slip with friction 10,
+  // the friction brings it at most to sticking. Momentum is kept in both.
+  for (const BoundaryCondition bc : {BoundaryCondition{BoundaryMode::Sticky, 0.0},
+                                     BoundaryCondition{BoundaryMode::Slip, 10.0}}) {
+    RigidBody body = RigidBody::of(ColliderShape::sphere(0.01), bodySettings(1000, 0, 0));
+    body.mass.mass = 1e-3;  // the state below takes its inverse
+    ColliderState at;
+    at.pose = Pose::at({0, 0, 0});
+    RigidBodyState s = RigidBodyState::dynamic(body, at);
+    std::vector<RigidCouplingPoint> points;
+    for (const Vec3d n : {Vec3d{1, 0, 0}, Vec3d{-1, 0, 0}, Vec3d{0, 1, 0}, Vec3d{0, -1, 0}})
+      points.push_back({1.0, 0.009 * n, n, Vec3d{0.3, 0.4, 1.0} - 0.2 * n});
+    Vec3d before = s.momentum();
+    for (const RigidCouplingPoint& q : points) before += q.m * q.v;
+    exchangeMomentum(s, bc, points);
+    Vec3d after = s.momentum();
+    for (const RigidCouplingPoint& q : points) after += q.m * q.v;
+    std::printf("%s: light body velocity (%.4f %.4f %.4f) m/s\n", toString(bc.mode), s.v.x, s.v.y, s.v.z);
+    EXPECT_LT(norm(after - before), 1e-12);
+    EXPECT_LT(norm(s.v), 2.0);  // of the order of the points' speed
+    if (bc.mode == BoundaryMode::Sticky) {
+      EXPECT_LT(norm(s.v - Vec3d{0.3, 0.4, 1.0}), 1e-3);
+    }
+  }
+}

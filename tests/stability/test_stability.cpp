@@ -50,6 +50,7 @@
 #include "lodestone/core/field/magnetization_law.h"
 #include "lodestone/core/field/material.h"
 #include "lodestone/core/mpm/solver.h"
+#include "lodestone/core/sources/cuboid_magnet.h"
 #include "lodestone/core/sources/sphere_magnet.h"
 #include "lodestone/core/sources/uniform_field.h"
 
@@ -481,6 +482,58 @@ TEST(Stability, ThinPlateHoldsASoftFluidPulledByAMagnetAndAFastFall) {
     expectStable(*s, o, "fast fall onto a 2 mm plate, fixed dt");
     EXPECT_GT(o.dtLimited, 0);
     EXPECT_EQ(countBelow(*s, bottom), 0u) << "fluid crossed the plate";
+  }
+}
+
+TEST(Stability, RigidBodiesInHardPlacesStayFinite) {
+  const double c = centre();
+  const auto bodyState = [](const MpmSolver& s, std::size_t i) {
+    return s.collider(i).stateAt(s.time());
+  };
+  {
+    // A body a thousand times lighter than the fluid it is placed in (the
+    // fluid fills it at the start and is pushed out), and a steel ball
+    // thrown at 5 m/s into the same fluid: both finite, inside the domain.
+    auto s = std::make_unique<MpmSolver>(smallSettings());
+    s->emit(EmitterShape::box(Pose::at({c, c, 0.04}), {0.04, 0.04, 0.025}), s->addMaterial(ferrofluid(paperMaterial())),
+            emitSettings());
+    RigidBodySettings light;
+    light.density = 1;
+    MpmCollider cork(ColliderShape::box({0.01, 0.01, 0.01}), ColliderMotion::fixed(Pose::at({c - 0.02, c, 0.04})));
+    cork.setDynamics(light);
+    RigidBodySettings steel;
+    steel.density = 7800;
+    MpmCollider ball(ColliderShape::sphere(0.008),
+                     ColliderMotion::constantVelocity(Pose::at({c + 0.02, c, 0.09}), {0, 0, -5}, {0, 30, 0}));
+    ball.setDynamics(steel);
+    const std::size_t a = s->addCollider(cork), b = s->addCollider(ball);
+    s->sources().add(SphereMagnet(Pose::at({c, c, -0.02}), 0.02, {0, 0, magnetizationFromRemanence(1.2)}));
+    const Outcome o = run(*s, 3, 0.01);
+    expectStable(*s, o, "a cork placed in fluid and a steel ball thrown into it");
+    const Vec3d lo = s->domainLower(), hi = s->domainUpper();
+    for (const std::size_t i : {a, b}) {
+      const ColliderState st = bodyState(*s, i);
+      EXPECT_TRUE(isFinite(st.pose.position) && isFinite(st.velocity) && isFinite(st.angularVelocity)) << i;
+      for (int k = 0; k < 3; ++k) {
+        EXPECT_GT(st.pose.position[k], lo[k] - 1e-9) << i;
+        EXPECT_LT(st.pose.position[k], hi[k] + 1e-9) << i;
+      }
+    }
+  }
+  {
+    // Two strong free magnets placed overlapping: the contact pushes them
+    // apart, the dipole pull holds them touching, all finite.
+    auto s = std::make_unique<MpmSolver>(smallSettings());
+    const double M = magnetizationFromRemanence(1.4);
+    const std::size_t a = s->addMagnet(CuboidMagnet(Pose::at({c, c, 0.05}), {0.008, 0.008, 0.008}, {0, 0, M}));
+    const std::size_t b = s->addMagnet(CuboidMagnet(Pose::at({c + 0.012, c, 0.05}), {0.008, 0.008, 0.008}, {0, 0, M}));
+    RigidBodySettings steel;
+    steel.density = 7500;
+    s->collider(a).setDynamics(steel);
+    s->collider(b).setDynamics(steel);
+    const Outcome o = run(*s, 3, 0.01);
+    expectStable(*s, o, "two overlapping free magnets");
+    EXPECT_TRUE(isFinite(bodyState(*s, a).pose.position) && isFinite(bodyState(*s, b).pose.position));
   }
 }
 

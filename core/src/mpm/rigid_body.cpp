@@ -2,7 +2,9 @@
 // semi-implicit Euler state update. See mpm/rigid_body.h.
 #include "lodestone/core/mpm/rigid_body.h"
 
+#include <algorithm>
 #include <cmath>
+#include <cstdint>
 
 #include "lodestone/core/base/constants.h"
 #include "lodestone/core/base/error.h"
@@ -76,7 +78,140 @@ RigidMassProperties levelSetMass(const SampledSdf& sdf, double density) {
   return p;
 }
 
+/// Solves the symmetric positive definite 6x6 system A x = b in place
+/// (Cholesky); false when A is not positive definite.
+bool solveSpd6(double A[6][6], double b[6]) {
+  for (int j = 0; j < 6; ++j) {
+    double d = A[j][j];
+    for (int k = 0; k < j; ++k) d -= A[j][k] * A[j][k];
+    if (!(d > 0)) return false;
+    A[j][j] = std::sqrt(d);
+    for (int i = j + 1; i < 6; ++i) {
+      double s = A[i][j];
+      for (int k = 0; k < j; ++k) s -= A[i][k] * A[j][k];
+      A[i][j] = s / A[j][j];
+    }
+  }
+  for (int i = 0; i < 6; ++i) {
+    double s = b[i];
+    for (int k = 0; k < i; ++k) s -= A[i][k] * b[k];
+    b[i] = s / A[i][i];
+  }
+  for (int i = 5; i >= 0; --i) {
+    double s = b[i];
+    for (int k = i + 1; k < 6; ++k) s -= A[k][i] * b[k];
+    b[i] = s / A[i][i];
+  }
+  return true;
+}
+
+/// The velocity V = (v, w) of the body coupled with the points: the
+/// solution of (M + sum m J^T P J) V = M V_body + sum m J^T P v over the
+/// `active` points, P = I (`sticky`) or n n^T.
+bool coupledVelocity(const RigidBodyState& body, const std::vector<std::uint8_t>& active, bool sticky,
+                     const std::vector<RigidCouplingPoint>& points, Vec3d& v, Vec3d& w) {
+  const Mat3d Iw = inverseOfInertia(body.inverseInertia, "rigid coupling");
+  double A[6][6] = {}, b[6] = {};
+  const double mass = 1 / body.inverseMass;
+  const Vec3d L = Iw * body.w;
+  for (int a = 0; a < 3; ++a) {
+    A[a][a] = mass;
+    for (int e = 0; e < 3; ++e) A[3 + a][3 + e] = Iw(a, e);
+    b[a] = mass * body.v[a];
+    b[3 + a] = L[a];
+  }
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    if (!active[i]) continue;
+    const RigidCouplingPoint& q = points[i];
+    const Mat3d P = sticky ? Mat3d::identity() : Mat3d::outer(q.n, q.n);
+    // J = [I, -[r]x]; J^T P J = [[P, -P[r]x], [[r]x P, -[r]x P [r]x]].
+    const Vec3d r = q.x - body.x;
+    const Mat3d Rx = Mat3d::cross(r);
+    const Mat3d PR = P * Rx, RP = Rx * P, RPR = Rx * P * Rx;
+    const Vec3d Pv = P * q.v, rPv = cross(r, Pv);
+    for (int a = 0; a < 3; ++a) {
+      for (int e = 0; e < 3; ++e) {
+        A[a][e] += q.m * P(a, e);
+        A[a][3 + e] -= q.m * PR(a, e);
+        A[3 + a][e] += q.m * RP(a, e);
+        A[3 + a][3 + e] -= q.m * RPR(a, e);
+      }
+      b[a] += q.m * Pv[a];
+      b[3 + a] += q.m * rPv[a];
+    }
+  }
+  if (!solveSpd6(A, b)) return false;
+  v = {b[0], b[1], b[2]};
+  w = {b[3], b[4], b[5]};
+  return true;
+}
+
 }  // namespace
+
+Vec3d exchangeMomentum(RigidBodyState& body, const BoundaryCondition& bc, std::vector<RigidCouplingPoint>& points) {
+  require(body.movable(), "rigid coupling: the body has infinite mass");
+  const bool sticky = bc.mode == BoundaryMode::Sticky;
+  // The points the condition acts on: all, but for separate only those
+  // approaching the body. The condition is then applied to exactly these
+  // (a point that starts to approach only at the coupled velocity is left
+  // alone: acting on it would be an explicit impulse, which threw light
+  // bodies about), so the body's velocity is the solve's.
+  std::vector<std::uint8_t> active(points.size(), 1);
+  if (bc.mode == BoundaryMode::Separate)
+    for (std::size_t i = 0; i < points.size(); ++i)
+      active[i] = dot(points[i].v - body.velocityAt(points[i].x), points[i].n) < 0;
+  RigidBodyState coupled = body;
+  if (!coupledVelocity(body, active, sticky, points, coupled.v, coupled.w))
+    throw Error("rigid coupling: the coupled momentum system is singular (a body of zero inertia?)");
+  // The normal part (or all, sticky) at the coupled velocity, then
+  // friction's part, scaled so that it brings body and points at most to
+  // sticking.
+  const BoundaryCondition slip{BoundaryMode::Slip, 0.0}, rubbing{BoundaryMode::Slip, bc.friction};
+  std::vector<Vec3d> normal(points.size()), withFriction(points.size());
+  Vec3d Pn{}, Ln{}, Pf{}, Lf{};
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const RigidCouplingPoint& q = points[i];
+    if (!active[i]) {
+      normal[i] = withFriction[i] = q.v;
+      continue;
+    }
+    const Vec3d u = coupled.velocityAt(q.x);
+    normal[i] = sticky ? u : applyBoundaryCondition(q.v, u, q.n, slip);
+    withFriction[i] = sticky || bc.friction == 0 ? normal[i] : applyBoundaryCondition(q.v, u, q.n, rubbing);
+    const Vec3d dn = q.m * (normal[i] - q.v), df = q.m * (withFriction[i] - normal[i]);
+    Pn += dn;
+    Ln += cross(q.x - body.x, dn);
+    Pf += df;
+    Lf += cross(q.x - body.x, df);
+  }
+  double s = 1;
+  if (norm2(Pf) + norm2(Lf) > 0) {
+    RigidBodyState stuck = body;
+    if (coupledVelocity(body, active, true, points, stuck.v, stuck.w)) {
+      // Velocity change of the body from friction against the room to sticking, compared as
+      // velocities at the farthest point (|dv| + |dw| R).
+      double R = 0;
+      for (const RigidCouplingPoint& q : points) R = std::max(R, norm(q.x - body.x));
+      const Vec3d dvF = -body.inverseMass * Pf, dwF = -1.0 * (body.inverseInertia * Lf);
+      const Vec3d afterV = body.v - body.inverseMass * Pn, afterW = body.w - body.inverseInertia * Ln;
+      const double room = norm(stuck.v - afterV) + norm(stuck.w - afterW) * R;
+      const double step = norm(dvF) + norm(dwF) * R;
+      if (step > room) s = room / step;
+    }
+  }
+  Vec3d P{}, L{};
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    RigidCouplingPoint& q = points[i];
+    const Vec3d v = normal[i] + s * (withFriction[i] - normal[i]);
+    const Vec3d dp = q.m * (v - q.v);
+    q.v = v;
+    P += dp;
+    L += cross(q.x - body.x, dp);
+  }
+  body.v -= body.inverseMass * P;
+  body.w -= body.inverseInertia * L;
+  return P;
+}
 
 RigidMassProperties massProperties(const ColliderShape& shape, double density) {
   require(std::isfinite(density) && density > 0, "rigid body: density must be a positive finite value in kg/m^3, got ",

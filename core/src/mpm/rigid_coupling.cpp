@@ -13,51 +13,6 @@ inline namespace mpm {
 
 namespace {
 
-/// Solves the symmetric positive definite 6x6 system A x = b in place
-/// (Cholesky); false when A is not positive definite.
-bool solveSpd6(double A[6][6], double b[6]) {
-  for (int j = 0; j < 6; ++j) {
-    double d = A[j][j];
-    for (int k = 0; k < j; ++k) d -= A[j][k] * A[j][k];
-    if (!(d > 0)) return false;
-    A[j][j] = std::sqrt(d);
-    for (int i = j + 1; i < 6; ++i) {
-      double s = A[i][j];
-      for (int k = 0; k < j; ++k) s -= A[i][k] * A[j][k];
-      A[i][j] = s / A[j][j];
-    }
-  }
-  for (int i = 0; i < 6; ++i) {
-    double s = b[i];
-    for (int k = 0; k < i; ++k) s -= A[i][k] * b[k];
-    b[i] = s / A[i][i];
-  }
-  for (int i = 5; i >= 0; --i) {
-    double s = b[i];
-    for (int k = i + 1; k < 6; ++k) s -= A[k][i] * b[k];
-    b[i] = s / A[i][i];
-  }
-  return true;
-}
-
-/// Inverse of a symmetric positive definite 3x3 matrix (the world inverse inertia's inverse).
-Mat3d inverse3(const Mat3d& a) {
-  Mat3d r;
-  r(0, 0) = a(1, 1) * a(2, 2) - a(1, 2) * a(2, 1);
-  r(0, 1) = a(0, 2) * a(2, 1) - a(0, 1) * a(2, 2);
-  r(0, 2) = a(0, 1) * a(1, 2) - a(0, 2) * a(1, 1);
-  r(1, 0) = a(1, 2) * a(2, 0) - a(1, 0) * a(2, 2);
-  r(1, 1) = a(0, 0) * a(2, 2) - a(0, 2) * a(2, 0);
-  r(1, 2) = a(0, 2) * a(1, 0) - a(0, 0) * a(1, 2);
-  r(2, 0) = a(1, 0) * a(2, 1) - a(1, 1) * a(2, 0);
-  r(2, 1) = a(0, 1) * a(2, 0) - a(0, 0) * a(2, 1);
-  r(2, 2) = a(0, 0) * a(1, 1) - a(0, 1) * a(1, 0);
-  const double det = a(0, 0) * r(0, 0) + a(0, 1) * r(1, 0) + a(0, 2) * r(2, 0);
-  for (int i = 0; i < 3; ++i)
-    for (int j = 0; j < 3; ++j) r(i, j) /= det;
-  return r;
-}
-
 /// Force and torque of magnet a on magnet b, for bodies that may touch or
 /// overlap slightly in contact: two spheres by their dipoles (exact while
 /// they are apart); other shapes by the surface-charge integral of order 8
@@ -197,12 +152,8 @@ void MpmSolver::exchangeWithRigidBodies(double dt) {
   const Index3 lo = grid_.activeLo(), hi = grid_.activeHi();
   const std::vector<MpmNode>& nodes = grid_.nodes();
   std::vector<Vec3d>& vel = grid_.velocity();
-  struct Node {
-    std::size_t index;
-    double m;
-    Vec3d x, n, v;
-  };
-  std::vector<Node> inside;
+  std::vector<std::size_t> index;
+  std::vector<RigidCouplingPoint> inside;
   for (std::size_t c = 0; c < colliders_.size(); ++c) {
     const MpmCollider& col = colliders_[c];
     if (!col.isDynamic()) continue;
@@ -220,6 +171,7 @@ void MpmSolver::exchangeWithRigidBodies(double dt) {
       from[a] = std::max(alo[a], int(std::floor((o[a] - R - g.origin[a]) / g.dx)));
       to[a] = std::min(ahi[a], int(std::ceil((o[a] + R - g.origin[a]) / g.dx)) + 1);
     }
+    index.clear();
     inside.clear();
     for (int k = from[2]; k < to[2]; ++k)
       for (int j = from[1]; j < to[1]; ++j)
@@ -229,64 +181,13 @@ void MpmSolver::exchangeWithRigidBodies(double dt) {
           const Vec3d x = g.nodePosition(i, j, k);
           const Vec3d xb = pose.pose.toLocal(x);
           if (col.shape().signedDistance(xb) > 0) continue;  // as MpmCollider::apply: on the surface counts
-          inside.push_back({n, nodes[n].mass, x, pose.pose.vectorToWorld(col.shape().normal(xb)), vel[n] - dt * settings_.gravity});
+          index.push_back(n);
+          inside.push_back({nodes[n].mass, x, pose.pose.vectorToWorld(col.shape().normal(xb)),
+                            vel[n] - dt * settings_.gravity});
         }
     if (inside.empty()) continue;
-    // The coupled velocity V = (v, w): (M + sum m J^T P J) V = M V_pred + sum m J^T P v_i.
-    const BoundaryCondition& bc = col.boundary();
-    const Mat3d Iw = inverse3(body.inverseInertia);
-    double A[6][6] = {}, b[6] = {};
-    const double mass = 1 / body.inverseMass;
-    for (int a = 0; a < 3; ++a) {
-      A[a][a] = mass;
-      for (int e = 0; e < 3; ++e) A[3 + a][3 + e] = Iw(a, e);
-    }
-    const Vec3d L = Iw * body.w;
-    for (int a = 0; a < 3; ++a) {
-      b[a] = mass * body.v[a];
-      b[3 + a] = L[a];
-    }
-    for (const Node& nd : inside) {
-      const Vec3d r = nd.x - body.x;
-      Mat3d P;
-      if (bc.mode == BoundaryMode::Sticky) {
-        P = Mat3d::identity();
-      } else {
-        if (bc.mode == BoundaryMode::Separate && dot(nd.v - body.velocityAt(nd.x), nd.n) >= 0) continue;
-        P = Mat3d::outer(nd.n, nd.n);
-      }
-      // J = [I, -[r]x]; J^T P J = [[P, -P[r]x], [[r]x P, -[r]x P [r]x]].
-      const Mat3d Rx = Mat3d::cross(r);
-      const Mat3d PR = P * Rx, RP = Rx * P, RPR = Rx * P * Rx;
-      const Vec3d Pv = P * nd.v, rPv = cross(r, Pv);
-      for (int a = 0; a < 3; ++a) {
-        for (int e = 0; e < 3; ++e) {
-          A[a][e] += nd.m * P(a, e);
-          A[a][3 + e] -= nd.m * PR(a, e);
-          A[3 + a][e] += nd.m * RP(a, e);
-          A[3 + a][3 + e] -= nd.m * RPR(a, e);
-        }
-        b[a] += nd.m * Pv[a];
-        b[3 + a] += nd.m * rPv[a];
-      }
-    }
-    if (!solveSpd6(A, b)) throw Error(concat("rigid body of collider ", c, ": the coupled momentum system is singular"));
-    RigidBodyState coupled = body;
-    coupled.v = {b[0], b[1], b[2]};
-    coupled.w = {b[3], b[4], b[5]};
-    // The boundary condition with the coupled velocity; the body takes the
-    // opposite of the nodes' momentum change.
-    Vec3d P{}, Lc{};
-    for (const Node& nd : inside) {
-      const Vec3d v = applyBoundaryCondition(nd.v, coupled.velocityAt(nd.x), nd.n, bc);
-      const Vec3d dp = nd.m * (v - nd.v);
-      vel[nd.index] = v;
-      P += dp;
-      Lc += cross(nd.x - body.x, dp);
-    }
-    body.v -= body.inverseMass * P;
-    body.w -= body.inverseInertia * Lc;
-    materialImpulse_[c] -= P;
+    materialImpulse_[c] -= exchangeMomentum(body, col.boundary(), inside);
+    for (std::size_t q = 0; q < index.size(); ++q) vel[index[q]] = inside[q].v;
   }
 }
 

@@ -19,6 +19,7 @@
 // makes a torque-free body conserve its angular momentum exactly; the
 // rotation is re-orthonormalised every substep.
 #include <cstddef>
+#include <vector>
 
 #include "lodestone/core/base/mat3.h"
 #include "lodestone/core/base/pose.h"
@@ -29,6 +30,7 @@ inline namespace mpm {
 
 struct ColliderShape;
 struct ColliderState;
+struct BoundaryCondition;
 
 /// Mass properties of a rigid body, in its body frame.
 struct RigidMassProperties {
@@ -108,6 +110,27 @@ struct RigidBodyState {
   /// comment; `body` gives the body-frame inertia.
   void advance(const RigidBody& body, double dt);
 };
+
+/// A point of material (a grid node or a particle) in contact with a body.
+struct RigidCouplingPoint {
+  double m = 0;  ///< mass, kg
+  Vec3d x;       ///< position, m
+  Vec3d n;       ///< the body's outward unit normal there
+  Vec3d v;       ///< velocity, m/s (replaced by the velocity after the exchange)
+};
+
+/// The momentum exchange of a dynamic body with material points inside it:
+/// the body's velocity solves (M + sum m J^T P J) V = M V_body + sum m J^T P
+/// v (J V the body's velocity at a point, P = I for sticky, n n^T for slip
+/// and for separate where the point approaches), the boundary condition `bc`
+/// is applied to the points with that velocity, and the body takes exactly
+/// the opposite of their momentum change (linear and angular momentum are
+/// kept to round-off). Friction's part is scaled down, if needed, so that it
+/// brings body and points at most to sticking: the explicit friction
+/// impulse cannot throw a light body about. Implicit in the body's
+/// velocity, so a body far lighter than the material stays stable.
+/// Returns the momentum given to the points (N*s).
+Vec3d exchangeMomentum(RigidBodyState& body, const BoundaryCondition& bc, std::vector<RigidCouplingPoint>& points);
 
 }  // namespace mpm
 }  // namespace lodestone
