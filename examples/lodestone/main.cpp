@@ -740,9 +740,9 @@ int exportFields(const Args& a) {
   const Scene scene = loadScene(a.scene, a.options);
   const int frame = a.frameGiven ? a.frame : scene.initialFrame();
   if (frame < scene.initialFrame() || frame > scene.lastFrame())
-    usageError(concat("--frame ", frame, ": the scene's states are frames ", scene.initialFrame(), "..",
-                      scene.lastFrame(), " (the initial state ", scene.initialFrame(), ", then frames ",
-                      scene.startFrame, "..", scene.lastFrame(), ")"));
+    usageError(concat("--frame ", frame, ": the scene has ", scene.frames, " frames (", scene.startFrame, "..",
+                      scene.lastFrame(), ") after its initial state, frame ", scene.initialFrame(),
+                      "; N must be in ", scene.initialFrame(), "..", scene.lastFrame()));
   auto solver = buildSolver(scene);
   if (frame > scene.initialFrame()) checkSubsteps(a, scene, *solver);
   for (int f = scene.initialFrame(); f < frame; ++f) solver->advanceFrame(scene.frameDuration());
