@@ -46,10 +46,12 @@ namespace {
 
 struct Args {
   std::string command, scene, out;
-  int first = 1, last = -1;
+  int first = 0, last = 0;  // run --frames A:B, scene frame numbers
+  bool framesGiven = false;  // run: --frames given (else all the scene's frames)
   SceneOptions options;
   int threads = 0;
-  int frame = 0;  // export-fields
+  int frame = 0;            // export-fields: scene frame number
+  bool frameGiven = false;  // export-fields: --frame given (else the initial state)
   std::string density, densityGrid = "n";  // export-fields: n (1/m^3) from a .vdb instead of the particles
   bool png = true, ply = true;
   int checkpointEvery = -1;  // -1: the scene's output.checkpoint_every
@@ -118,8 +120,13 @@ std::optional<int> parseArgs(int argc, char** argv, Args& a) {
   addScene(run);
   run.add_option("--out", a.out, "output directory (created)")->required()->type_name("DIR");
   run.add_option_function<std::string>(
-         "--frames", [&](const std::string& f) { readFrameRange(f, a.first, a.last); },
-         "write frames A..B (1-based, inclusive; earlier frames are still simulated); default all frames of the scene")
+         "--frames",
+         [&](const std::string& f) {
+           readFrameRange(f, a.first, a.last);
+           a.framesGiven = true;
+         },
+         "write frames A..B (scene frame numbers, within time.start_frame .. the scene's last frame; inclusive; "
+         "earlier frames are still simulated); default all frames of the scene")
       ->type_name("A:B")
       ->check(cli::rule("", [](const std::string& f) {
         int first = 0, last = 0;
@@ -204,10 +211,12 @@ std::optional<int> parseArgs(int argc, char** argv, Args& a) {
       "export-fields", "field solve of the state at frame N, written as OpenVDB grids n, phi, H, M, B, force");
   addScene(exportFields);
   exportFields.add_option("--out", a.out, "the .vdb file to write")->required()->type_name("FILE.vdb");
-  cli::addNumber(exportFields, "--frame", a.frame, "the state after N frames of the scene")
-      ->type_name("N")
-      ->check(cli::wholeNumber(0))
-      ->default_str(cli::formatNumber(a.frame));
+  CLI::Option* frameOption =
+      cli::addNumber(exportFields, "--frame", a.frame,
+                     "the state at the end of scene frame N (time.start_frame - 1 .. the scene's last frame); "
+                     "default the initial state, frame time.start_frame - 1")
+          ->type_name("N")
+          ->check(cli::wholeNumber(0));
   exportFields
       .add_option("--density", a.density,
                   "solve for the density grid of this file (n, 1/m^3) instead of the scene's particles")
@@ -229,6 +238,7 @@ std::optional<int> parseArgs(int argc, char** argv, Args& a) {
     return 1;
   }
   a.command = app.get_subcommands().front()->get_name();
+  a.frameGiven = frameOption->count() > 0;
   if (a.clean && a.resume) usageError("--clean and --resume exclude each other");
   a.args.assign(argv, argv + argc);
   return std::nullopt;
@@ -272,7 +282,7 @@ void printSceneSummary(const Scene& scene, const MpmSolver& solver) {
   for (std::size_t e = 0; e < solver.emitterCount(); ++e)
     std::printf("  emitter '%s' (%s): %s; up to %.0f particles by t = %.4g s\n", scene.emitters[e].name.c_str(),
                 scene.materialNames[solver.emitter(e).materialIndex()].c_str(), solver.emitter(e).describe().c_str(),
-                solver.emitter(e).particlesBy(end), end);
+                solver.emitter(e).particlesBy(end) - solver.emitter(e).particlesBy(solver.time()), end);
   std::printf("  %d frames at %.4g fps; %s; field solved %s\n", scene.frames, scene.fps,
               scene.settings.fixedDt > 0 ? concat("dt = ", scene.settings.fixedDt, " s").c_str()
                                          : concat("CFL ", scene.settings.cfl, ", dt <= ", scene.settings.dtMax, " s").c_str(),
@@ -282,7 +292,10 @@ void printSceneSummary(const Scene& scene, const MpmSolver& solver) {
                                   scene.settings.magneticSolveDistance, " cells")
                          : std::string("once per frame"))
                         .c_str()
-                  : concat("every ", scene.settings.magneticSolveInterval, " substeps").c_str());  std::printf("  %s\n", substepText(scene, solver).c_str());
+                  : concat("every ", scene.settings.magneticSolveInterval, " substeps").c_str());
+  std::printf("  frames %d..%d from the initial state, frame %d at t = %.6g s (frame f ends at t = f / fps)\n",
+              scene.startFrame, scene.lastFrame(), scene.initialFrame(), scene.startTime());
+  std::printf("  %s\n", substepText(scene, solver).c_str());
 }
 
 nlohmann::json frameJson(int frame, const MpmFrameReport& r, std::size_t particles, double ioSeconds) {
@@ -469,10 +482,11 @@ std::unique_ptr<MagneticForceStage> solveFieldsNow(const Scene& scene, const Mpm
 }
 
 void writeFrameFiles(const Args& a, const Scene& scene, const MpmSolver& solver, int frame) {
-  char name[64];
+  const std::string number = frameNumber(frame);
+  std::string name;
   const MpmParticles& p = solver.particles();
   if (a.ply && scene.output.ply) {
-    std::snprintf(name, sizeof name, "frame_%04d.ply", frame);
+    name = "frame_" + number + ".ply";
     PlyPointCloud cloud(p.x);
     cloud.addVec3("vx", "vy", "vz", p.v);
     cloud.addFloat("n_p", p.count);
@@ -484,23 +498,23 @@ void writeFrameFiles(const Args& a, const Scene& scene, const MpmSolver& solver,
     cloud.write((std::filesystem::path(a.out) / name).string());
   }
   if (!scene.output.vdbFields.empty() && (solver.magneticStage() || magneticLaw(solver))) {
-    std::snprintf(name, sizeof name, "fields_%04d.vdb", frame);
+    name = "fields_" + number + ".vdb";
     const std::string path = (std::filesystem::path(a.out) / name).string();
     if (solver.magneticStage()) {
       writeFields(path, scene, *solver.magneticStage(), frame, solver.time(), &solver, true);
     } else {
-      // Before the first substep (frame 0): a field solve of this state.
+      // Before the first substep (the initial frame): a field solve of this state.
       MagneticStageReport report;
       const std::unique_ptr<MagneticForceStage> stage = solveFieldsNow(scene, solver, report);
       writeFields(path, scene, *stage, frame, solver.time(), &solver, true);
     }
   }
   if (scene.output.vdbPoints) {
-    std::snprintf(name, sizeof name, "particles_%04d.vdb", frame);
+    name = "particles_" + number + ".vdb";
     writeParticles((std::filesystem::path(a.out) / name).string(), solver, frame);
   }
   if (a.png && scene.output.png) {
-    std::snprintf(name, sizeof name, "frame_%04d.png", frame);
+    name = "frame_" + number + ".png";
     const RgbImage img = renderPreview(scene, solver);
     writePng((std::filesystem::path(a.out) / name).string(), img.width, img.height, img.rgb.data());
   }
@@ -583,23 +597,30 @@ int run(const Args& a) {
     threads = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, std::size_t(a.threads));
   Scene scene = loadScene(a.scene, a.options);
   if (a.checkFinite) scene.settings.checkFinite = true;
+  // The frames written, first..last, in scene frame numbers (time.start_frame on).
+  const int initialFrame = scene.initialFrame();
+  const std::string sceneRange = concat("the scene's frames are ", scene.startFrame, "..", scene.lastFrame());
+  const int first = a.framesGiven ? a.first : scene.startFrame;
+  const int last = a.framesGiven ? a.last : scene.lastFrame();
+  if (first < scene.startFrame || first > scene.lastFrame())
+    usageError(concat("--frames starts at ", first, " but ", sceneRange));
+  if (last > scene.lastFrame()) usageError(concat("--frames ends at ", last, " but ", sceneRange));
   auto solver = buildSolver(scene);
   printSceneSummary(scene, *solver);
   printPlan(scene, *solver, stdout);
   checkSubsteps(a, scene, *solver);
   std::string planShown;
-  const int last = a.last < 0 ? scene.frames : std::min(a.last, scene.frames);
-  if (a.first > scene.frames) usageError(concat("--frames starts at ", a.first, " but the scene has ", scene.frames));
   const int checkpointEvery = a.checkpointEvery >= 0 ? a.checkpointEvery : scene.output.checkpointEvery;
-  const CheckpointOrigin origin{runIdentity(scene), a.first, last};
+  const CheckpointOrigin origin{runIdentity(scene), first, last};
   const RunDirectory directory(a.out, origin.identity, a.clean);
   const std::string command = commandLine(a.args);
   const std::size_t initialParticles = solver->particles().size();
-  const int startFrame = a.resume ? resumeFromCheckpoint(a.out, origin, *solver) : 0;
+  // The frame the solver is at: the initial one, or a checkpoint's.
+  const int startFrame = a.resume ? resumeFromCheckpoint(a.out, origin, *solver) : initialFrame;
   if (startFrame == last) {
     std::printf("nothing to simulate: %s is at the last frame (%d) of --frames %d:%d; the run in %s is complete\n",
-                checkpointName(startFrame).c_str(), last, a.first, last, a.out.c_str());
-    directory.record(command, a.first, last, "complete", last);
+                checkpointName(startFrame).c_str(), last, first, last, a.out.c_str());
+    directory.record(command, first, last, "complete", last);
     return 0;
   }
 
@@ -611,8 +632,8 @@ int run(const Args& a) {
                    {"dx_m", scene.settings.grid.dx}};
   stats["frames"] = nlohmann::json::array();
   const std::filesystem::path statsPath = std::filesystem::path(a.out) / "stats.json";
-  std::int64_t lost = 0;  // particles lost as non-finite since frame 0
-  if (startFrame > 0 && std::filesystem::exists(statsPath)) {
+  std::int64_t lost = 0;  // particles lost as non-finite since the initial frame
+  if (startFrame > initialFrame && std::filesystem::exists(statsPath)) {
     // Keep the per-frame records up to the checkpoint.
     try {
       const std::vector<std::uint8_t> bytes = readBytes(statsPath);
@@ -627,9 +648,9 @@ int run(const Args& a) {
                    statsPath.string().c_str(), e.what(), startFrame + 1);
     }
   }
-  int lastCheckpoint = startFrame > 0 ? startFrame : -1;
+  int lastCheckpoint = startFrame > initialFrame ? startFrame : initialFrame;  // initialFrame: none
   const auto howToResume = [&] {
-    return lastCheckpoint >= 0 ? concat("resume from ", checkpointName(lastCheckpoint), " (frame ", lastCheckpoint,
+    return lastCheckpoint > initialFrame ? concat("resume from ", checkpointName(lastCheckpoint), " (frame ", lastCheckpoint,
                                         ") with: ", resumeCommand(a))
                                : std::string("no checkpoint was written (use --checkpoint-every N or "
                                              "output.checkpoint_every); run again to start over");
@@ -638,18 +659,21 @@ int run(const Args& a) {
     std::printf("\ninterrupted: stopped %s frame %d at t = %.6g s; frames up to %d are complete in %s; %s\n",
                 midFrame ? "during" : "after", frame, time, midFrame ? frame - 1 : frame, a.out.c_str(),
                 howToResume().c_str());
-    directory.record(command, a.first, last, "interrupted", midFrame ? frame - 1 : frame);
+    directory.record(command, first, last, "interrupted", midFrame ? frame - 1 : frame);
     return 128 + int(gStopSignal);
   };
-  directory.record(command, a.first, last, "running", startFrame);
+  directory.record(command, first, last, "running", startFrame);
   std::signal(SIGINT, onStopSignal);
   std::signal(SIGTERM, onStopSignal);
   const MpmProgressCallback keepGoing = [](const MpmProgress&) { return gStopSignal == 0; };
   const auto t0 = std::chrono::steady_clock::now();
-  ProgressPrinter progress(std::cout, last, ProgressOptions{isTerminal(stdout)});
+  ProgressOptions progressOptions{isTerminal(stdout)};
+  progressOptions.firstFrame = initialFrame;
+  ProgressPrinter progress(std::cout, last - initialFrame, progressOptions);
   int frame = startFrame;
   try {
-    if (a.first == 1 && startFrame == 0) writeFrameFiles(a, scene, *solver, 0);  // the initial state
+    if (first == scene.startFrame && startFrame == initialFrame)
+      writeFrameFiles(a, scene, *solver, initialFrame);  // the initial state
     for (frame = startFrame + 1; frame <= last; ++frame) {
       const MpmFrameReport r = solver->advanceFrame(scene.frameDuration(), keepGoing);
       if (r.cancelled) {
@@ -657,7 +681,7 @@ int run(const Args& a) {
         return stopMessage(frame, solver->time(), true);
       }
       const auto tio = std::chrono::steady_clock::now();
-      if (frame >= a.first) writeFrameFiles(a, scene, *solver, frame);
+      if (frame >= first) writeFrameFiles(a, scene, *solver, frame);
       const double io = std::chrono::duration<double>(std::chrono::steady_clock::now() - tio).count();
       stats["frames"].push_back(frameJson(frame, r, solver->particles().size(), io));
       lost += std::int64_t(r.nonFinite);
@@ -674,7 +698,7 @@ int run(const Args& a) {
         }
       }
       writeJsonFile(statsPath.string(), stats);
-      if (checkpointEvery > 0 && frame % checkpointEvery == 0) {
+      if (checkpointEvery > 0 && (frame - initialFrame) % checkpointEvery == 0) {
         writeFileAtomically((std::filesystem::path(a.out) / checkpointName(frame)).string(),
                             saveMpmCheckpoint(*solver, frame, checkpointTag(origin)));
         // A resumed solver starts its next field solve from phi = 0: so does this one.
@@ -686,7 +710,7 @@ int run(const Args& a) {
         if (!m.converged()) progress.message(concat("frame ", frame, ": ", m.solve.message));
       for (const std::string& w : r.warnings) progress.message(concat("frame ", frame, ": ", w));
       const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-      progress.update(frame, elapsed,
+      progress.update(frame - initialFrame, elapsed,
                       formatStageSplit({{"p2g", r.secondsP2G}, {"magnetic", r.secondsMagnetic},
                                         {"grid", r.secondsGridUpdate}, {"g2p", r.secondsG2P}, {"output", io}}));
       if (double(lost) > a.maxLost * double(initialParticles)) {
@@ -698,7 +722,7 @@ int run(const Args& a) {
                      "run go on.\n",
                      static_cast<long long>(lost), initialParticles, 100.0 * double(lost) / double(initialParticles),
                      frame, solver->time(), a.maxLost, frame, a.out.c_str());
-        directory.record(command, a.first, last, "failed", frame);
+        directory.record(command, first, last, "failed", frame);
         return kExitBlownUp;
       }
       if (frame < last && stdoutBroken()) {
@@ -706,7 +730,7 @@ int run(const Args& a) {
                      "lodestone: standard output was closed (broken pipe): stopped after frame %d at t = %.6g s; "
                      "frames up to %d are complete in %s; %s\n",
                      frame, solver->time(), frame, a.out.c_str(), howToResume().c_str());
-        directory.record(command, a.first, last, "interrupted", frame);
+        directory.record(command, first, last, "interrupted", frame);
         return kExitBrokenPipe;
       }
       if (gStopSignal != 0 && frame < last) {
@@ -715,19 +739,19 @@ int run(const Args& a) {
       }
     }
   } catch (...) {
-    directory.record(command, a.first, last, "failed", frame - 1);
+    directory.record(command, first, last, "failed", frame - 1);
     throw;
   }
   progress.finish();
-  directory.record(command, a.first, last, "complete", last);
+  directory.record(command, first, last, "complete", last);
   if (lost > 0)
     std::printf("%lld of the %zu particles (%.3g%%) were lost as non-finite (within --max-lost %g)\n",
                 static_cast<long long>(lost), initialParticles, 100.0 * double(lost) / double(initialParticles),
                 a.maxLost);
-  std::printf("wrote frames %d..%d to %s (stats.json has the per-frame details)\n", a.first, last, a.out.c_str());
+  std::printf("wrote frames %d..%d to %s (stats.json has the per-frame details)\n", first, last, a.out.c_str());
   if (stdoutBroken()) {
     std::fprintf(stderr, "lodestone: standard output was closed (broken pipe); the run completed: frames %d..%d are in %s\n",
-                 a.first, last, a.out.c_str());
+                 first, last, a.out.c_str());
     return kExitBrokenPipe;
   }
   return 0;
@@ -736,16 +760,19 @@ int run(const Args& a) {
 int exportFields(const Args& a) {
   if (a.out.empty()) usageError("export-fields needs --out FILE.vdb");
   const Scene scene = loadScene(a.scene, a.options);
-  if (a.frame > scene.frames)
-    usageError(concat("--frame ", a.frame, ": the scene has ", scene.frames, " frames (0..", scene.frames, ")"));
+  const int frame = a.frameGiven ? a.frame : scene.initialFrame();
+  if (frame < scene.initialFrame() || frame > scene.lastFrame())
+    usageError(concat("--frame ", frame, ": the scene has ", scene.frames, " frames (", scene.startFrame, "..",
+                      scene.lastFrame(), ") after its initial state, frame ", scene.initialFrame(),
+                      "; N must be in ", scene.initialFrame(), "..", scene.lastFrame()));
   auto solver = buildSolver(scene);
-  if (a.frame > 0) checkSubsteps(a, scene, *solver);
-  for (int f = 0; f < a.frame; ++f) solver->advanceFrame(scene.frameDuration());
+  if (frame > scene.initialFrame()) checkSubsteps(a, scene, *solver);
+  for (int f = scene.initialFrame(); f < frame; ++f) solver->advanceFrame(scene.frameDuration());
   MagneticStageReport rep;
   const std::unique_ptr<MagneticForceStage> stage = solveFieldsNow(scene, *solver, rep, a.density, a.densityGrid);
   std::printf("%s", rep.summary().c_str());
-  writeFields(a.out, scene, *stage, a.frame, solver->time(), solver.get(), false);
-  std::printf("wrote %s (frame %d, t = %g s)\n", a.out.c_str(), a.frame, solver->time());
+  writeFields(a.out, scene, *stage, frame, solver->time(), solver.get(), false);
+  std::printf("wrote %s (frame %d, t = %g s)\n", a.out.c_str(), frame, solver->time());
   return rep.converged() ? 0 : 1;
 }
 

@@ -64,6 +64,7 @@ std::vector<StageDecision> mechanicsDecisions(const plugin::Scene& scene, const 
 
 std::string emitterTimeline(const plugin::Scene& scene, const MpmSolver& solver, std::size_t e) {
   const EmissionSchedule& schedule = solver.emitter(e).settings().schedule;
+  const int offset = scene.initialFrame();  // f = 1..frames is scene frame offset + f
   std::string text;
   int first = 1;
   bool on = false;
@@ -71,8 +72,8 @@ std::string emitterTimeline(const plugin::Scene& scene, const MpmSolver& solver,
     const bool now = f <= scene.frames && schedule.onWithin(solver.time() + (f - 1) * scene.frameDuration(),
                                                             solver.time() + f * scene.frameDuration());
     if (f > 1 && (now != on || f > scene.frames)) {
-      text += concat(text.empty() ? "" : ", ", on ? "on" : "idle", " in frame", first == f - 1 ? " " : "s ", first,
-                     first == f - 1 ? std::string() : concat("-", f - 1));
+      text += concat(text.empty() ? "" : ", ", on ? "on" : "idle", " in frame", first == f - 1 ? " " : "s ",
+                     offset + first, first == f - 1 ? std::string() : concat("-", offset + f - 1));
       first = f;
     }
     on = now;
@@ -187,6 +188,10 @@ void printPlan(const plugin::Scene& scene, const MpmSolver& solver, std::FILE* o
   }
   for (std::size_t s = 0; s + 1 < spans.size(); ++s) spans[s].last = spans[s + 1].first - 1;
   spans.back().last = scene.frames;
+  for (Span& span : spans) {  // scene frame numbers
+    span.first += scene.initialFrame();
+    span.last += scene.initialFrame();
+  }
 
   const double substeps = substepsPerFrame(scene, solver);
   const int interval = scene.settings.magneticSolveInterval;
@@ -205,13 +210,14 @@ void printPlan(const plugin::Scene& scene, const MpmSolver& solver, std::FILE* o
   for (std::size_t e = 0; e < solver.emitterCount() && sources && !magneticNow && !emitterMagnetic; ++e) {
     const RateEmitter& emitter = solver.emitter(e);
     if (!solver.materials()[emitter.materialIndex()].isMagnetic()) continue;
-    const double born = emitter.birthTime(0);
+    const double born = emitter.birthTime(emitter.chunksBy(solver.time()));  // its first chunk from now on
     if (born >= solver.time() + scene.frames * scene.frameDuration()) continue;
     emitterMagnetic = magnetic = true;
     std::fprintf(out,
                  "  magnetic stages (from frame %d, when emitter '%s' first emits): on - it emits magnetic material "
                  "(each solve plans for the material then present)\n",
-                 1 + int(std::floor((born - solver.time()) / scene.frameDuration())), scene.emitters[e].name.c_str());
+                 scene.startFrame + std::max(0, int(std::floor((born - solver.time()) / scene.frameDuration()))),
+                 scene.emitters[e].name.c_str());
   }
   for (const Span& span : spans) {
     if (emitterMagnetic) break;  // said above
@@ -244,11 +250,14 @@ void printPlan(const plugin::Scene& scene, const MpmSolver& solver, std::FILE* o
   double emittedByEnd = 0, emittedMean = 0;  // particles; the mean over the frames
   for (std::size_t e = 0; e < solver.emitterCount(); ++e) {
     const RateEmitter& emitter = solver.emitter(e);
-    emittedByEnd += emitter.particlesBy(end);
+    // Chunks born before the start time are never emitted.
+    const double before = emitter.particlesBy(solver.time());
+    emittedByEnd += emitter.particlesBy(end) - before;
     for (int f = 1; f <= scene.frames; ++f)
-      emittedMean += emitter.particlesBy(solver.time() + f * scene.frameDuration()) / scene.frames;
+      emittedMean += (emitter.particlesBy(solver.time() + f * scene.frameDuration()) - before) / scene.frames;
     std::fprintf(out, "  emitter '%s': %s; up to %.0f particles by t = %.4g s (%s)\n", scene.emitters[e].name.c_str(),
-                 emitterTimeline(scene, solver, e).c_str(), emitter.particlesBy(end), end, emitter.describe().c_str());
+                 emitterTimeline(scene, solver, e).c_str(), emitter.particlesBy(end) - before, end,
+                 emitter.describe().c_str());
   }
 
   // Run time: the MPM substeps plus the field solves.

@@ -18,8 +18,8 @@ namespace lodestone::examples {
 /// MPM core is always on.
 std::vector<StageDecision> mechanicsDecisions(const plugin::Scene& scene, const MpmSolver& solver);
 
-/// When emitter `e` of `solver` is on over the scene's frames: "on in frames
-/// 1-30, idle in frames 31-48".
+/// When emitter `e` of `solver` is on over the scene's frames, in scene
+/// frame numbers (time.start_frame on): "on in frames 1-30, idle in frames 31-48".
 std::string emitterTimeline(const plugin::Scene& scene, const MpmSolver& solver, std::size_t e);
 
 /// Substeps per frame with the scene's first substep (fixed, or the CFL step now).

@@ -111,11 +111,13 @@ CheckpointOrigin checkpointOrigin(const std::string& tag) {
   return o;
 }
 
-std::string checkpointName(int frame) {
-  char name[64];
-  std::snprintf(name, sizeof name, "checkpoint_%04d.lsck", frame);
-  return name;
+std::string frameNumber(int frame) {
+  char digits[32];
+  std::snprintf(digits, sizeof digits, "%04d", frame);
+  return digits;
 }
+
+std::string checkpointName(int frame) { return "checkpoint_" + frameNumber(frame) + ".lsck"; }
 
 std::vector<int> checkpointFrames(const std::string& dir) {
   std::vector<int> frames;

@@ -57,7 +57,10 @@ std::string checkpointTag(const CheckpointOrigin& origin);
 /// this lodestone did not write (an older version's or another program's).
 CheckpointOrigin checkpointOrigin(const std::string& tag);
 
-/// checkpoint_NNNN.lsck
+/// A frame number (>= 0) as file names carry it: at least four digits
+/// ("0042", "12345").
+std::string frameNumber(int frame);
+/// checkpoint_NNNN.lsck (NNNN: frameNumber)
 std::string checkpointName(int frame);
 /// The frames of the checkpoint_NNNN.lsck files in `dir`, newest first.
 std::vector<int> checkpointFrames(const std::string& dir);

@@ -146,7 +146,8 @@ RateEmitterSettings rateEmitterSettingsFrom(const ParamSet& p, const ColliderMot
   return s;
 }
 
-double estimatedEmittedParticles(const EmitterShape& shape, const RateEmitterSettings& s, double duration) {
+double estimatedEmittedParticles(const EmitterShape& shape, const RateEmitterSettings& s, double start,
+                                 double end) {
   const double cell = s.lattice.cellSize, ppc = s.lattice.particlesPerCell;
   const double pointVolume = cell * cell * cell / ppc;  // m^3
   const double chunk = estimatedParticles(shape.volume(), cell, s.lattice.particlesPerCell);
@@ -167,7 +168,7 @@ double estimatedEmittedParticles(const EmitterShape& shape, const RateEmitterSet
       break;
     }
   }
-  return perSecond * s.schedule.activeTime(duration) + chunk;
+  return perSecond * (s.schedule.activeTime(end) - s.schedule.activeTime(start)) + chunk;
 }
 
 MpmMaterial materialFrom(const ParamSet& p) {

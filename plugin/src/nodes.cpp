@@ -645,6 +645,10 @@ NodeDecl mpmSolverNode() {
   q.push_back(required(positive(floatParam("domain.dx", "Grid spacing", 0.02, "m", "MPM grid spacing."))));
   q.push_back(choiceParam("domain.boundary", "Walls", kBoundaryModes, "separate", "Velocity condition at the walls."));
   q.push_back(range(floatParam("domain.friction", "Wall friction", 0.0, "", "Coulomb friction at the walls."), 0, 10));
+  q.push_back(intParam("time.start_frame", "Start frame", 1, 1, 1000000,
+                       "Number of the first simulated frame. Frame f ends at scene time f / fps: the initial state "
+                       "is frame start_frame - 1, at t = (start_frame - 1) / fps, where the simulation starts. "
+                       "Keyframes, time profiles and emitter time lines are in scene seconds."));
   q.push_back(required(intParam("time.frames", "Frames", 1, 1, 100000, "Frames to simulate.")));
   q.push_back(range(floatParam("time.fps", "Frame rate", 24.0, "1/s", "Frames per second."), 1, 10000));
   q.push_back(range(floatParam("time.dt", "Time step", 0.0, "s", "Fixed substep; 0: CFL-adaptive."), 0, 1));
@@ -673,11 +677,15 @@ NodeDecl mpmSolverNode() {
     const ParamSet& p = c.params();
     const ParticlesData all = mergeParticles(c.inputs("particles"));
     const int frames = int(p.getInt("time.frames"));
+    const double fps = p.getFloat("time.fps");
+    const int initialFrame = int(p.getInt("time.start_frame")) - 1;
+    const double start = initialFrame / fps;  // s, the scene time of the initial state
     double particles = double(all.particles.size());
     for (const ParticlesData::Emitter& e : all.emitters)
-      particles += estimatedEmittedParticles(e.shape, e.settings, frames / p.getFloat("time.fps"));
+      particles += estimatedEmittedParticles(e.shape, e.settings, start, (initialFrame + frames) / fps);
     MpmSettings s = mpmSettingsFrom(p, particles);
     auto solver = std::make_shared<MpmSolver>(s);
+    solver->setTime(start);  // before the magnets and colliders, which take their pose at it
     for (const MpmMaterial& m : all.materials) solver->addMaterial(m);
     solver->particles() = all.particles;
     for (const ParticlesData::Emitter& e : all.emitters) solver->addEmitter(e.shape, e.material, e.settings);
@@ -698,10 +706,11 @@ NodeDecl mpmSolverNode() {
     out.frameTimes.push_back(solver->time());
     out.centreOfMass.push_back(comMagnetic());
     for (int f = 0; f < frames; ++f) {
-      solver->advanceFrame(1.0 / p.getFloat("time.fps"));
+      solver->advanceFrame(1.0 / fps);
       out.frameTimes.push_back(solver->time());
       out.centreOfMass.push_back(comMagnetic());
     }
+    out.startFrame = initialFrame + 1;
     out.frames = frames;
     out.time = solver->time();
     out.solver = std::move(solver);

@@ -107,6 +107,7 @@ Scene sceneFromJson(const nlohmann::json& doc, const std::string& sourceName, co
     throw InvalidArgument(concat(sourceName, ": ", e.what()));
   }
   if (!root.has("time")) root.object("time");
+  scene.startFrame = int(solverParams.getInt("time.start_frame"));
   scene.frames = int(solverParams.getInt("time.frames"));
   scene.fps = solverParams.getFloat("time.fps");
 
@@ -197,7 +198,7 @@ Scene sceneFromJson(const nlohmann::json& doc, const std::string& sourceName, co
   for (const SceneBody& b : scene.bodies)
     particles += estimatedParticles(b.shape.volume(), b.emit.cellSize, b.emit.particlesPerCell);
   for (const SceneEmitter& e : scene.emitters)
-    particles += estimatedEmittedParticles(e.shape, e.settings, scene.frames / scene.fps);
+    particles += estimatedEmittedParticles(e.shape, e.settings, scene.startTime(), scene.frameTime(scene.lastFrame()));
   try {
     mpmSettingsFrom(solverParams, particles);
   } catch (const InvalidArgument& e) {
@@ -313,6 +314,8 @@ Scene loadScene(const std::string& path, const SceneOptions& options) { return p
 
 std::unique_ptr<MpmSolver> buildSolver(const Scene& scene) {
   auto solver = std::make_unique<MpmSolver>(scene.settings);
+  // Before anything is added: magnets and colliders take their pose at the solver's time.
+  solver->setTime(scene.startTime());
   for (const MpmMaterial& m : scene.materials) solver->addMaterial(m);
   const Vec3d lo = solver->domainLower(), hi = solver->domainUpper();
   const auto point = [](const Vec3d& p) {

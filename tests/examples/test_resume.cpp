@@ -391,6 +391,96 @@ TEST(RunOutcome, AClosedStandardOutputStopsTheRunWithAMessage) {
   fs::remove_all(dir.parent_path());
 }
 
+namespace {
+
+// A small scene in which nothing depends on the time (a jelly cube under
+// gravity), from frame `startFrame`; the frame (1/64 s) and the substep
+// (1/1024 s) are powers of two, so that the times add up exactly from any
+// start and the frames are the same bit for bit.
+std::string jellyScene(const fs::path& path, int startFrame, int frames) {
+  std::ofstream(path) << R"({
+  "name": "jelly",
+  "domain": { "min": [0, 0, 0], "max": [0.2, 0.2, 0.2], "dx": 0.02 },
+  "time": { "start_frame": )" << startFrame << R"(, "frames": )" << frames << R"(, "fps": 64, "dt": 0.0009765625 },
+  "materials": [ { "name": "jelly", "model": "solid", "density": 1000, "youngs_modulus": 1e4 } ],
+  "bodies": [ { "material": "jelly", "shape": "box", "center": [0.1, 0.1, 0.1], "half_size": [0.03, 0.03, 0.03] } ]
+})";
+  return path.string();
+}
+
+// What follows a PLY file's header (the header's comment names the frame and time).
+std::string plyBody(const fs::path& path) {
+  const std::string text = readText(path);
+  const std::size_t end = text.find("end_header\n");
+  EXPECT_NE(end, std::string::npos) << path;
+  return end == std::string::npos ? std::string() : text.substr(end + 11);
+}
+
+fs::path plyOf(const fs::path& dir, const std::string& number) { return dir / ("frame_" + number + ".ply"); }
+
+}  // namespace
+
+// time.start_frame 1001: the initial state is frame 1000, the frames 1001 and
+// 1002; files, stats.json and messages use these numbers, and the state
+// equals that of the same scene from frame 1 (nothing in it depends on the time).
+TEST(StartFrame, ARunWritesTheScenesFrameNumbersAndTheSameStateAsFromFrameOne) {
+  const fs::path one = scratch("start_1"), later = scratch("start_1001");
+  const fs::path log = later.parent_path() / "start.log";
+  ASSERT_EQ(runToEnd(args(jellyScene(one.parent_path() / "jelly_1.json", 1, 2), one, {}), log), 0) << readText(log);
+  ASSERT_EQ(runToEnd(args(jellyScene(later.parent_path() / "jelly_1001.json", 1001, 2), later, {}), log), 0)
+      << readText(log);
+  EXPECT_NE(readText(log).find("wrote frames 1001..1002"), std::string::npos) << readText(log);
+  for (const char* n : {"1000", "1001", "1002"}) EXPECT_TRUE(fs::exists(plyOf(later, n))) << n;
+  EXPECT_FALSE(fs::exists(plyOf(later, "0000")));
+  EXPECT_FALSE(fs::exists(plyOf(later, "0001")));
+  const std::string stats = readText(later / "stats.json");
+  EXPECT_TRUE(std::regex_search(stats, std::regex("\"frame\":\\s*1001[^0-9]"))) << stats;
+  EXPECT_TRUE(std::regex_search(stats, std::regex("\"frame\":\\s*1002[^0-9]"))) << stats;
+  EXPECT_FALSE(std::regex_search(stats, std::regex("\"frame\":\\s*[0-2][^0-9]"))) << stats;
+  const std::string manifest = readText(later / "lodestone_run.json");
+  EXPECT_TRUE(std::regex_search(manifest, std::regex("\"last_complete_frame\":\\s*1002"))) << manifest;
+  EXPECT_NE(readText(plyOf(later, "1002")).find("frame 1002 time 15.65625 s"), std::string::npos);
+  // The same particles, bit for bit.
+  EXPECT_TRUE(plyBody(plyOf(one, "0000")) == plyBody(plyOf(later, "1000")));
+  EXPECT_TRUE(plyBody(plyOf(one, "0002")) == plyBody(plyOf(later, "1002")));
+  EXPECT_FALSE(plyBody(plyOf(later, "1000")) == plyBody(plyOf(later, "1002")));  // it moved
+  // --frames takes scene frame numbers: 1002 alone (1001 still simulated).
+  const fs::path part = scratch("start_part");
+  ASSERT_EQ(runToEnd(args(later.parent_path() / "jelly_1001.json", part, {"--frames", "1002:1002"}), log), 0)
+      << readText(log);
+  EXPECT_FALSE(fs::exists(plyOf(part, "1000")));
+  EXPECT_FALSE(fs::exists(plyOf(part, "1001")));
+  EXPECT_TRUE(readText(plyOf(part, "1002")) == readText(plyOf(later, "1002")));
+  fs::remove_all(one.parent_path());
+}
+
+// Checkpoints carry the scene frame number; --resume from checkpoint_1002
+// writes the frames of the uninterrupted run, byte for byte.
+TEST(StartFrame, AResumedRunWritesTheFramesOfTheUninterruptedOne) {
+  const fs::path ref = scratch("start_ref"), cut = scratch("start_resumed");
+  const fs::path log = ref.parent_path() / "start_resume.log";
+  const std::string scene = jellyScene(ref.parent_path() / "jelly_1001.json", 1001, 4);
+  ASSERT_EQ(runToEnd(args(scene, ref, {"--checkpoint-every", "2"}), log), 0) << readText(log);
+  ASSERT_TRUE(fs::exists(ref / "checkpoint_1002.lsck"));
+  ASSERT_TRUE(fs::exists(ref / "checkpoint_1004.lsck"));
+  EXPECT_FALSE(fs::exists(ref / "checkpoint_1001.lsck"));
+  // The directory as a run stopped after frame 1003 would leave it.
+  for (const char* f : {"lodestone_run.json", "stats.json", "checkpoint_1002.lsck", "frame_1000.ply",
+                        "frame_1001.ply", "frame_1002.ply"})
+    fs::copy_file(ref / f, cut / f);
+  ASSERT_EQ(runToEnd(args(scene, cut, {"--checkpoint-every", "2", "--resume"}), log), 0) << readText(log);
+  EXPECT_NE(readText(log).find("checkpoint_1002.lsck: frame 1002"), std::string::npos) << readText(log);
+  for (const char* n : {"1003", "1004"}) {
+    ASSERT_TRUE(fs::exists(plyOf(cut, n))) << n;
+    EXPECT_TRUE(readText(plyOf(ref, n)) == readText(plyOf(cut, n))) << "frame " << n << " differs";
+  }
+  EXPECT_TRUE(readText(ref / "checkpoint_1004.lsck") == readText(cut / "checkpoint_1004.lsck"));
+  const std::string stats = readText(cut / "stats.json");
+  for (const char* n : {"1001", "1002", "1003", "1004"})
+    EXPECT_TRUE(std::regex_search(stats, std::regex(std::string("\"frame\":\\s*") + n))) << n << ": " << stats;
+  fs::remove_all(ref.parent_path());
+}
+
 #if LODESTONE_TEST_HAVE_VDB
 namespace {
 // The grid names of a .vdb file, sorted.
@@ -426,6 +516,30 @@ TEST(ExportFields, WritesTheSixFieldGridsItsHelpNamesAndRefusesAFrameBeyondTheSc
   // Frame 201 of a 200-frame scene: refused, not labelled as the last frame's state.
   EXPECT_EQ(runToEnd(exportArgs("201"), log), 1) << readText(log);
   EXPECT_NE(readText(log).find("--frame 201: the scene has 200 frames"), std::string::npos) << readText(log);
+  fs::remove_all(dir.parent_path());
+}
+
+// export-fields --frame takes a scene frame number: frame 1001 of the spike
+// scene from frame 1001 is one frame after the initial state, at t = 2.002 s.
+TEST(ExportFields, TheFrameIsASceneFrameNumber) {
+  const fs::path dir = scratch("export_start");
+  const fs::path log = dir.parent_path() / "export_start.log";
+  const std::string scene =
+      sceneVariant(dir.parent_path() / "spike_1001.json", "\"frames\": 200,", "\"start_frame\": 1001, \"frames\": 200,");
+  const auto exportArgs = [&](std::vector<std::string> extra) {
+    std::vector<std::string> a{LODESTONE_CLI, "export-fields", scene, "--out", (dir / "f.vdb").string(), "--dx", "0.02"};
+    a.insert(a.end(), extra.begin(), extra.end());
+    return a;
+  };
+  ASSERT_EQ(runToEnd(exportArgs({"--frame", "1001"}), log), 0) << readText(log);
+  EXPECT_NE(readText(log).find("(frame 1001, t = 2.002 s)"), std::string::npos) << readText(log);
+  EXPECT_EQ(gridNames(dir / "f.vdb"), (std::vector<std::string>{"B", "H", "M", "force", "n", "phi"}));
+  // Without --frame: the initial state, frame 1000 at t0 = 2 s.
+  ASSERT_EQ(runToEnd(exportArgs({}), log), 0) << readText(log);
+  EXPECT_NE(readText(log).find("(frame 1000, t = 2 s)"), std::string::npos) << readText(log);
+  EXPECT_EQ(runToEnd(exportArgs({"--frame", "1201"}), log), 1) << readText(log);
+  EXPECT_NE(readText(log).find("--frame 1201: the scene has 200 frames (1001..1200)"), std::string::npos)
+      << readText(log);
   fs::remove_all(dir.parent_path());
 }
 

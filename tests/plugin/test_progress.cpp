@@ -51,6 +51,11 @@ TEST(Progress, FormatProgressLine) {
   EXPECT_THROW(formatProgressLine(0, 0, 1.0), InvalidArgument);
 }
 
+TEST(Progress, FormatProgressLineShowsSceneFrameNumbers) {
+  // Frames 1001..1100 of a scene whose initial frame is 1000: 25 of 100 done.
+  EXPECT_EQ(formatProgressLine(25, 100, 10.0, "", 1000), "frame 1025/1100   25.0%  elapsed 10.0 s  ETA 30.0 s");
+}
+
 TEST(Progress, PlainLinesAreThrottled) {
   std::ostringstream out;
   ProgressOptions o;

@@ -187,3 +187,72 @@ TEST(Scene, MagnetThatIsNotAColliderKeepsItsMotion) {
   EXPECT_GE(solver->magnet(0).pose().position.z, 0.02 + 0.1 * 0.01 - 1e-9);
   EXPECT_LT(solver->magnet(0).pose().position.z, 0.02 + 0.1 * 0.02);
 }
+
+// time.start_frame: frame f ends at scene time f / fps; the initial state is
+// frame start_frame - 1, where the solver starts.
+TEST(SceneStartFrame, TheTimeLineStartsAtTheInitialFrame) {
+  const Scene first = parseScene(kMinimal, "test.json");
+  EXPECT_EQ(first.startFrame, 1);
+  EXPECT_EQ(first.initialFrame(), 0);
+  EXPECT_EQ(first.lastFrame(), 2);
+  EXPECT_EQ(first.startTime(), 0.0);
+  EXPECT_EQ(buildSolver(first)->time(), 0.0);
+
+  const Scene later = parseScene(replaced(kMinimal, R"("frames": 2)", R"("start_frame": 1001, "frames": 2)"), "test.json");
+  EXPECT_EQ(later.startFrame, 1001);
+  EXPECT_EQ(later.initialFrame(), 1000);
+  EXPECT_EQ(later.lastFrame(), 1002);
+  EXPECT_DOUBLE_EQ(later.startTime(), 10.0);  // 1000 frames at 100 fps
+  EXPECT_DOUBLE_EQ(later.frameTime(later.lastFrame()), 10.02);
+  EXPECT_DOUBLE_EQ(buildSolver(later)->time(), 10.0);
+}
+
+// Nothing in the minimal scene depends on the time: the same frames from
+// any start frame. The frame duration and substep are powers of two (1/64 s,
+// 1/1024 s) so that the times add up exactly from either start.
+TEST(SceneStartFrame, ATimeIndependentSceneGivesTheSameFramesFromAnyStart) {
+  const std::string exact = replaced(kMinimal, R"("fps": 100, "dt": 1e-4)", R"("fps": 64, "dt": 0.0009765625)");
+  const Scene a = parseScene(exact, "test.json");
+  const Scene b = parseScene(replaced(exact, R"("frames": 2)", R"("start_frame": 1001, "frames": 2)"), "test.json");
+  const auto sa = buildSolver(a), sb = buildSolver(b);
+  ASSERT_GT(sa->particles().size(), 0u);
+  const double z0 = sa->particles().x[0].z;
+  for (int f = 0; f < 2; ++f) {
+    sa->advanceFrame(a.frameDuration());
+    sb->advanceFrame(b.frameDuration());
+  }
+  EXPECT_DOUBLE_EQ(sb->time(), b.frameTime(1002));
+  ASSERT_EQ(sa->particles().size(), sb->particles().size());
+  for (std::size_t p = 0; p < sa->particles().size(); ++p) {
+    for (int c = 0; c < 3; ++c) {
+      EXPECT_EQ(sa->particles().x[p][c], sb->particles().x[p][c]) << "particle " << p;
+      EXPECT_EQ(sa->particles().v[p][c], sb->particles().v[p][c]) << "particle " << p;
+    }
+  }
+  EXPECT_LT(sa->particles().x[0].z, z0);  // it did move (gravity)
+}
+
+// Keyframe times are scene seconds: a magnet keyed to move from t = 1 s to
+// t = 1.5 s rests at its first key for a run from frame 1, and a run from
+// frame 151 (t0 = 1.5 s at 100 fps) starts with it at its last key.
+TEST(SceneStartFrame, KeyframesAreInSceneSeconds) {
+  const std::string text = replaced(replaced(kMinimal, R"("bodies")", R"("magnets": [ { "shape": "sphere", "center": [0.1, 0.1, 0.02],
+      "radius": 0.01, "remanence": 1.2, "collider": false,
+      "motion": { "keyframes": [ { "time": 1, "center": [0.1, 0.1, 0.02] },
+                                 { "time": 1.5, "center": [0.1, 0.1, 0.12] } ] } } ],
+  "bodies")"), R"("youngs_modulus": 1e4 })", R"("youngs_modulus": 1e4, "magnetic": { "law": "linear", "chi": 0.5 } })");
+  const auto early = buildSolver(parseScene(text, "test.json"));
+  early->advanceFrame(0.01);
+  early->advanceFrame(0.01);
+  EXPECT_EQ(early->magnet(0).pose().position.z, 0.02);
+  const Scene lateScene = parseScene(replaced(text, R"("frames": 2)", R"("start_frame": 151, "frames": 2)"), "test.json");
+  const auto late = buildSolver(lateScene);
+  EXPECT_NEAR(late->magnet(0).pose().position.z, 0.12, 1e-12);
+  // From frame 126 (t0 = 1.25 s): half way, and moving up over the frames.
+  const auto middle =
+      buildSolver(parseScene(replaced(text, R"("frames": 2)", R"("start_frame": 126, "frames": 2)"), "test.json"));
+  EXPECT_NEAR(middle->magnet(0).pose().position.z, 0.07, 1e-9);
+  middle->advanceFrame(0.01);
+  middle->advanceFrame(0.01);
+  EXPECT_GT(middle->magnet(0).pose().position.z, 0.07 + 0.2 * 0.01 - 1e-9);
+}

@@ -227,6 +227,52 @@ TEST(SceneNodes, AnEmitterNodeEmitsInTheSolverNodeAsTheSceneDoes) {
   for (std::size_t q = 0; q < a.size(); ++q) ASSERT_EQ(a.x[q], b.x[q]) << q;
 }
 
+// time.start_frame in the mpm_solver node as in a scene: the solver starts at
+// scene time (start_frame - 1) / fps, so an emitter that stops at t = 0.04 s
+// emits only its last 0.02 s from frame 2 (t0 = 0.02 s at 50 fps).
+TEST(SceneNodes, TheSolverNodeStartsAtTheStartFramesTime) {
+  const std::string sceneText = R"({
+    "name": "jet",
+    "domain": { "min": [0, 0, 0], "max": [0.16, 0.1, 0.16], "dx": 0.01 },
+    "time": { "start_frame": 2, "frames": 3, "fps": 50 },
+    "materials": [ { "name": "goo", "model": "fluid", "density": 1000, "viscosity": 0.5, "bulk_modulus": 2e4 } ],
+    "emitters": [ { "material": "goo", "shape": "cylinder", "center": [0.05, 0.05, 0.12], "axis": [0, 0, -1],
+                    "radius": 0.012, "half_length": 0.005, "rate": "stream", "speed": 0.6, "end": 0.04 } ]
+  })";
+  const Scene scene = parseScene(sceneText, "jet.json");
+  const auto solver = buildSolver(scene);
+  EXPECT_DOUBLE_EQ(solver->time(), 0.02);
+  for (int f = 0; f < scene.frames; ++f) solver->advanceFrame(scene.frameDuration());
+  Scene fromZero = parseScene(sceneText, "jet.json");
+  fromZero.startFrame = 1;
+  const auto whole = buildSolver(fromZero);
+  for (int f = 0; f < scene.frames; ++f) whole->advanceFrame(scene.frameDuration());
+
+  Network net;
+  net.addNode("material", "goo");
+  setParamsFromJson(net, "goo", nlohmann::json::parse(R"({"name": "goo", "model": "fluid", "density": 1000,
+                    "viscosity": 0.5, "bulk_modulus": 2e4})"), "goo");
+  net.addNode("particle_emitter", "jet");
+  setParamsFromJson(net, "jet", nlohmann::json::parse(R"({"shape": "cylinder", "center": [0.05, 0.05, 0.12],
+                    "axis": [0, 0, -1], "radius": 0.012, "half_length": 0.005, "rate": "stream", "speed": 0.6,
+                    "end": 0.04, "cell_size": 0.01})"), "jet");
+  net.addNode("mpm_solver", "sim");
+  setParamsFromJson(net, "sim", nlohmann::json::parse(R"({"domain": {"min": [0, 0, 0], "max": [0.16, 0.1, 0.16],
+                    "dx": 0.01}, "time": {"start_frame": 2, "frames": 3, "fps": 50}})"), "sim");
+  net.connect("goo", "material", "jet", "material");
+  net.connect("jet", "particles", "sim", "particles");
+  const auto sim = std::get<std::shared_ptr<const SimulationData>>(net.cook("sim").at("simulation"));
+  EXPECT_EQ(sim->startFrame, 2);
+  ASSERT_EQ(sim->frameTimes.size(), 4u);
+  EXPECT_DOUBLE_EQ(sim->frameTimes.front(), 0.02);
+  EXPECT_NEAR(sim->frameTimes.back(), 0.08, 1e-12);
+  const MpmParticles &a = solver->particles(), &b = sim->solver->particles();
+  ASSERT_GT(a.size(), 0u);
+  EXPECT_LT(a.size(), whole->particles().size());  // the emitter was on for 0.02 s of the run, not 0.04 s
+  ASSERT_EQ(a.size(), b.size());
+  for (std::size_t q = 0; q < a.size(); ++q) ASSERT_EQ(a.x[q], b.x[q]) << q;
+}
+
 // A grid too large is refused by the one settings builder, before any int
 // overflow, with the same message for a scene and a node.
 TEST(SceneNodes, ATooLargeGridIsRefusedByTheSettingsBuilder) {

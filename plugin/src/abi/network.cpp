@@ -135,6 +135,7 @@ nlohmann::json outputJson(const NodeValue& v) {
     j["particles"] = (*fo)->particleForces.size();
     j["total_force_N"] = vecJson((*fo)->total);
   } else if (const auto* sim = std::get_if<std::shared_ptr<const SimulationData>>(&v)) {
+    j["start_frame"] = (*sim)->startFrame;
     j["frames"] = (*sim)->frames;
     j["time_s"] = (*sim)->time;
     j["particles"] = (*sim)->solver->particles().size();

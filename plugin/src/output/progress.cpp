@@ -41,13 +41,14 @@ std::string formatStageSplit(const std::vector<std::pair<std::string, double>>& 
   return r;
 }
 
-std::string formatProgressLine(int frame, int total, double elapsedSeconds, const std::string& split) {
+std::string formatProgressLine(int frame, int total, double elapsedSeconds, const std::string& split,
+                               int firstFrame) {
   require(total >= 1, "progress: the number of frames must be >= 1, got ", total);
   require(frame >= 0 && frame <= total, "progress: frame must be in [0, ", total, "], got ", frame);
   const double eta = frame > 0 ? elapsedSeconds / frame * (total - frame) : -1.0;
   char percent[16];
   std::snprintf(percent, sizeof percent, "%5.1f%%", 100.0 * frame / total);
-  std::string line = concat("frame ", frame, "/", total, "  ", percent, "  elapsed ", formatDuration(elapsedSeconds),
+  std::string line = concat("frame ", firstFrame + frame, "/", firstFrame + total, "  ", percent, "  elapsed ", formatDuration(elapsedSeconds),
                             "  ETA ", formatDuration(eta));
   if (!split.empty()) line += "  | " + split;
   return line;
@@ -95,7 +96,7 @@ void ProgressPrinter::update(int frame, const std::string& split) {
 }
 
 void ProgressPrinter::update(int frame, double elapsedSeconds, const std::string& split) {
-  const std::string line = formatProgressLine(frame, total_, elapsedSeconds, split);
+  const std::string line = formatProgressLine(frame, total_, elapsedSeconds, split, options_.firstFrame);
   const double interval = options_.terminal ? options_.terminalInterval : options_.plainInterval;
   const bool due = lastPrinted_ < 0 || frame == total_ || elapsedSeconds - lastPrinted_ >= interval;
   if (!due) return;

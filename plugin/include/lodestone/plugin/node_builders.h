@@ -47,10 +47,12 @@ EmitterSettings emitterSettingsFrom(const ParamSet& params);
 /// bad time line.
 RateEmitterSettings rateEmitterSettingsFrom(const ParamSet& params, const ColliderMotion& motion);
 
-/// The material points an emitter adds by time `duration` (s) when none is
-/// blocked, estimated from volumes before its lattice is built (for the
-/// memory check): its points per second times its on-time, plus one chunk.
-double estimatedEmittedParticles(const EmitterShape& shape, const RateEmitterSettings& settings, double duration);
+/// The material points an emitter adds from scene time `start` to `end` (s)
+/// when none is blocked, estimated from volumes before its lattice is built
+/// (for the memory check): its points per second times its on-time within
+/// [start, end], plus one chunk.
+double estimatedEmittedParticles(const EmitterShape& shape, const RateEmitterSettings& settings, double start,
+                                 double end);
 
 /// The MPM material of material parameters (model, density, moduli, magnetic.*).
 MpmMaterial materialFrom(const ParamSet& params);

@@ -103,9 +103,10 @@ struct ForcesData {
 /// A reference MLS-MPM after some frames.
 struct SimulationData {
   std::shared_ptr<MpmSolver> solver;
+  int startFrame = 1;               ///< the number of the first simulated frame (time.start_frame)
   int frames = 0;
-  double time = 0;                  ///< s
-  std::vector<double> frameTimes;   ///< s
+  double time = 0;                  ///< s, scene time
+  std::vector<double> frameTimes;   ///< s, scene time of the initial state and of each frame's end
   std::vector<Vec3d> centreOfMass;  ///< of the magnetic material per frame, m
 };
 

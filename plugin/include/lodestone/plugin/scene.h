@@ -71,11 +71,24 @@ struct Scene {
   FieldSourceSet fields;
   std::vector<MpmCollider> colliders;
   std::optional<AccuracyPresetSettings> accuracy;  ///< the scene's accuracy preset, if it names one
-  int frames = 1;
-  double fps = 24;  ///< frames per second
+  // The time line (time.start_frame, time.frames, time.fps): frame f ends
+  // at scene time f / fps. The initial state is frame startFrame - 1, at
+  // startTime(); the simulated frames are startFrame .. lastFrame().
+  // Keyframes, time profiles and emitter time lines are in scene seconds.
+  int startFrame = 1;  ///< the number of the first simulated frame
+  int frames = 1;      ///< frames to simulate
+  double fps = 24;     ///< frames per second
   SceneOutput output;
 
   double frameDuration() const { return 1.0 / fps; }
+  /// The number of the initial state's frame: startFrame - 1.
+  int initialFrame() const { return startFrame - 1; }
+  /// The number of the last simulated frame.
+  int lastFrame() const { return startFrame + frames - 1; }
+  /// The scene time at the end of frame `frame` (s): frame / fps.
+  double frameTime(int frame) const { return frame / fps; }
+  /// The scene time of the initial state (s), where the simulation starts.
+  double startTime() const { return frameTime(initialFrame()); }
 };
 
 /// Readers of shapes stored in files, for bodies and colliders of shape
@@ -109,7 +122,8 @@ Scene loadScene(const std::string& path, const SceneOptions& options = {});
 Scene parseScene(const std::string& text, const std::string& sourceName, const SceneOptions& options = {});
 
 /// A solver with the scene's materials, bodies, emitters, magnets, fields and
-/// colliders (the particles emitted at the scene's dx). Throws
+/// colliders (the particles emitted at the scene's dx), at the scene time
+/// startTime(). Throws
 /// InvalidArgument for a body wholly outside the domain, or an emitter whose
 /// centre is outside it when it first switches on.
 std::unique_ptr<MpmSolver> buildSolver(const Scene& scene);

@@ -24,10 +24,13 @@ std::string formatDuration(double seconds);
 std::string formatStageSplit(const std::vector<std::pair<std::string, double>>& stageSeconds);
 
 /// "frame k/N  pp.p%  elapsed E  ETA T" (+ "  | split" when `split` is not
-/// empty). The ETA assumes the remaining frames take the mean time so far
-/// ("--" before the first frame). Throws lodestone::InvalidArgument unless
-/// 0 <= frame <= total and total >= 1.
-std::string formatProgressLine(int frame, int total, double elapsedSeconds, const std::string& split = "");
+/// empty), k and N shown as firstFrame + frame and firstFrame + total (a
+/// scene's frame numbers: firstFrame its initial frame). The ETA assumes the
+/// remaining frames take the mean time so far ("--" before the first
+/// frame). Throws lodestone::InvalidArgument unless 0 <= frame <= total and
+/// total >= 1.
+std::string formatProgressLine(int frame, int total, double elapsedSeconds, const std::string& split = "",
+                               int firstFrame = 0);
 
 /// Whether the C stream is a terminal (isatty).
 bool isTerminal(std::FILE* stream);
@@ -51,6 +54,8 @@ struct ProgressOptions {
   /// frame are always printed. Defaults suit a terminal and a log file.
   double terminalInterval = 0.1;
   double plainInterval = 10.0;
+  /// Added to the frame numbers shown (formatProgressLine's firstFrame).
+  int firstFrame = 0;
 };
 
 class ProgressPrinter {
