@@ -6,6 +6,7 @@
 // bits on any thread count).
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <memory>
@@ -96,12 +97,14 @@ TEST(SourceReaction, AMagnetFeelsMinusTheForceOnTheMaterialUpToTheDiscreteSelfFo
   for (const int cells : {4, 6, 8, 12}) {
     const BallRun r = runBall(cells, mat, magnet);
     ASSERT_TRUE(r.report.converged()) << r.report.summary();
+    const auto start = std::chrono::steady_clock::now();
     const MagnetWrench w = r.stage->reactionOn(magnet, magnet, magnet.pose().position, 0.0);
+    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     const Vec3d F = r.report.totalForce;
     const double mismatch = norm(w.force + F) / norm(F);
     std::printf("cells/radius %2d: on the ball F_z = %.6g N, on the magnet F_z = %.6g N, |F_magnet + F_ball|/|F_ball| = "
-                "%.3g, torque on the magnet %.3g N m\n",
-                cells, F.z, w.force.z, mismatch, norm(w.torque));
+                "%.3g, torque on the magnet %.3g N m; reaction %.3g s, stage force %.3g s, stage total %.3g s\n",
+                cells, F.z, w.force.z, mismatch, norm(w.torque), seconds, r.report.secondsForce, r.report.secondsTotal);
     EXPECT_LT(F.z, 0);        // the ball is pulled down
     EXPECT_GT(w.force.z, 0);  // the magnet up
     EXPECT_LT(mismatch, 6e-4);
