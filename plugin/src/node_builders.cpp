@@ -371,7 +371,7 @@ void addSourcesAndColliders(MpmSolver& solver, const FieldSourceSet& fields,
   for (const SourcesData::Magnet& m : magnets) {
     if (m.collider) {
       const std::size_t c = solver.addMagnet(*m.magnet, m.motion, m.boundary);
-      if (m.dynamics) solver.collider(c).setDynamics(*m.dynamics, solver.time());
+      if (m.dynamics) solver.collider(c).setDynamics(*m.dynamics);
     } else
       solver.addNonCollidingMagnet(*m.magnet, m.motion);
   }

@@ -20,13 +20,7 @@ namespace {
 
 Mat3d rotation(const Vec3d& axis, double angle) { return Pose::fromAxisAngle({}, axis, angle).rotation; }
 
-Mat3d diag(double a, double b, double c) {
-  Mat3d m;
-  m(0, 0) = a;
-  m(1, 1) = b;
-  m(2, 2) = c;
-  return m;
-}
+Mat3d diag(double a, double b, double c) { return Mat3d::diagonal(a, b, c); }
 
 double maxAbsDiff(const Mat3d& a, const Mat3d& b) {
   double m = 0;

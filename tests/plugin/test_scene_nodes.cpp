@@ -191,6 +191,29 @@ TEST(SceneNodes, SceneSettingsAreTheMpmSolverNodesSettings) {
   }
 }
 
+namespace {
+
+/// The jet of the emitter tests as a node network: a stream emitter (with
+/// `motion`, a JSON member or "") into an mpm_solver with time line `time`.
+std::shared_ptr<const SimulationData> cookJet(const std::string& motion, const std::string& time) {
+  Network net;
+  net.addNode("material", "goo");
+  setParamsFromJson(net, "goo", nlohmann::json::parse(R"({"name": "goo", "model": "fluid", "density": 1000,
+                    "viscosity": 0.5, "bulk_modulus": 2e4})"), "goo");
+  net.addNode("particle_emitter", "jet");
+  setParamsFromJson(net, "jet", nlohmann::json::parse(std::string(R"({"shape": "cylinder", "center": [0.05, 0.05, 0.12],
+                    "axis": [0, 0, -1], "radius": 0.012, "half_length": 0.005, "rate": "stream", "speed": 0.6,
+                    "end": 0.04, "cell_size": 0.01)") + (motion.empty() ? "" : ", " + motion) + "}"), "jet");
+  net.addNode("mpm_solver", "sim");
+  setParamsFromJson(net, "sim", nlohmann::json::parse(R"({"domain": {"min": [0, 0, 0], "max": [0.16, 0.1, 0.16],
+                    "dx": 0.01}, "time": )" + time + "}"), "sim");
+  net.connect("goo", "material", "jet", "material");
+  net.connect("jet", "particles", "sim", "particles");
+  return std::get<std::shared_ptr<const SimulationData>>(net.cook("sim").at("simulation"));
+}
+
+}  // namespace
+
 // A particle_emitter node feeding an mpm_solver node emits in the solver as
 // the scene's emitter does: the same particles after the same frames.
 TEST(SceneNodes, AnEmitterNodeEmitsInTheSolverNodeAsTheSceneDoes) {
@@ -207,20 +230,7 @@ TEST(SceneNodes, AnEmitterNodeEmitsInTheSolverNodeAsTheSceneDoes) {
   const auto solver = buildSolver(scene);
   for (int f = 0; f < scene.frames; ++f) solver->advanceFrame(scene.frameDuration());
 
-  Network net;
-  net.addNode("material", "goo");
-  setParamsFromJson(net, "goo", nlohmann::json::parse(R"({"name": "goo", "model": "fluid", "density": 1000,
-                    "viscosity": 0.5, "bulk_modulus": 2e4})"), "goo");
-  net.addNode("particle_emitter", "jet");
-  setParamsFromJson(net, "jet", nlohmann::json::parse(R"({"shape": "cylinder", "center": [0.05, 0.05, 0.12],
-                    "axis": [0, 0, -1], "radius": 0.012, "half_length": 0.005, "rate": "stream", "speed": 0.6,
-                    "end": 0.04, "cell_size": 0.01, "motion": {"velocity": [0.5, 0, 0]}})"), "jet");
-  net.addNode("mpm_solver", "sim");
-  setParamsFromJson(net, "sim", nlohmann::json::parse(R"({"domain": {"min": [0, 0, 0], "max": [0.16, 0.1, 0.16],
-                    "dx": 0.01}, "time": {"frames": 3, "fps": 50}})"), "sim");
-  net.connect("goo", "material", "jet", "material");
-  net.connect("jet", "particles", "sim", "particles");
-  const auto sim = std::get<std::shared_ptr<const SimulationData>>(net.cook("sim").at("simulation"));
+  const auto sim = cookJet(R"("motion": {"velocity": [0.5, 0, 0]})", R"({"frames": 3, "fps": 50})");
   const MpmParticles &a = solver->particles(), &b = sim->solver->particles();
   ASSERT_GT(a.size(), 0u);
   ASSERT_EQ(a.size(), b.size());
@@ -248,20 +258,7 @@ TEST(SceneNodes, TheSolverNodeStartsAtTheStartFramesTime) {
   const auto whole = buildSolver(fromZero);
   for (int f = 0; f < scene.frames; ++f) whole->advanceFrame(scene.frameDuration());
 
-  Network net;
-  net.addNode("material", "goo");
-  setParamsFromJson(net, "goo", nlohmann::json::parse(R"({"name": "goo", "model": "fluid", "density": 1000,
-                    "viscosity": 0.5, "bulk_modulus": 2e4})"), "goo");
-  net.addNode("particle_emitter", "jet");
-  setParamsFromJson(net, "jet", nlohmann::json::parse(R"({"shape": "cylinder", "center": [0.05, 0.05, 0.12],
-                    "axis": [0, 0, -1], "radius": 0.012, "half_length": 0.005, "rate": "stream", "speed": 0.6,
-                    "end": 0.04, "cell_size": 0.01})"), "jet");
-  net.addNode("mpm_solver", "sim");
-  setParamsFromJson(net, "sim", nlohmann::json::parse(R"({"domain": {"min": [0, 0, 0], "max": [0.16, 0.1, 0.16],
-                    "dx": 0.01}, "time": {"start_frame": 2, "frames": 3, "fps": 50}})"), "sim");
-  net.connect("goo", "material", "jet", "material");
-  net.connect("jet", "particles", "sim", "particles");
-  const auto sim = std::get<std::shared_ptr<const SimulationData>>(net.cook("sim").at("simulation"));
+  const auto sim = cookJet("", R"({"start_frame": 2, "frames": 3, "fps": 50})");
   EXPECT_EQ(sim->startFrame, 2);
   ASSERT_EQ(sim->frameTimes.size(), 4u);
   EXPECT_DOUBLE_EQ(sim->frameTimes.front(), 0.02);

@@ -342,24 +342,9 @@ MpmCollider::MpmCollider(const ColliderShape& shape, const ColliderMotion& motio
   boundary_.validate("collider");
 }
 
-void MpmCollider::setMotion(const ColliderMotion& motion) {
-  if (!body_ || motion.kind() == ColliderMotion::Kind::Dynamic) {
-    motion_ = motion;
-    return;
-  }
-  Vec3d v, w;
-  motion.velocityAt(0.0, v, w);
-  motion_ = ColliderMotion::dynamic(motion.poseAt(0.0), v, w);
-}
+void MpmCollider::setMotion(const ColliderMotion& motion) { motion_ = motion; }
 
-void MpmCollider::setDynamics(const RigidBodySettings& settings, double time) {
-  require(std::isfinite(time), "dynamic collider: time must be finite (s), got ", time);
-  body_ = RigidBody::of(shape_, settings);
-  if (motion_.kind() == ColliderMotion::Kind::Dynamic) return;
-  Vec3d v, w;
-  motion_.velocityAt(time, v, w);
-  motion_ = ColliderMotion::dynamic(motion_.poseAt(time), v, w);
-}
+void MpmCollider::setDynamics(const RigidBodySettings& settings) { body_ = RigidBody::of(shape_, settings); }
 
 const RigidBody& MpmCollider::body() const {
   require(body_.has_value(), "collider: not a dynamic rigid body (a ", toString(shape_.kind), " moving ",

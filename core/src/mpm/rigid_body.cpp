@@ -16,14 +16,6 @@ inline namespace mpm {
 
 namespace {
 
-Mat3d diagonal(double a, double b, double c) {
-  Mat3d m;
-  m(0, 0) = a;
-  m(1, 1) = b;
-  m(2, 2) = c;
-  return m;
-}
-
 Mat3d scaled(const Mat3d& a, double s) {
   Mat3d r;
   for (int i = 0; i < 3; ++i)
@@ -40,7 +32,7 @@ Mat3d inverseOfInertia(const Mat3d& I, const char* who) {
   for (const double l : e.values)
     require(std::isfinite(l) && l > 0, who, ": the inertia tensor is not positive definite (principal moment ", l,
             " kg m^2)");
-  return rotated(e.vectors, diagonal(1 / e.values[0], 1 / e.values[1], 1 / e.values[2]));
+  return rotated(e.vectors, Mat3d::diagonal(1 / e.values[0], 1 / e.values[1], 1 / e.values[2]));
 }
 
 /// Mass properties of a level set: sums over its samples with the smoothed
@@ -227,13 +219,13 @@ RigidMassProperties massProperties(const ColliderShape& shape, double density) {
       const double r = shape.radius;
       p.mass = density * 4.0 / 3.0 * kPi * r * r * r;
       const double i = 0.4 * p.mass * r * r;
-      p.inertia = diagonal(i, i, i);
+      p.inertia = Mat3d::diagonal(i, i, i);
       break;
     }
     case ColliderShapeKind::Box: {
       const Vec3d a = shape.halfSize;
       p.mass = density * 8 * a.x * a.y * a.z;
-      p.inertia = diagonal(p.mass / 3 * (a.y * a.y + a.z * a.z), p.mass / 3 * (a.x * a.x + a.z * a.z),
+      p.inertia = Mat3d::diagonal(p.mass / 3 * (a.y * a.y + a.z * a.z), p.mass / 3 * (a.x * a.x + a.z * a.z),
                            p.mass / 3 * (a.x * a.x + a.y * a.y));
       break;
     }
@@ -241,7 +233,7 @@ RigidMassProperties massProperties(const ColliderShape& shape, double density) {
       const double r = shape.radius, L = 2 * shape.halfLength;
       p.mass = density * kPi * r * r * L;
       const double side = p.mass * (3 * r * r + L * L) / 12;
-      p.inertia = diagonal(side, side, 0.5 * p.mass * r * r);
+      p.inertia = Mat3d::diagonal(side, side, 0.5 * p.mass * r * r);
       break;
     }
     case ColliderShapeKind::LevelSet:

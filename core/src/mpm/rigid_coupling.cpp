@@ -80,6 +80,12 @@ void MpmSolver::predictRigidBodies(double dt) {
     contactImpulse_.assign(nc, Vec3d{});
   }
   if (contactSamples_.size() != nc) contactSamples_.assign(nc, {});
+  // A dynamic collider not stepped yet starts from its scripted motion now.
+  for (MpmCollider& col : colliders_)
+    if (col.isDynamic() && col.motion().kind() != ColliderMotion::Kind::Dynamic) {
+      const ColliderState s = col.stateAt(time_);
+      col.setMotion(ColliderMotion::dynamic(s.pose, s.velocity, s.angularVelocity));
+    }
   updateMagnetWrenches();
   const double spacing = 0.5 * settings_.grid.dx;
   for (std::size_t c = 0; c < nc; ++c) {

@@ -16,6 +16,13 @@ struct Mat3 {
     r.m[0][0] = r.m[1][1] = r.m[2][2] = T(1);
     return r;
   }
+  LODESTONE_HOSTDEV static constexpr Mat3 diagonal(T a, T b, T c) {
+    Mat3 r;
+    r.m[0][0] = a;
+    r.m[1][1] = b;
+    r.m[2][2] = c;
+    return r;
+  }
   LODESTONE_HOSTDEV static constexpr Mat3 outer(const Vec3<T>& a, const Vec3<T>& b) {
     Mat3 r;
     for (int i = 0; i < 3; ++i)

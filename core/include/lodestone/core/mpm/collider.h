@@ -274,16 +274,19 @@ class MpmCollider {
   const ColliderShape& shape() const { return shape_; }
   const ColliderMotion& motion() const { return motion_; }
   const BoundaryCondition& boundary() const { return boundary_; }
-  /// A dynamic collider keeps its dynamics: `motion` then sets its state
-  /// (a Dynamic motion, or any motion's pose and velocity at time 0).
+  /// For a dynamic collider, a Dynamic motion sets its state; any other
+  /// motion gives its starting pose and velocities at the time the solver
+  /// first steps it.
   void setMotion(const ColliderMotion& motion);
   void setBoundary(const BoundaryCondition& boundary);
 
-  /// Makes the collider a dynamic rigid body (mpm/rigid_body.h) that starts
-  /// from its motion's pose and velocities at `time` (s): a constant-velocity
-  /// motion gives it an initial velocity and spin. Throws InvalidArgument for
-  /// a plane or an inverted shape, or bad settings (naming the value).
-  void setDynamics(const RigidBodySettings& settings, double time = 0.0);
+  /// Makes the collider a dynamic rigid body (mpm/rigid_body.h). It starts
+  /// from its motion's pose and velocities at the solver's time when the
+  /// solver first steps it: a constant-velocity motion gives it an initial
+  /// velocity and spin, a keyframed one its pose at that time. Throws
+  /// InvalidArgument for a plane or an inverted shape, or bad settings
+  /// (naming the value).
+  void setDynamics(const RigidBodySettings& settings);
   bool isDynamic() const { return body_.has_value(); }
   /// The body's mass properties and settings; throws unless isDynamic().
   const RigidBody& body() const;
