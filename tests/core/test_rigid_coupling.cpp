@@ -134,10 +134,10 @@ TEST(RigidCoupling, ALightBoxFloatsAndAHeavyOneSinks) {
   // A 4 cm cube (4 cells a side) of half the fluid's density floats: it
   // comes to rest with its top within a cell of the surface and its bottom
   // in the fluid (without the body's share of gravity removed from the
-  // nodes inside it, it sank to the floor). Archimedes puts its centre at the raised surface; at this
-  // resolution it floats lower (the allowance layer of half a cell that the
-  // fluid may seep into shrinks the displacing volume): the figure is
-  // printed and bounded at 3 cells. One twice as dense sinks to the floor.
+  // nodes inside it, it sank to the floor). Archimedes puts its centre at
+  // the raised surface; at this resolution it floats lower (the grid sees
+  // the body only at the 8 nodes inside it): the figure is printed and
+  // bounded at 3 cells. One twice as dense sinks to the floor.
   double surface = 0, floor = 0;
   const double light = restingHeight(500, surface, floor);
   const double area = 0.20 * 0.20;  // the pool's cross-section between the walls, m^2
