@@ -376,12 +376,18 @@ Vec3d MpmCollider::apply(const ColliderState& s, const Vec3d& x, const Vec3d& v)
   return applyBoundaryCondition(v, vc, n, boundary_);
 }
 
-bool MpmCollider::projectOut(const ColliderState& s, Vec3d& x, Vec3d& v, double allowed) const {
+bool MpmCollider::pushOut(const ColliderState& s, Vec3d& x, double allowed, Vec3d& normal) const {
   const Vec3d xb = s.pose.toLocal(x);
   const double phi = shape_.signedDistance(xb);
   if (!(phi < -allowed)) return false;
-  const Vec3d n = s.pose.vectorToWorld(shape_.normal(xb));
-  x = x - (phi + allowed) * n;
+  normal = s.pose.vectorToWorld(shape_.normal(xb));
+  x = x - (phi + allowed) * normal;
+  return true;
+}
+
+bool MpmCollider::projectOut(const ColliderState& s, Vec3d& x, Vec3d& v, double allowed) const {
+  Vec3d n;
+  if (!pushOut(s, x, allowed, n)) return false;
   const Vec3d vc = s.velocity + cross(s.angularVelocity, x - s.pose.position);
   v = applyBoundaryCondition(v, vc, n, boundary_);
   return true;

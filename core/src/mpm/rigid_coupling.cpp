@@ -3,6 +3,9 @@
 // mpm/solver.h.
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+
+#include <tbb/parallel_for.h>
 
 #include "lodestone/core/base/error.h"
 #include "lodestone/core/mpm/solver.h"
@@ -211,6 +214,35 @@ void MpmSolver::advanceRigidBodies(double dt) {
   }
 }
 
+std::size_t MpmSolver::pushOutOfBody(std::size_t c, const ColliderState& s, double allowed,
+                                     const ParticleBounds& bounds, std::size_t& outside) {
+  // Pushed out to the allowance, then the particles and the body exchange
+  // momentum as the grid nodes inside it do (exchangeMomentum): implicit, so
+  // a light body is not thrown by the material's weight.
+  MpmCollider& col = colliders_[c];
+  Vec3d* X = particles_.x.data();
+  const std::size_t np = particles_.size();
+  std::vector<std::uint8_t> deep(np, 0);
+  std::vector<Vec3d> normal(np);
+  tbb::parallel_for(std::size_t(0), np, [&](std::size_t p) { deep[p] = col.pushOut(s, X[p], allowed, normal[p]); });
+  std::vector<std::size_t> index;
+  std::vector<RigidCouplingPoint> points;
+  for (std::size_t p = 0; p < np; ++p) {
+    if (!deep[p]) continue;
+    index.push_back(p);
+    points.push_back({particles_.mass[p], X[p], normal[p], particles_.v[p]});
+    if (bounds.excludes(X[p])) ++outside;
+  }
+  if (points.empty()) return 0;
+  RigidBodyState body = RigidBodyState::dynamic(col.body(), s);
+  const Vec3d given = exchangeMomentum(body, col.boundary(), points);
+  for (std::size_t q = 0; q < index.size(); ++q) particles_.v[index[q]] = points[q].v;
+  const ColliderState after = body.colliderState();
+  col.setMotion(ColliderMotion::dynamic(after.pose, after.velocity, after.angularVelocity));
+  if (c < materialImpulse_.size()) materialImpulse_[c] -= given;
+  return points.size();
+}
+
 std::vector<RigidBodyReport> MpmSolver::rigidBodies() const {
   std::vector<RigidBodyReport> out;
   for (std::size_t c = 0; c < colliders_.size(); ++c) {
@@ -219,8 +251,9 @@ std::vector<RigidBodyReport> MpmSolver::rigidBodies() const {
     RigidBodyReport r;
     r.collider = c;
     const std::size_t m = colliderMagnet(c);
-    const RigidBodyState s = RigidBodyState::dynamic(col.body(), col.stateAt(time_));
-    r.pose = col.stateAt(time_).pose;
+    const ColliderState now = col.stateAt(time_);
+    const RigidBodyState s = RigidBodyState::dynamic(col.body(), now);
+    r.pose = now.pose;
     r.velocity = s.v;
     r.angularVelocity = s.w;
     if (m < magnets_.size()) {

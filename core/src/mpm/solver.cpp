@@ -782,7 +782,6 @@ std::size_t MpmSolver::projectOutOfColliders(double dt, std::size_t& outside) {
   const ParticleBounds bounds = domainBounds();
   Vec3d* X = particles_.x.data();
   Vec3d* V = particles_.v.data();
-  const double* mass = particles_.mass.data();
   struct Count {
     std::size_t pushed = 0, outside = 0;
     Count& operator+=(const Count& o) {
@@ -792,50 +791,16 @@ std::size_t MpmSolver::projectOutOfColliders(double dt, std::size_t& outside) {
     }
   };
   std::size_t pushed = 0;
-  const auto beyond = [&](const Vec3d& x) {
-    return x.x < bounds.lo.x || x.y < bounds.lo.y || x.z < bounds.lo.z || x.x > bounds.hi.x || x.y > bounds.hi.y ||
-           x.z > bounds.hi.z;
-  };
   for (std::size_t c = 0; c < colliders_.size(); ++c) {
     if (colliders_[c].isDynamic()) {
-      // Pushed out to the allowance, then the particles and the body
-      // exchange momentum as the grid nodes inside it do (exchangeMomentum):
-      // implicit, so a light body is not thrown by the material's weight.
-      const MpmCollider& col = colliders_[c];
-      const std::size_t np = particles_.size();
-      std::vector<std::uint8_t> deep(np, 0);
-      std::vector<Vec3d> normal(np);
-      tbb::parallel_for(std::size_t(0), np, [&](std::size_t p) {
-        const Vec3d xb = states[c].pose.toLocal(X[p]);
-        const double phi = col.shape().signedDistance(xb);
-        if (!(phi < -allowed[c])) return;
-        normal[p] = states[c].pose.vectorToWorld(col.shape().normal(xb));
-        X[p] = X[p] - (phi + allowed[c]) * normal[p];
-        deep[p] = 1;
-      });
-      std::vector<std::size_t> index;
-      std::vector<RigidCouplingPoint> points;
-      for (std::size_t p = 0; p < np; ++p)
-        if (deep[p]) {
-          index.push_back(p);
-          points.push_back({mass[p], X[p], normal[p], V[p]});
-          if (beyond(X[p])) ++outside;
-        }
-      if (points.empty()) continue;
-      pushed += points.size();
-      RigidBodyState body = RigidBodyState::dynamic(col.body(), states[c]);
-      const Vec3d given = exchangeMomentum(body, col.boundary(), points);
-      for (std::size_t q = 0; q < index.size(); ++q) V[index[q]] = points[q].v;
-      const ColliderState st = body.colliderState();
-      colliders_[c].setMotion(ColliderMotion::dynamic(st.pose, st.velocity, st.angularVelocity));
-      if (c < materialImpulse_.size()) materialImpulse_[c] -= given;
+      pushed += pushOutOfBody(c, states[c], allowed[c], bounds, outside);
       continue;
     }
     const Count n = deterministicSum<Count>(particles_.size(), [&](std::size_t p) {
       Count k;
       if (!colliders_[c].projectOut(states[c], X[p], V[p], allowed[c])) return k;
       ++k.pushed;
-      if (beyond(X[p])) ++k.outside;
+      if (bounds.excludes(X[p])) ++k.outside;
       return k;
     });
     pushed += n.pushed;

@@ -313,6 +313,10 @@ class MpmCollider {
   /// what keeps particles out of walls thinner than the grid's reach
   /// (MpmSolver's collider projection).
   bool projectOut(const ColliderState& s, Vec3d& x, Vec3d& v, double allowed = 0.0) const;
+  /// The positional part of projectOut: moves x out to depth `allowed` and
+  /// gives the outward normal (world frame) there; false, changing nothing,
+  /// when x is not deeper than that.
+  bool pushOut(const ColliderState& s, Vec3d& x, double allowed, Vec3d& normal) const;
 
  private:
   ColliderShape shape_;

@@ -61,6 +61,10 @@ struct MpmNode {
 struct ParticleBounds {
   Vec3d lo, hi;
   bool clamp = true;
+  /// Whether x lies outside [lo, hi] on some axis.
+  bool excludes(const Vec3d& x) const {
+    return x.x < lo.x || x.y < lo.y || x.z < lo.z || x.x > hi.x || x.y > hi.y || x.z > hi.z;
+  }
 };
 
 /// What G2P measured.

@@ -424,6 +424,11 @@ class MpmSolver {
   void predictRigidBodies(double dt);                       // a.-b.
   void exchangeWithRigidBodies(double dt);                  // c. (in the grid update)
   void advanceRigidBodies(double dt);                       // d.
+  // The collider projection for dynamic collider c at state s: particles
+  // pushed out and their momentum exchanged with the body; returns how many
+  // were pushed, adding to `outside` those now beyond `bounds`.
+  std::size_t pushOutOfBody(std::size_t c, const ColliderState& s, double allowed, const ParticleBounds& bounds,
+                            std::size_t& outside);
   void updateMagnetWrenches();                              // magnetWrench_ of the dynamic magnets
   std::size_t colliderMagnet(std::size_t c) const;          // magnet index of collider c, or magnetCount()
   void solveMagnetic(MpmStepReport& rep);
