@@ -107,9 +107,10 @@ TEST(RigidCoupling, ASpinningBodyInFluidKeepsTheTotalAngularMomentum) {
 
 namespace {
 
-/// Height (m) at which a cube of side 4 cm and density `rho` comes to rest
-/// in a pool of water-like fluid (1000 kg/m^3), centre height.
-double restingHeight(double rho, double& surface, double& floor) {
+/// Height (m) at which a cube of half side `half` (m) and density `rho`
+/// comes to rest in a pool 10 cm deep of water-like fluid (1000 kg/m^3),
+/// centre height; 1 cm cells, a 20 cm x 20 cm pool between the walls.
+double restingHeight(double rho, double half, double& surface, double& floor) {
   MpmSettings s = box(24, 0.01, {0, 0, -9.81});
   MpmSolver solver(s);
   const std::uint32_t fluid = solver.addMaterial(viscousFluid(2.0, 4e4, 1000));
@@ -120,8 +121,8 @@ double restingHeight(double rho, double& surface, double& floor) {
                                 {0.5 * (hi.x - lo.x), 0.5 * (hi.y - lo.y), 0.5 * depth}),
               fluid, {});
   surface = floor + depth;
-  MpmCollider cube(ColliderShape::box({0.02, 0.02, 0.02}),
-                   ColliderMotion::fixed(Pose::at({0.115, 0.115, surface + 0.03})));
+  MpmCollider cube(ColliderShape::box({half, half, half}),
+                   ColliderMotion::fixed(Pose::at({0.115, 0.115, surface + half + 0.01})));
   cube.setDynamics(density(rho));
   const std::size_t c = solver.addCollider(cube);
   for (int f = 0; f < 30; ++f) solver.advanceFrame(0.05);
@@ -130,25 +131,21 @@ double restingHeight(double rho, double& surface, double& floor) {
 
 }  // namespace
 
-TEST(RigidCoupling, ALightBoxFloatsAndAHeavyOneSinks) {
-  // A 4 cm cube (4 cells a side) of half the fluid's density floats: it
-  // comes to rest with its top within a cell of the surface and its bottom
-  // in the fluid (without the body's share of gravity removed from the
-  // nodes inside it, it sank to the floor). Archimedes puts its centre at
-  // the raised surface; at this resolution it floats lower (the grid sees
-  // the body only at the 8 nodes inside it): the figure is printed and
-  // bounded at 3 cells. One twice as dense sinks to the floor.
+TEST(RigidCoupling, ALightBoxFloatsAtArchimedesDepthAndAHeavyOneSinks) {
+  // An 8 cm cube (8 cells a side) of half the fluid's density floats half
+  // submerged: Archimedes puts its centre at the surface the cube raised.
+  // It comes to rest within a cell of it (0.24 cells low; coupling only the
+  // nodes inside the body, it sat 2.1 cells low; a 4-cell cube sits 1.1
+  // cells low). One twice as dense sinks to the floor.
   double surface = 0, floor = 0;
-  const double light = restingHeight(500, surface, floor);
+  const double half = 0.04;
+  const double light = restingHeight(500, half, surface, floor);
   const double area = 0.20 * 0.20;  // the pool's cross-section between the walls, m^2
-  const double raised = surface + 0.04 * 0.04 * 0.04 / area;
-  const double archimedes = raised;  // half submerged: the centre at the surface
-  const double heavyZ = restingHeight(2000, surface, floor);
+  const double archimedes = surface + 0.5 * std::pow(2 * half, 3) / area;  // half the cube below the surface
+  const double heavy = restingHeight(2000, half, surface, floor);
   std::printf("buoyancy: light cube centre %.4f m (Archimedes %.4f m, %.2f cells lower), heavy cube centre %.4f m "
               "(floor + half side %.4f)\n",
-              light, archimedes, (archimedes - light) / 0.01, heavyZ, floor + 0.02);
-  EXPECT_GT(light + 0.02, raised - 0.01);  // its top within a cell of the surface
-  EXPECT_LT(light - 0.02, raised);          // its bottom is in it
-  EXPECT_NEAR(light, archimedes, 0.03);
-  EXPECT_NEAR(heavyZ, floor + 0.02, 0.002);  // on the floor
+              light, archimedes, (archimedes - light) / 0.01, heavy, floor + half);
+  EXPECT_NEAR(light, archimedes, 0.01);
+  EXPECT_NEAR(heavy, floor + half, 0.002);  // on the floor
 }

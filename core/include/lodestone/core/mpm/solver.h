@@ -336,13 +336,14 @@ class MpmSolver {
   //      and the pull of the other magnets (magnet_interaction.h);
   //   b. contacts with the other bodies, the kinematic colliders and the
   //      domain walls (rigid_contact.h);
-  //   c. in the grid update, the body and the grid nodes inside it with mass
-  //      exchange momentum: the body's velocity V = (v, w) solves
+  //   c. in the grid update, the body and the grid nodes with mass inside it
+  //      or within one cell of it exchange momentum: the body's velocity
+  //      V = (v, w) solves
   //        (M + sum_i m_i J_i^T P_i J_i) V = M V_pred + sum_i m_i J_i^T P_i v_i,
   //      J_i V = v + w x (x_i - x_c) the body's velocity at node i, v_i the
-  //      node's velocity without the substep's gravity (its mass is the
-  //      kernels' reach of material outside the body, whose weight the
-  //      material's pressure carries, not the body), P_i = I
+  //      node's velocity, inside the body without the substep's gravity (its
+  //      mass is the kernels' reach of material outside the body, whose
+  //      weight the material's pressure carries, not the body), P_i = I
   //      (sticky), n n^T (slip, and separate where the node approaches),
   //      which is the momentum balance with the nodes taking the body's
   //      normal velocity; the collider's boundary condition (with friction)
