@@ -4,6 +4,7 @@
 // spheres and a box coming to rest on the floor.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <memory>
@@ -209,6 +210,27 @@ TEST(RigidBody, ABoxDroppedOnTheFloorComesToRestFlatOnIt) {
   EXPECT_LT(norm(cross(up, Vec3d{0, 0, 1})), 1e-3);
   EXPECT_LT(norm(s.velocity), 1e-3);
   EXPECT_LT(norm(s.angularVelocity), 1e-2);
+}
+
+TEST(RigidBody, ABodyPlacedDeepInTheFloorRisesOutOfItWithoutBeingThrown) {
+  // A sphere of radius 3 cm placed with its centre on the floor (3 cm deep,
+  // 1.5 cells): the overlap push moves it out without giving it momentum,
+  // and it rests on the floor, not thrown across the box (a push on the
+  // velocity, 0.2 of the overlap per substep of 1 ms, gave it 6 m/s).
+  MpmSolver solver(emptyBox(20, 0.02, {0, 0, -9.81}));
+  const double floor = solver.domainLower().z;
+  MpmCollider ball(ColliderShape::sphere(0.03), ColliderMotion::fixed(Pose::at({0.2, 0.2, floor})));
+  ball.setDynamics(bodySettings(1000, 0.5, 0.4));
+  const std::size_t c = solver.addCollider(ball);
+  double fastest = 0;
+  for (int f = 0; f < 10; ++f) {
+    solver.advanceFrame(0.05);
+    fastest = std::max(fastest, norm(solver.collider(c).stateAt(solver.time()).velocity));
+  }
+  const double z = solver.collider(c).stateAt(solver.time()).pose.position.z;
+  std::printf("deep start: fastest %.4f m/s, centre z %.5f m (resting %.5f)\n", fastest, z, floor + 0.03);
+  EXPECT_LT(fastest, 0.05);  // what gravity gives it before the floor stops it
+  EXPECT_NEAR(z, floor + 0.03, 0.02 * 0.02);
 }
 
 TEST(RigidBody, TheMomentumExchangeIsImplicitForALightBody) {

@@ -297,6 +297,12 @@ void RigidBodyState::applyImpulse(const Vec3d& P, const Vec3d& p) {
   w += inverseInertia * cross(p - x, P);
 }
 
+void RigidBodyState::applyPushImpulse(const Vec3d& P, const Vec3d& p) {
+  if (!movable()) return;
+  pushV += inverseMass * P;
+  pushW += inverseInertia * cross(p - x, P);
+}
+
 double RigidBodyState::inverseEffectiveMass(const Vec3d& n, const Vec3d& p) const {
   if (!movable()) return 0;
   const Vec3d r = p - x;
@@ -322,8 +328,9 @@ ColliderState RigidBodyState::colliderState() const {
 
 void RigidBodyState::advance(const RigidBody& body, double dt) {
   const Vec3d L = rotated(rotation, body.mass.inertia) * w;  // angular momentum about the centre
-  x += dt * v;
-  rotation = orthonormalized(rotationFromVector(dt * w) * rotation);
+  x += dt * (v + pushV);
+  rotation = orthonormalized(rotationFromVector(dt * (w + pushW)) * rotation);
+  pushV = pushW = Vec3d{};
   inverseInertia = rotated(rotation, body.mass.inverseInertia);
   w = inverseInertia * L;
 }

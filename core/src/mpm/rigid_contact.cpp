@@ -121,7 +121,9 @@ double solveContacts(std::vector<RigidBodyState>& bodies, const std::vector<Rigi
   struct Row {
     double kn = 0;       // inverse effective mass along the normal, 1/kg
     double target = 0;   // normal relative velocity to reach, m/s
+    double push = 0;     // normal separation speed the overlap push asks for, m/s
     double Pn = 0;       // accumulated normal impulse, N*s
+    double Pp = 0;       // accumulated push impulse, N*s
     Vec3d Pt;            // accumulated friction impulse, N*s
   };
   std::vector<Row> rows(contacts.size());
@@ -132,8 +134,8 @@ double solveContacts(std::vector<RigidBodyState>& bodies, const std::vector<Rigi
     r.kn = a.inverseEffectiveMass(k.normal, k.point) + b.inverseEffectiveMass(k.normal, k.point);
     const double vn = dot(a.velocityAt(k.point) - b.velocityAt(k.point), k.normal);
     const double bounce = -vn > settings.restitutionSpeed ? -k.restitution * vn : 0.0;
-    const double push = settings.baumgarte * std::max(k.depth - settings.slop, 0.0) / dt;
-    r.target = std::max(bounce, push);
+    r.target = bounce;
+    r.push = settings.baumgarte * std::max(k.depth - settings.slop, 0.0) / dt;
   }
   double largest = 0;
   for (int it = 0; it < settings.iterations; ++it) {
@@ -167,6 +169,21 @@ double solveContacts(std::vector<RigidBodyState>& bodies, const std::vector<Rigi
           b.applyImpulse(-1.0 * dPt, k.point);
         }
       }
+    }
+  }
+  // The overlap push, normal only, on the push velocities.
+  for (int it = 0; it < settings.iterations; ++it) {
+    for (std::size_t c = 0; c < contacts.size(); ++c) {
+      const RigidContact& k = contacts[c];
+      Row& r = rows[c];
+      if (!(r.kn > 0) || (r.push == 0 && r.Pp == 0)) continue;
+      RigidBodyState &a = bodies[k.a], &b = bodies[k.b];
+      const double vn = dot(a.pushVelocityAt(k.point) - b.pushVelocityAt(k.point), k.normal);
+      const double Pp = std::max(r.Pp + (r.push - vn) / r.kn, 0.0);
+      const Vec3d dP = (Pp - r.Pp) * k.normal;
+      r.Pp = Pp;
+      a.applyPushImpulse(dP, k.point);
+      b.applyPushImpulse(-1.0 * dP, k.point);
     }
   }
   for (const Row& r : rows) largest = std::max(largest, r.Pn);

@@ -13,11 +13,14 @@
 //   v += dt F / m,  L += dt tau            (gravity, magnetic forces)
 //   contact and grid impulses change v and L (impulses P at points p:
 //   v += P / m, L += (p - x) x P)
-//   x += dt v,  R <- exp(dt [w]) R,  w = I_w(R)^-1 L
+//   x += dt (v + v_push),  R <- exp(dt [w + w_push]) R,  w = I_w(R)^-1 L
 // with x the centre of mass, L = I_w w the angular momentum about it and
 // I_w = R I R^T the world inertia. Keeping L (not w) across the rotation
 // makes a torque-free body conserve its angular momentum exactly; the
-// rotation is re-orthonormalised every substep.
+// rotation is re-orthonormalised every substep. (v_push, w_push) is the
+// contacts' overlap push (rigid_contact.h): it moves the pose in this
+// substep only and never enters the momentum, so a body placed deep in
+// another is moved out of it, not thrown.
 #include <cstddef>
 #include <vector>
 
@@ -86,6 +89,7 @@ struct RigidBodyState {
   double inverseMass = 0;                 ///< 1/kg; 0: not moved by impulses
   Mat3d inverseInertia;                   ///< world frame, kg^-1 m^-2; zero with inverseMass 0
   Vec3d originOffset;                     ///< body origin minus centre of mass, body frame, m
+  Vec3d pushV, pushW;                     ///< overlap push of this substep (m/s, rad/s): pose only
 
   /// The dynamic body `body` at the collider state `s` (pose of the body
   /// origin, velocity of the origin, angular velocity).
@@ -98,6 +102,10 @@ struct RigidBodyState {
   Vec3d velocityAt(const Vec3d& p) const { return v + cross(w, p - x); }
   /// Applies impulse P (N*s) at world point p.
   void applyImpulse(const Vec3d& P, const Vec3d& p);
+  /// The overlap push's velocity at world point p, and a push impulse
+  /// (kg m/s, changing pushV and pushW as applyImpulse changes v and w).
+  Vec3d pushVelocityAt(const Vec3d& p) const { return pushV + cross(pushW, p - x); }
+  void applyPushImpulse(const Vec3d& P, const Vec3d& p);
   /// Inverse effective mass (1/kg) for an impulse along unit direction n at
   /// world point p: 1/m + n . (I_w^-1 (r x n)) x r.
   double inverseEffectiveMass(const Vec3d& n, const Vec3d& p) const;
@@ -107,7 +115,8 @@ struct RigidBodyState {
   /// The collider state (pose of the body origin, its velocity, w).
   ColliderState colliderState() const;
   /// Semi-implicit Euler position update over dt (s), see the header
-  /// comment; `body` gives the body-frame inertia.
+  /// comment (the push is used and cleared); `body` gives the body-frame
+  /// inertia.
   void advance(const RigidBody& body, double dt);
 };
 
