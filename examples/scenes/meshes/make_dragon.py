@@ -21,8 +21,15 @@ script checks that every edge is shared by exactly two triangles in opposite
 directions and that the enclosed volume is positive.
 
     python3 make_dragon.py > dragon.obj
+    python3 make_dragon.py --mirror > dragon_mirrored.obj
+
+`--mirror` writes the dragon mirrored in x (the head looks along -x), wound
+the same way (outward normals), for a scene that needs a second dragon
+facing the first: a `mesh` shape's `axis` turns the file's z axis, not about
+it.
 """
 import math
+import sys
 
 RINGS, AROUND = 88, 20  # rings along the spine (tail to snout); vertices per ring
 LENGTH = 0.130  # arc length of the spine from the first to the last ring (m)
@@ -142,6 +149,9 @@ lo = [min(v[d] for v in vertices) for d in range(3)]
 hi = [max(v[d] for v in vertices) for d in range(3)]
 shift = (-(lo[0] + hi[0]) / 2, -(lo[1] + hi[1]) / 2, -lo[2])
 vertices = [(v[0] + shift[0], v[1] + shift[1], v[2] + shift[2]) for v in vertices]
+if "--mirror" in sys.argv[1:]:
+    vertices = [(-v[0], v[1], v[2]) for v in vertices]
+    faces = [(f[0], f[2], f[1]) for f in faces]  # a mirror turns the winding; turn it back
 
 # Checks: a closed, consistently oriented 2-manifold enclosing a positive volume.
 directed = {}
