@@ -1,0 +1,73 @@
+// Onset of the Rosensweig instability. See field/rosensweig_onset.h.
+#include "lodestone/core/field/rosensweig_onset.h"
+
+#include <cmath>
+
+#include "lodestone/core/base/constants.h"
+#include "lodestone/core/base/error.h"
+
+namespace lodestone {
+inline namespace field {
+
+namespace {
+
+struct OperatingPoint {
+  double M = 0, chord = 0, tangent = 0;  // A/m; relative permeabilities
+};
+
+OperatingPoint at(const MagneticMaterial& m, double H) {
+  const MagnetizationResponse<double> r = respond(m.law, m.numberDensity, Vec3d{0, 0, H});
+  OperatingPoint p;
+  p.M = r.M.z;
+  p.tangent = 1 + r.iso + r.rank1 * r.h.z * r.h.z;
+  p.chord = H > 0 ? 1 + p.M / H : 1 + m.lowFieldSusceptibility();
+  return p;
+}
+
+}  // namespace
+
+RosensweigOnset rosensweigOnset(const MagneticMaterial& material, double density, double surfaceTension,
+                                double gravity) {
+  require(std::isfinite(density) && density > 0, "Rosensweig onset: density must be positive and finite, got ",
+          density, " kg/m^3");
+  require(std::isfinite(surfaceTension) && surfaceTension > 0,
+          "Rosensweig onset: surface tension must be positive and finite, got ", surfaceTension, " N/m");
+  require(std::isfinite(gravity) && gravity > 0, "Rosensweig onset: gravity must be positive and finite, got ",
+          gravity, " m/s^2");
+  const double chi0 = material.lowFieldSusceptibility();
+  require(material.law.kind != LawKind::None && chi0 > 0,
+          "Rosensweig onset: the material is not magnetizable (", material.describe(), ")");
+  RosensweigOnset out;
+  out.wavelength = 2 * kPi * std::sqrt(surfaceTension / (density * gravity));
+  const double capillary = std::sqrt(density * gravity * surfaceTension);  // Pa
+  // f(H) = M^2 - (2/mu0) (1 + 1/mu_hat) sqrt(rho g sigma), increasing in H.
+  const auto excess = [&](double H, OperatingPoint& p) {
+    p = at(material, H);
+    return p.M * p.M - 2 / kMu0 * (1 + 1 / std::sqrt(p.chord * p.tangent)) * capillary;
+  };
+  OperatingPoint p;
+  double lo = 0, hi = std::sqrt(4 / kMu0 * capillary) / chi0;  // M(hi) >= the largest right side for a linear law
+  int grow = 0;
+  while (excess(hi, p) < 0) {
+    require(++grow < 200 && std::isfinite(hi), "Rosensweig onset: the material saturates at Ms = ",
+            material.saturation(), " A/m, below the onset magnetization (at least ",
+            std::sqrt(2 / kMu0 * capillary), " A/m for rho = ", density, " kg/m^3, sigma = ", surfaceTension,
+            " N/m): no field makes spikes");
+    lo = hi;
+    hi *= 2;
+  }
+  for (int it = 0; it < 200 && hi - lo > 1e-13 * hi; ++it) {
+    const double mid = 0.5 * (lo + hi);
+    (excess(mid, p) < 0 ? lo : hi) = mid;
+  }
+  excess(hi, p);
+  out.H = hi;
+  out.M = p.M;
+  out.appliedH = hi + p.M;
+  out.muChord = p.chord;
+  out.muTangent = p.tangent;
+  return out;
+}
+
+}  // namespace field
+}  // namespace lodestone
