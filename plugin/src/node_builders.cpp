@@ -186,11 +186,15 @@ MpmMaterial materialFrom(const ParamSet& p) {
   if (model == "elastoplastic_solid")
     return elastoplasticSolid(p.getFloat("youngs_modulus"), p.getFloat("poisson_ratio"), p.getFloat("yield_stress"),
                               p.getFloat("viscosity"), rho, mag);
-  if (model == "viscoplastic_fluid")
-    return viscoplasticFluid(p.getFloat("yield_stress"), p.getFloat("consistency"), p.getFloat("flow_index"),
-                             p.getFloat("max_viscosity"), p.getFloat("bulk_modulus"), rho, mag);
-  return model == "solid" ? neoHookeanSolid(p.getFloat("youngs_modulus"), p.getFloat("poisson_ratio"), rho, mag)
+  if (model == "solid") return neoHookeanSolid(p.getFloat("youngs_modulus"), p.getFloat("poisson_ratio"), rho, mag);
+  MpmMaterial fluid = model == "viscoplastic_fluid"
+                          ? viscoplasticFluid(p.getFloat("yield_stress"), p.getFloat("consistency"),
+                                              p.getFloat("flow_index"), p.getFloat("max_viscosity"),
+                                              p.getFloat("bulk_modulus"), rho, mag)
                           : viscousFluid(p.getFloat("viscosity"), p.getFloat("bulk_modulus"), rho, mag);
+  fluid.surfaceTension = p.getFloat("surface_tension");
+  fluid.validate();
+  return fluid;
 }
 
 std::unique_ptr<FieldSource> appliedFieldFrom(const ParamSet& p) {

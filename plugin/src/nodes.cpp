@@ -176,6 +176,14 @@ NodeDecl materialNode() {
                        "viscous time step dx^2 rho / (6 mu_max) shrinks in proportion: substeps grow linearly "
                        "with mu_max."))),
                    "model", {"viscoplastic_fluid"}));
+  q.push_back(when(range(floatParam("surface_tension", "Surface tension", 0.0, "N/m",
+                                    "Surface tension coefficient sigma of the fluid (0: none; water 0.072, a "
+                                    "ferrofluid about 0.03): a capillary stress on the fluid's surface (Laplace "
+                                    "pressure 2 sigma / R in a drop of radius R). Adds a substep limit sqrt(rho "
+                                    "dx^3 / (2 pi sigma)) and one scatter and one gather per substep; the surface is "
+                                    "smoothed over about two cells, walls and colliders have no contact angle."),
+                         0, kMaxSurfaceTension),
+                   "model", {"fluid", "viscoplastic_fluid"}));
   q.push_back(required(choiceParam("magnetic.law", "Magnetization law",
                                    {"none", "paper", "paper-linear", "langevin", "linear"}, "none",
                                    "none; paper (Langevin, Table 2 of Sun et al. 2021); paper-linear (its low-field "

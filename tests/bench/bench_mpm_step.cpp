@@ -10,6 +10,9 @@
 // difference. With --bodies N1,N2,... a further table times a fluid block
 // with N spheres (1 cm, 500 kg/m^3) resting in it, kinematic and dynamic in
 // the same run: the price of the two-way coupling per substep is the
+// difference. With --surface-tension SIGMA a further table times a resting
+// fluid drop (no gravity) with sigma = 0 and with SIGMA (N/m) at the same dt:
+// the price of the capillary stress (colour scatter and gradient pass) is the
 // difference. Prints tables and writes CSV. Not a test: timings are
 // machine-dependent.
 // `lodestone-bench-mpm-step --help` lists the options.
@@ -139,6 +142,34 @@ double bodiesRun(double particles, int bodies, bool dynamic, int steps, int node
   return total / steps;
 }
 
+/// Mean seconds per substep of a resting fluid drop (a sphere of about
+/// `particles`, no gravity) with surface tension sigma (N/m), at the substep
+/// dt (s); P2G (including the capillary passes) in *p2g.
+double dropRun(double particles, double sigma, double dt, int steps, int nodes, double* p2g) {
+  MpmSettings s;
+  s.grid.dx = 7.8e-3;
+  s.grid.dims = {nodes, nodes, nodes};
+  s.gravity = {0, 0, 0};
+  MpmSolver solver(s);
+  MpmMaterial water = viscousFluid(1.0, 1e5, 1000);
+  water.surfaceTension = sigma;
+  const std::uint32_t m = solver.addMaterial(water);
+  const double radius = std::cbrt(3 * particles / (8 * 4 * 3.14159265358979)) * s.grid.dx;
+  const Vec3d lo = solver.domainLower(), hi = solver.domainUpper();
+  require(2 * radius < hi.z - lo.z, "bench: a drop of ", particles, " particles does not fit a ", nodes, "^3 grid");
+  solver.emit(EmitterShape::sphere(Pose::at(0.5 * (lo + hi)), radius), m, {});
+  for (int w = 0; w < 2; ++w) solver.step(dt);
+  double total = 0;
+  *p2g = 0;
+  for (int k = 0; k < steps; ++k) {
+    const MpmStepReport r = solver.step(dt);
+    total += r.secondsTotal;
+    *p2g += r.secondsP2G;
+  }
+  *p2g /= steps;
+  return total / steps;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -147,6 +178,7 @@ int main(int argc, char** argv) {
     int steps = 20, nodes = 128, threads = 0, reorder = MpmSettings{}.reorderInterval, age = 0;
     std::string csvPath = "bench_mpm_step.csv", collider = "none";
     std::vector<double> bodies;
+    double sigma = 0;
     CLI::App app("lodestone-bench-mpm-step: times one MLS-MPM substep (no magnetism)", "lodestone-bench-mpm-step");
     cli::helpLayout(app, 28);
     cli::addNumberList(app, "--particles", counts, "target particle counts, 8 per cell (each 8..1e9)");
@@ -176,6 +208,9 @@ int main(int argc, char** argv) {
         ->capture_default_str();
     cli::addNumberList(app, "--bodies", bodies,
                        "also time a fluid block with this many 1 cm spheres in it, kinematic and dynamic (e.g. 1,20,100)");
+    cli::addNumber(app, "--surface-tension", sigma,
+                   "also time a resting fluid drop without and with this surface tension (N/m, in (0, 10])")
+        ->type_name("SIGMA");
     app.add_option("--csv", csvPath, "CSV output")->type_name("FILE")->capture_default_str();
     if (const std::optional<int> code = cli::parse(app, argc, argv)) return *code;
     for (double c : counts) require(c >= 8 && c <= 1e9, "--particles: ", c, " is not in 8..1e9");
@@ -219,6 +254,25 @@ int main(int argc, char** argv) {
             << ",kinematic,0," << 1e3 * k << ",,,,,," << threads << '\n';
         csv << "fluid+bodies," << counts.front() << ',' << nodes << ',' << steps << ",0," << reorder << ",spheres:" << nb
             << ",dynamic,0," << 1e3 * d << ",,,,,," << threads << '\n';
+      }
+    }
+    if (sigma != 0) {
+      require(std::isfinite(sigma) && sigma > 0 && sigma <= kMaxSurfaceTension, "--surface-tension: ", sigma,
+              " N/m is not in (0, ", kMaxSurfaceTension, "]");
+      const double dt = 1e-5;  // s, below every limit of both cases
+      std::printf("\nsurface tension: a resting drop at dt = %.3g s, ms per substep\n%10s %10s %10s %10s %8s\n", dt,
+                  "particles", "sigma N/m", "ms/step", "P2G", "ratio");
+      for (double c : counts) {
+        double p0 = 0, p1 = 0;
+        const double t0 = dropRun(c, 0, dt, steps, nodes, &p0);
+        const double t1 = dropRun(c, sigma, dt, steps, nodes, &p1);
+        std::printf("%10.3g %10s %10.2f %10.2f\n%10s %10.3g %10.2f %10.2f %7.2fx\n", c, "0", 1e3 * t0, 1e3 * p0, "",
+                    sigma, 1e3 * t1, 1e3 * p1, t1 / t0);
+        std::fflush(stdout);
+        csv << "drop," << c << ',' << nodes << ',' << steps << ",0," << reorder << ",sigma:0,-," << dt << ','
+            << 1e3 * t0 << ',' << 1e3 * p0 << ",,,,," << threads << '\n';
+        csv << "drop," << c << ',' << nodes << ',' << steps << ",0," << reorder << ",sigma:" << sigma << ",-," << dt
+            << ',' << 1e3 * t1 << ',' << 1e3 * p1 << ",,,,," << threads << '\n';
       }
     }
     std::printf("CSV written to %s\n", csvPath.c_str());

@@ -56,6 +56,10 @@ struct Case {
 
 TEST(SceneBadInput, TheUnchangedSceneIsValid) { EXPECT_EQ(errorOf(kScene), ""); }
 
+TEST(SceneBadInput, SurfaceTensionOnAFluidIsAccepted) {
+  EXPECT_EQ(errorOf(replaced(kScene, "\"viscosity\": 1", "\"viscosity\": 1, \"surface_tension\": 0.03")), "");
+}
+
 TEST(SceneBadInput, EachIsRefusedWithWhereAndWhat) {
   const Case cases[] = {
       // Syntax: line and column.
@@ -84,6 +88,13 @@ TEST(SceneBadInput, EachIsRefusedWithWhereAndWhat) {
       {"zero density", "\"density\": 1000", "\"density\": 0", {"materials[0].density"}},
       {"overflowing number (inf)", "\"density\": 1000", "\"density\": 1e999", {"bad.json:5:", "number overflow"}},
       {"negative viscosity", "\"viscosity\": 1", "\"viscosity\": -1", {"materials[0].viscosity"}},
+      {"negative surface tension", "\"viscosity\": 1", "\"viscosity\": 1, \"surface_tension\": -0.07",
+       {"materials[0].surface_tension", "-0.07"}},
+      {"surface tension too large", "\"viscosity\": 1", "\"viscosity\": 1, \"surface_tension\": 72",
+       {"materials[0].surface_tension", "72"}},
+      {"surface tension on a solid", "\"model\": \"fluid\", \"density\": 1000, \"viscosity\": 1, \"bulk_modulus\": 1e5",
+       "\"model\": \"solid\", \"density\": 1000, \"youngs_modulus\": 1e5, \"surface_tension\": 0.07",
+       {"materials[0]", "surface_tension"}},
       {"zero fps", "\"fps\": 100", "\"fps\": 0", {"time.fps"}},
       {"zero frames", "\"frames\": 2", "\"frames\": 0", {"time.frames"}},
       {"start frame 0", "\"frames\": 2", "\"start_frame\": 0, \"frames\": 2", {"time.start_frame", "0"}},

@@ -18,6 +18,7 @@
 #include "lodestone/core/base/bspline.h"
 #include "lodestone/core/base/error.h"
 #include "lodestone/core/mpm/constitutive.h"
+#include "lodestone/core/mpm/surface_tension.h"
 
 namespace lodestone {
 inline namespace mpm {
@@ -43,6 +44,7 @@ struct MaterialParams {
   double mu = 0, lambda = 0;              // Pa (solid)
   double viscosity = 0, bulkModulus = 0;  // Pa*s, Pa (fluid)
   double yieldStress = 0, consistency = 0, flowIndex = 1, maxViscosity = 0;  // Pa, Pa*s^n, -, Pa*s
+  double surfaceTension = 0;                                                  // N/m (fluid)
 };
 
 std::vector<MaterialParams> paramsOf(const std::vector<MpmMaterial>& materials) {
@@ -60,6 +62,7 @@ std::vector<MaterialParams> paramsOf(const std::vector<MpmMaterial>& materials) 
     out[m].lambda = mat.lambda;
     out[m].viscosity = mat.viscosity;
     out[m].bulkModulus = mat.bulkModulus;
+    out[m].surfaceTension = mat.isFluid() ? mat.surfaceTension : 0.0;
   }
   return out;
 }
@@ -264,6 +267,31 @@ void MpmGrid::bin(const MpmParticles& particles, std::size_t materialCount) {
   });
 }
 
+// Nine colours (bj mod 3, bk mod 3) in a fixed order; rows of one colour
+// write disjoint nodes and run in parallel.
+template <typename RowFn>
+void MpmGrid::forEachRow(const RowFn& rowFn) const {
+  const int j0 = activeLo_.j, j1 = activeHi_.j - 2, k0 = activeLo_.k, k1 = activeHi_.k - 2;  // base rows [j0, j1)
+  for (int ck = 0; ck < 3; ++ck) {
+    for (int cj = 0; cj < 3; ++cj) {
+      // First row of this colour at or after j0 / k0.
+      const int fj = j0 + ((cj - j0 % 3) + 3) % 3;
+      const int fk = k0 + ((ck - k0 % 3) + 3) % 3;
+      const int nrj = fj < j1 ? (j1 - fj + 2) / 3 : 0;
+      const int nrk = fk < k1 ? (k1 - fk + 2) / 3 : 0;
+      const std::size_t rows = std::size_t(nrj) * std::size_t(nrk);
+      if (rows == 0) continue;
+      tbb::parallel_for(tbb::blocked_range<std::size_t>(0, rows), [&](const tbb::blocked_range<std::size_t>& r) {
+        for (std::size_t row = r.begin(); row != r.end(); ++row) {
+          const int bj = fj + 3 * int(row % std::size_t(nrj));
+          const int bk = fk + 3 * int(row / std::size_t(nrj));
+          rowFn(bj, bk);
+        }
+      });
+    }
+  }
+}
+
 void MpmGrid::particleToGrid(const MpmParticles& particles, const std::vector<MpmMaterial>& materials, double dt,
                              const Vec3d* particleForces) {
   require(std::isfinite(dt) && dt >= 0, "MPM P2G: time step must be finite and >= 0 (s), got ", dt);
@@ -302,6 +330,22 @@ void MpmGrid::particleToGrid(const MpmParticles& particles, const std::vector<Mp
   const std::uint32_t* mat = particles.material.data();
   MpmNode* nodes = nodes_.data();
 
+  // Surface tension (surface_tension.h), only when some material has it: the
+  // colour field c_i = sum_p w_ip V_p / dx^3 of the liquids with sigma > 0
+  // (V_p = V_p^0 J_p), scattered row by row like the mass (deterministic),
+  // then per particle g_p = sum_i c_i grad w_ip and T_p = sigma |g_p| (I - n n^T).
+  std::vector<double> sigma(params.size());
+  bool anySurfaceTension = false;
+  for (std::size_t m = 0; m < params.size(); ++m) {
+    sigma[m] = params[m].surfaceTension;
+    anySurfaceTension = anySurfaceTension || sigma[m] > 0;
+  }
+  const Mat3d* capillary = nullptr;
+  if (anySurfaceTension) {
+    computeCapillaryStress(particles, sigma);
+    capillary = capillary_.data();
+  }
+
   auto depositRow = [&](int bj, int bk) {
     const std::size_t firstBin =
         std::size_t(binDims_.i) * (std::size_t(bj - binLo_.j) + std::size_t(binDims_.j) * std::size_t(bk - binLo_.k));
@@ -323,12 +367,18 @@ void MpmGrid::particleToGrid(const MpmParticles& particles, const std::vector<Mp
         const double m = M[p];
         const MaterialParams& mp = params[mat[p]];
         // Kirchhoff stress tau = J sigma (Pa): Eq. 18, Eqs. 19-21, Herschel-Bulkley or damped Hencky.
-        const Mat3d tau = mp.viscoplastic ? viscoplasticFluidKirchhoff(Cp[p], Jp[p], mp.yieldStress, mp.consistency,
+        Mat3d tau = mp.viscoplastic ? viscoplasticFluidKirchhoff(Cp[p], Jp[p], mp.yieldStress, mp.consistency,
                                                                        mp.flowIndex, mp.maxViscosity, mp.bulkModulus)
                           : mp.fluid      ? viscousFluidKirchhoff(Cp[p], Jp[p], mp.viscosity, mp.bulkModulus)
                           : mp.elastoplastic
                               ? elastoplasticKirchhoff(Fp[p], Cp[p], mp.mu, mp.lambda, mp.viscosity)
                               : neoHookeanKirchhoff(Fp[p], mp.mu, mp.lambda);
+        // The capillary stress T_p (Cauchy, Pa) of the liquids with surface tension: tau += J T_p.
+        if (capillary) {
+          const Mat3d& Tc = capillary[p];
+          for (int a = 0; a < 3; ++a)
+            for (int b = 0; b < 3; ++b) tau(a, b) += Jp[p] * Tc(a, b);
+        }
         // A = m C - dt D^-1 V0 tau (kg/s): the MLS-MPM affine momentum with the stress impulse.
         Mat3d A;
         const double s = stressScale * V0[p];
@@ -359,27 +409,91 @@ void MpmGrid::particleToGrid(const MpmParticles& particles, const std::vector<Mp
     }
   };
 
-  // Nine colours (bj mod 3, bk mod 3) in a fixed order; rows of one colour
-  // write disjoint nodes and run in parallel.
-  const int j0 = activeLo_.j, j1 = activeHi_.j - 2, k0 = activeLo_.k, k1 = activeHi_.k - 2;  // base rows [j0, j1)
-  for (int ck = 0; ck < 3; ++ck) {
-    for (int cj = 0; cj < 3; ++cj) {
-      // First row of this colour at or after j0 / k0.
-      const int fj = j0 + ((cj - j0 % 3) + 3) % 3;
-      const int fk = k0 + ((ck - k0 % 3) + 3) % 3;
-      const int nrj = fj < j1 ? (j1 - fj + 2) / 3 : 0;
-      const int nrk = fk < k1 ? (k1 - fk + 2) / 3 : 0;
-      const std::size_t rows = std::size_t(nrj) * std::size_t(nrk);
-      if (rows == 0) continue;
-      tbb::parallel_for(tbb::blocked_range<std::size_t>(0, rows), [&](const tbb::blocked_range<std::size_t>& r) {
-        for (std::size_t row = r.begin(); row != r.end(); ++row) {
-          const int bj = fj + 3 * int(row % std::size_t(nrj));
-          const int bk = fk + 3 * int(row / std::size_t(nrj));
-          depositRow(bj, bk);
-        }
-      });
-    }
+  forEachRow(depositRow);
+}
+
+void MpmGrid::computeCapillaryStress(const MpmParticles& particles, const std::vector<double>& sigmaOf) {
+  const std::size_t np = particles.size();
+  const double dx = spec_.dx;
+  const double invDx = 1.0 / dx;
+  const double invCell = invDx * invDx * invDx;  // 1/m^3
+  const Vec3d o = spec_.origin;
+  const std::size_t sj = std::size_t(spec_.dims.i);
+  const std::size_t sk = sj * std::size_t(spec_.dims.j);
+  const Vec3d* X = particles.x.data();
+  const double* Jp = particles.J.data();
+  const double* V0 = particles.volume0.data();
+  const std::uint32_t* mat = particles.material.data();
+
+  // The colour field on the active box (nodes outside it are never read).
+  if (colour_.size() != nodes_.size()) colour_.assign(nodes_.size(), 0.0);
+  double* colour = colour_.data();
+  {
+    const int nj = activeHi_.j - activeLo_.j, ni = activeHi_.i - activeLo_.i;
+    const std::size_t rows = std::size_t(nj) * std::size_t(activeHi_.k - activeLo_.k);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, rows, 16), [&](const tbb::blocked_range<std::size_t>& r) {
+      for (std::size_t row = r.begin(); row != r.end(); ++row) {
+        const int j = activeLo_.j + int(row % std::size_t(nj));
+        const int k = activeLo_.k + int(row / std::size_t(nj));
+        std::fill_n(colour + spec_.index(activeLo_.i, j, k), ni, 0.0);
+      }
+    });
   }
+  forEachRow([&](int bj, int bk) {
+    const std::size_t firstBin =
+        std::size_t(binDims_.i) * (std::size_t(bj - binLo_.j) + std::size_t(binDims_.j) * std::size_t(bk - binLo_.k));
+    for (int bi = binLo_.i; bi < binLo_.i + binDims_.i; ++bi) {
+      const std::size_t bin = firstBin + std::size_t(bi - binLo_.i);
+      double* corner = colour + spec_.index(bi, bj, bk);
+      for (std::uint32_t s = offsets_[bin]; s != offsets_[bin + 1]; ++s) {
+        const std::size_t p = sorted_[s];
+        if (!(sigmaOf[mat[p]] > 0)) continue;
+        const Vec3d x = X[p];
+        const QuadraticWeights<double> wx = quadraticWeightsAt((x.x - o.x) * invDx, bi);
+        const QuadraticWeights<double> wy = quadraticWeightsAt((x.y - o.y) * invDx, bj);
+        const QuadraticWeights<double> wz = quadraticWeightsAt((x.z - o.z) * invDx, bk);
+        const double fraction = V0[p] * Jp[p] * invCell;  // V_p / dx^3
+        for (int c = 0; c < 3; ++c)
+          for (int b = 0; b < 3; ++b) {
+            double* line = corner + std::size_t(b) * sj + std::size_t(c) * sk;
+            const double wbc = fraction * wy.w[b] * wz.w[c];
+            for (int a = 0; a < 3; ++a) line[a] += wx.w[a] * wbc;
+          }
+      }
+    }
+  });
+
+  // Per particle: g_p = sum_i c_i grad w_ip (1/m) and the capillary stress.
+  capillary_.resize(np);
+  Mat3d* T = capillary_.data();
+  const double minGradient = 1e-9 * invDx;
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, np, 2048), [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t p = r.begin(); p != r.end(); ++p) {
+      const double sigma = sigmaOf[mat[p]];
+      if (!(sigma > 0)) {
+        T[p] = Mat3d{};
+        continue;
+      }
+      const Vec3d x = X[p];
+      const double ux = (x.x - o.x) * invDx, uy = (x.y - o.y) * invDx, uz = (x.z - o.z) * invDx;
+      const QuadraticWeights<double> wx = quadraticWeightsAt(ux, int(quadraticBaseFloor(ux)), invDx);
+      const QuadraticWeights<double> wy = quadraticWeightsAt(uy, int(quadraticBaseFloor(uy)), invDx);
+      const QuadraticWeights<double> wz = quadraticWeightsAt(uz, int(quadraticBaseFloor(uz)), invDx);
+      const double* corner = colour + spec_.index(wx.base, wy.base, wz.base);
+      Vec3d g;
+      for (int c = 0; c < 3; ++c)
+        for (int b = 0; b < 3; ++b) {
+          const double* line = corner + std::size_t(b) * sj + std::size_t(c) * sk;
+          for (int a = 0; a < 3; ++a) {
+            const double ci = line[a];
+            g.x += ci * wx.dw[a] * wy.w[b] * wz.w[c];
+            g.y += ci * wx.w[a] * wy.dw[b] * wz.w[c];
+            g.z += ci * wx.w[a] * wy.w[b] * wz.dw[c];
+          }
+        }
+      T[p] = particleCapillaryStress(g, sigma, minGradient);
+    }
+  });
 }
 
 namespace {

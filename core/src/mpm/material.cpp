@@ -99,6 +99,13 @@ void MpmMaterial::validate() const {
     default:
       throw InvalidArgument(concat("MPM material: unknown model ", int(model)));
   }
+  if (isFluid())
+    require(std::isfinite(surfaceTension) && surfaceTension >= 0 && surfaceTension <= kMaxSurfaceTension,
+            toString(model), ": surface tension sigma must be finite and in [0, ", kMaxSurfaceTension,
+            "] (N/m), got ", surfaceTension);
+  else
+    require(surfaceTension == 0, toString(model), ": surface tension applies only to the fluid models, got sigma = ",
+            surfaceTension, " N/m on a solid");
   validateMagneticMaterial(magnetic, "MPM material");
 }
 
@@ -114,6 +121,7 @@ std::string MpmMaterial::describe() const {
                " Pa, eta = ", viscosity, " Pa*s, rho = ", density, " kg/m^3");
   else
     s = concat("viscous fluid: mu_N = ", viscosity, " Pa*s, K = ", bulkModulus, " Pa, rho = ", density, " kg/m^3");
+  if (surfaceTension > 0) s += concat(", sigma = ", surfaceTension, " N/m");
   return s + "; magnetic: " + magnetic.describe();
 }
 

@@ -11,6 +11,7 @@
 #include "lodestone/core/base/error.h"
 #include "lodestone/core/base/number_text.h"
 #include "lodestone/core/mpm/solver.h"
+#include "lodestone/core/mpm/surface_tension.h"
 
 namespace lodestone {
 inline namespace mpm {
@@ -68,26 +69,32 @@ double MpmSolver::colliderAllowance(std::size_t c) const {
 double MpmSolver::cflDt(double cfl, bool bound, bool* byColliders) const {
   const double vmax = maxParticleSpeed();
   double c = 0, nu = 0;
+  const double dx = settings_.grid.dx;
+  double capillary = std::numeric_limits<double>::infinity();  // s, Brackbill's capillary limit
   for (const MpmMaterial& m : materials_) {
     c = std::max(c, m.waveSpeed());
     nu = std::max(nu, m.kinematicViscosity());
+    if (m.hasSurfaceTension()) capillary = std::min(capillary, capillaryTimeStep(m.density, dx, m.surfaceTension));
   }
-  const double dx = settings_.grid.dx;
   const double speed = std::max(vmax, maxEmissionSpeed()) + c;  // material about to be emitted counts
   // The crossing limit of thin colliders (the projection after advection
   // pushes a particle back out through the face it entered by only while it
   // is less than the half-thickness deep).
   const double crossing =
       settings_.colliderProjection ? colliderCrossingDt(vmax) : std::numeric_limits<double>::infinity();
-  // The bound: a cell per substep, and the explicit viscous limit dx^2/(6 nu)
-  // (cfl dx^2/(3 nu) at the default cfl = 1/2 of it).
+  // The bound: a cell per substep, the explicit viscous limit dx^2/(6 nu)
+  // (cfl dx^2/(3 nu) at the default cfl = 1/2 of it) and, with surface
+  // tension, the capillary limit sqrt(rho dx^3/(2 pi sigma)) of the least
+  // dense liquid with the largest sigma (2 cfl times it, like the viscous one).
   double dt = 0;
   if (bound) {
     dt = speed > 0 ? dx / speed : std::numeric_limits<double>::infinity();
     if (nu > 0) dt = std::min(dt, dx * dx / (6 * nu));
+    dt = std::min(dt, capillary);
   } else {
     dt = speed > 0 ? cfl * dx / speed : settings_.dtMax;
     if (nu > 0) dt = std::min(dt, cfl * dx * dx / (3 * nu));
+    if (std::isfinite(capillary)) dt = std::min(dt, 2 * cfl * capillary);
     dt = std::min(dt, settings_.dtMax);
   }
   const double colliderDt = bound ? crossing : cfl * crossing;
@@ -183,7 +190,7 @@ MpmFrameReport MpmSolver::advanceFrame(double frameDuration, const MpmProgressCa
     fr.warnings.push_back(concat(fr.nonFinite, " particle(s) with a non-finite state were removed"));
   if (fr.dtLimitedByCfl > 0)
     fr.warnings.push_back(concat(fr.dtLimitedByCfl, " substep(s): the fixed dt = ", settings_.fixedDt,
-                                 " s exceeded the stability bound (a cell per substep, dx^2/(6 nu), a collider's half-thickness) and was "
+                                 " s exceeded the stability bound (a cell per substep, dx^2/(6 nu), the capillary limit sqrt(rho dx^3/(2 pi sigma)), a collider's half-thickness) and was "
                                  "shortened to cfl times the bound"));
   fr.time = time_;
   fr.energies = energies();

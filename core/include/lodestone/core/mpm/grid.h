@@ -12,6 +12,11 @@
 // is the Kirchhoff stress (mpm_constitutive.h), V_p^0 J = V_p the current
 // volume, 4/dx^2 = D_p^-1 for quadratic B-splines; f_p an optional external
 // force per particle (N).
+// Surface tension (only when some material has sigma > 0; otherwise nothing
+// of it runs): a first scatter gives the colour field c_i = sum_p w_ip V_p /
+// dx^3 of the liquids with sigma > 0, a pass over those particles its
+// gradient g_p = sum_i c_i grad w_ip and the capillary stress T_p = sigma
+// |g_p| (I - n n^T) (surface_tension.h), and tau_p += J_p T_p.
 // G2P (steps 5-7): v_p = sum_i w_ip v_i, C_p = (4/dx^2) sum_i w_ip v_i d_ip^T,
 // then F_p <- (I + dt C_p) F_p (solids, MLS update) or J_p <- (1 + dt tr C_p) J_p
 // (fluids), and x_p <- x_p + dt v_p.
@@ -118,17 +123,31 @@ class MpmGrid {
   /// flat order, ascending index within a bin): a cache-friendly order.
   const std::vector<std::uint32_t>& binnedOrder() const { return sorted_; }
 
+  /// The colour field c_i = sum_p w_ip V_p / dx^3 (dimensionless) of the
+  /// liquids with surface tension, valid on the active box after a P2G of a
+  /// scene that has one (empty when none ever had).
+  const std::vector<double>& colour() const { return colour_; }
+
   /// Seconds spent binning in the last particleToGrid.
   double lastBinningSeconds() const { return binningSeconds_; }
 
  private:
   void bin(const MpmParticles& particles, std::size_t materialCount);
   void zeroBox(Index3 lo, Index3 hi);
+  // Runs rowFn(bj, bk) on every row of bins of the active box, in the nine
+  // colours of disjoint nodes (grid.cpp).
+  template <typename RowFn>
+  void forEachRow(const RowFn& rowFn) const;
+  // Surface tension: the colour field and the capillary stress per particle
+  // (sigma: N/m per material, 0 for none).
+  void computeCapillaryStress(const MpmParticles& particles, const std::vector<double>& sigma);
 
   GridSpec spec_;
   Index3 baseDims_{0, 0, 0};
   std::vector<MpmNode> nodes_;
   std::vector<Vec3d> velocity_;
+  std::vector<double> colour_;   // surface tension: colour field per node (allocated when first needed)
+  std::vector<Mat3d> capillary_;  // surface tension: capillary Cauchy stress per particle, Pa
   Index3 activeLo_{0, 0, 0}, activeHi_{0, 0, 0};
   // Binning scratch. Bins are stencil base nodes; only the box of bins in
   // use, [binLo_, binLo_ + binDims_), gets offsets.

@@ -19,6 +19,9 @@ enum class MpmModel : int {
 };
 const char* toString(MpmModel model);
 
+/// Largest accepted surface tension, N/m (water is 0.072, mercury 0.49).
+constexpr double kMaxSurfaceTension = 10.0;
+
 struct MpmMaterial {
   MpmModel model = MpmModel::NeoHookeanSolid;
   double density = 0;         ///< rest mass density rho, kg/m^3
@@ -31,11 +34,14 @@ struct MpmMaterial {
   double consistency = 0;     ///< viscoplastic fluid: consistency k, Pa*s^n
   double flowIndex = 1;       ///< viscoplastic fluid: flow index n in (0, 2] (1: Bingham)
   double maxViscosity = 0;    ///< viscoplastic fluid: cap mu_max of the effective viscosity, Pa*s
+  double surfaceTension = 0;  ///< fluids: surface tension coefficient sigma, N/m, in [0, kMaxSurfaceTension]
+                              ///< (0: none); a capillary stress on the colour field (surface_tension.h)
 
   /// True for the models that track only J (viscous and viscoplastic fluids).
   bool isFluid() const { return model == MpmModel::ViscousFluid || model == MpmModel::ViscoplasticFluid; }
   MagneticMaterial magnetic;  ///< magnetization law and n0 (1/m^3); LawKind::None when not magnetic
 
+  bool hasSurfaceTension() const { return surfaceTension > 0; }
   bool isMagnetic() const { return magnetic.law.kind != LawKind::None; }
   /// Fastest elastic (P-)wave speed at rest, m/s: sqrt((lambda + 2 mu)/rho)
   /// for the solids, sqrt(K/rho) for the fluids.

@@ -44,11 +44,13 @@
 // leaving the domain.
 //
 // Time stepping: a fixed dt, or dt = min(cfl dx / (max|v_p| + c), cfl dx^2 /
-// (3 nu), cfl h_c / (max|v_p| + collider speed), dtMax) floored at dtMin,
+// (3 nu), 2 cfl t_sigma, cfl h_c / (max|v_p| + collider speed), dtMax) floored at dtMin,
 // with c the largest elastic wave speed of the materials (sqrt((lambda + 2
 // mu)/rho) or sqrt(K/rho)), nu the largest kinematic viscosity (the explicit
 // diffusion limit dx^2/(6 nu) at cfl = 1/2) and h_c the thinnest collider
-// half-thickness (colliderCrossingDt).
+// half-thickness (colliderCrossingDt), t_sigma = min sqrt(rho dx^3 / (2 pi
+// sigma)) over the liquids with surface tension (Brackbill et al. 1992; the
+// capillary limit, mpm/surface_tension.h).
 // A fixed dt above the stability bound (stabilityLimitDt) is shortened by
 // advanceFrame, with a warning, rather than taken and blown up.
 //
@@ -301,7 +303,8 @@ class MpmSolver {
   /// The substep the solver would take now (s): fixedDt, or the CFL step.
   double suggestedDt() const;
   /// The largest stable substep now (s): dx / (max|v_p| + c), the
-  /// explicit viscous limit dx^2 / (6 nu) and, with colliderProjection, the
+  /// explicit viscous limit dx^2 / (6 nu), the capillary limit sqrt(rho dx^3
+  /// / (2 pi sigma)) of the liquids with surface tension and, with colliderProjection, the
   /// collider crossing limit colliderCrossingDt(); infinite for an empty or
   /// static inviscid scene. advanceFrame shortens a fixedDt above it to cfl times
   /// it (counted in MpmFrameReport::dtLimitedByCfl, with a warning).
