@@ -33,6 +33,19 @@ std::vector<StageDecision> mechanicsDecisions(const plugin::Scene& scene, const 
   for (const MpmMaterial& m : solver.materials()) (m.isFluid() ? fluid : solid) = true;
   d.push_back({"fluid pressure and viscosity", fluid, fluid ? "on" : "idle",
                fluid ? "a fluid material is used" : "no fluid material", 0, 0});
+  double sigma = 0;
+  std::size_t wetting = 0;
+  for (const MpmMaterial& m : solver.materials())
+    if (m.hasSurfaceTension()) {
+      sigma = std::max(sigma, m.surfaceTension);
+      ++wetting;
+    }
+  d.push_back({"surface tension", wetting > 0, wetting > 0 ? concat(wetting, " fluid(s), up to ", numberText(sigma, 3), " N/m") : "idle",
+               wetting > 0 ? "a fluid has surface_tension > 0: a colour-field pass and a surface stress in every P2G "
+                             "(about 1.5x its cost), and the capillary time-step limit"
+                           : "no fluid has surface_tension: no colour field, and no capillary time-step limit (a "
+                             "scene with none runs bit for bit as without the feature)",
+               0, 0});
   bool plastic = false;
   for (const MpmMaterial& m : solver.materials()) plastic = plastic || m.model == MpmModel::ElastoplasticSolid;
   d.push_back({"elastic stress", solid, solid ? "on" : "idle",
