@@ -40,12 +40,15 @@ SurfaceHeightField surfaceHeight(const std::vector<Vec3d>& points, double x0, do
   f.x0 = x0;
   f.y0 = y0;
   f.h = h;
-  f.nx = std::max(1, int(std::ceil((x1 - x0) / h - 1e-9)));
-  f.ny = std::max(1, int(std::ceil((y1 - y0) / h - 1e-9)));
+  // Whole cells only: a sliver at the far edge holds too few points for its
+  // highest to be on the surface.
+  f.nx = std::max(1, int(std::floor((x1 - x0) / h + 1e-9)));
+  f.ny = std::max(1, int(std::floor((y1 - y0) / h + 1e-9)));
   f.z.assign(std::size_t(f.nx) * std::size_t(f.ny), std::numeric_limits<double>::quiet_NaN());
   for (const Vec3d& p : points) {
-    if (!(p.x >= x0 && p.x < x1 && p.y >= y0 && p.y < y1) || !std::isfinite(p.z)) continue;
-    const int i = std::min(f.nx - 1, int((p.x - x0) / h)), j = std::min(f.ny - 1, int((p.y - y0) / h));
+    if (!(p.x >= x0 && p.y >= y0) || !std::isfinite(p.z)) continue;
+    const int i = int((p.x - x0) / h), j = int((p.y - y0) / h);
+    if (i >= f.nx || j >= f.ny) continue;
     double& z = f.z[std::size_t(j) * std::size_t(f.nx) + std::size_t(i)];
     if (std::isnan(z) || p.z > z) z = p.z;
   }

@@ -26,8 +26,9 @@ struct SurfaceHeightField {
   double mean() const;
 };
 
-/// The height field of `points` over [x0, x1) x [y0, y1) in cells of size h
-/// (m). Points outside the rectangle are ignored. Throws InvalidArgument for
+/// The height field of `points` over [x0, x1) x [y0, y1) in whole cells of
+/// size h (m): floor((x1 - x0) / h) of them along x from x0 (a remainder
+/// narrower than a cell is left out, as are points outside). Throws InvalidArgument for
 /// a cell size that is not positive and finite or an empty rectangle.
 SurfaceHeightField surfaceHeight(const std::vector<Vec3d>& points, double x0, double y0, double x1, double y1,
                                  double h);
