@@ -30,7 +30,7 @@ using namespace lodestone;
 namespace {
 
 struct Summary {
-  double ratio = 0, appliedH = 0, finalRange = 0, maxRange = 0, spacing = 0, seconds = 0;
+  double ratio = 0, appliedH = 0, finalRange = 0, maxRange = 0, finalRms = 0, spacing = 0, seconds = 0;
   std::size_t peaks = 0;
   int solves = 0;
   bool converged = true;
@@ -89,7 +89,8 @@ int main(int argc, char** argv) {
 
     std::ofstream csv(csvPath);
     require(bool(csv), "cannot write ", csvPath);
-    csv << "ratio,applied_H_A_per_m,frame,time_s,range_m,range_cells,peaks,mean_nearest_m,mean_nearest_over_lambda\n";
+    csv << "ratio,applied_H_A_per_m,frame,time_s,range_m,range_cells,rms_cells,peaks,mean_nearest_m,"
+           "mean_nearest_over_lambda\n";
     std::vector<Summary> rows;
     for (const double ratio : ratios) {
       plugin::Scene scene = base;
@@ -117,13 +118,15 @@ int main(int argc, char** argv) {
         const std::vector<SurfacePeak> peaks = findSurfacePeaks(field, 0.4 * onset.wavelength, 0.5 * h);
         const double spacing = meanNearestPeakDistance(field, peaks, 0);
         s.finalRange = field.range();
+        s.finalRms = field.rms();
         s.maxRange = std::max(s.maxRange, s.finalRange);
         s.peaks = peaks.size();
         s.spacing = spacing;
         csv << ratio << ',' << s.appliedH << ',' << f << ',' << solver->time() << ',' << s.finalRange << ','
-            << s.finalRange / h << ',' << peaks.size() << ',' << spacing << ',' << spacing / onset.wavelength << '\n';
-        std::printf("  %.2f H0_c, frame %d (t = %.3f s): range %.2f cells, %zu peaks, mean nearest %.2f lambda_c\n",
-                    ratio, f, solver->time(), s.finalRange / h, peaks.size(), spacing / onset.wavelength);
+            << s.finalRange / h << ',' << s.finalRms / h << ',' << peaks.size() << ',' << spacing << ',' << spacing / onset.wavelength << '\n';
+        std::printf("  %.2f H0_c, frame %d (t = %.3f s): range %.2f cells, rms %.3f cells, %zu peaks, mean nearest %.2f "
+                    "lambda_c\n",
+                    ratio, f, solver->time(), s.finalRange / h, s.finalRms / h, peaks.size(), spacing / onset.wavelength);
         std::fflush(stdout);
       }
       s.seconds = secondsSince(t0);
@@ -131,12 +134,13 @@ int main(int argc, char** argv) {
     }
     std::ofstream table(tablePath);
     require(bool(table), "cannot write ", tablePath);
-    table << "| H0 / H0_c | H0 (A/m) | peak-to-trough at the end (cells) | largest (cells) | spikes | mean nearest / "
-             "lambda_c | field solves | all converged | run time (s) |\n|---|---|---|---|---|---|---|---|---|\n";
+    table << "| H0 / H0_c | H0 (A/m) | rms height at the end (cells) | peak-to-trough at the end (cells) | largest "
+             "(cells) | spikes | mean nearest / lambda_c | field solves | all converged | run time (s) |\n"
+             "|---|---|---|---|---|---|---|---|---|---|\n";
     for (const Summary& s : rows) {
       char line[512];
-      std::snprintf(line, sizeof line, "| %.2f | %.0f | %.2f | %.2f | %zu | %s | %d | %s | %.0f |\n", s.ratio,
-                    s.appliedH, s.finalRange / h, s.maxRange / h, s.peaks,
+      std::snprintf(line, sizeof line, "| %.2f | %.0f | %.3f | %.2f | %.2f | %zu | %s | %d | %s | %.0f |\n", s.ratio,
+                    s.appliedH, s.finalRms / h, s.finalRange / h, s.maxRange / h, s.peaks,
                     std::isnan(s.spacing) ? "-" : cli::formatNumber(std::round(100 * s.spacing / onset.wavelength) / 100).c_str(),
                     s.solves, s.converged ? "yes" : "no", s.seconds);
       table << line;

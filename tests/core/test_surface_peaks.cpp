@@ -85,6 +85,7 @@ TEST(SurfacePeaks, AHexagonalArrayIsFoundWhereItIsAndSpacedAsLaidOut) {
                 1e3 * k.spacing, k.jitter, 1e3 * k.cell, peaks.size(), found, inside, 1e3 * spacing, 1e3 * kLambda,
                 1e3 * f.range());
     EXPECT_EQ(found, inside);
+    EXPECT_GT(f.rms(), 2e-4);  // the bumps: well above the flat case's roughness
     EXPECT_NEAR(spacing / kLambda, 1.0, k.tolerance);
   }
 }
@@ -100,6 +101,7 @@ TEST(SurfacePeaks, ARoughFlatSurfaceHasNoPeaks) {
   const SurfaceHeightField f = surfaceHeight(pts, 0, 0, kSide, kSide, 1e-3);
   EXPECT_TRUE(findSurfacePeaks(f, 0.4 * kLambda, 5e-4).empty());
   EXPECT_LT(f.range(), 2e-4);
+  EXPECT_LT(f.rms(), 1e-4);
   EXPECT_NEAR(f.mean(), 0.005, 1e-4);  // the highest of the points over each cell
   EXPECT_FALSE(findSurfacePeaks(f, 0.4 * kLambda, 0).empty());  // without a prominence, roughness peaks
 }

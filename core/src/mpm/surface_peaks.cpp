@@ -31,6 +31,18 @@ double SurfaceHeightField::mean() const {
   return n ? sum / double(n) : std::numeric_limits<double>::quiet_NaN();
 }
 
+double SurfaceHeightField::rms() const {
+  const double m = mean();
+  double sum = 0;
+  std::size_t n = 0;
+  for (const double v : z)
+    if (!std::isnan(v)) {
+      sum += (v - m) * (v - m);
+      ++n;
+    }
+  return n ? std::sqrt(sum / double(n)) : 0.0;
+}
+
 SurfaceHeightField surfaceHeight(const std::vector<Vec3d>& points, double x0, double y0, double x1, double y1,
                                  double h) {
   require(std::isfinite(h) && h > 0, "surface height: the cell size must be positive and finite, got ", h, " m");

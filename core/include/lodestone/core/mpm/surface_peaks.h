@@ -24,6 +24,9 @@ struct SurfaceHeightField {
   double range() const;
   /// Mean height over the cells with points, m.
   double mean() const;
+  /// Root-mean-square deviation of the heights from their mean, m: the
+  /// surface's amplitude (a flying droplet moves it little, unlike range()).
+  double rms() const;
 };
 
 /// The height field of `points` over [x0, x1) x [y0, y1) in whole cells of
