@@ -19,6 +19,7 @@
 #include <cmath>
 #include <limits>
 
+#include "lodestone/core/base/constants.h"
 #include "lodestone/core/base/hostdev.h"
 #include "lodestone/core/base/mat3.h"
 #include "lodestone/core/base/vec3.h"
@@ -65,7 +66,7 @@ LODESTONE_HOSTDEV inline Mat3<T> particleCapillaryStress(const Vec3<T>& g, T sig
 /// tension sigma (N/m); infinite for sigma <= 0.
 inline double capillaryTimeStep(double density, double dx, double sigma) {
   if (!(sigma > 0)) return std::numeric_limits<double>::infinity();
-  return std::sqrt(density * dx * dx * dx / (2 * 3.14159265358979323846 * sigma));
+  return std::sqrt(density * dx * dx * dx / (2 * kPi * sigma));
 }
 
 }  // namespace mpm
