@@ -13,6 +13,7 @@
 #include <openvdb/tools/Prune.h>
 
 #include "lodestone/core/base/error.h"
+#include "vdb_checked_read.h"
 
 namespace lodestone {
 
@@ -126,32 +127,10 @@ DenseGrid<CoreT> toDense(const GridT& grid, const GridSpec& spec) {
 template <typename Accept>
 openvdb::GridBase::Ptr readChecked(const std::string& path, const std::string& gridName, const char* wanted,
                                    Accept accept) {
-  initializeVdb();
   const std::string where = "VDB file '" + path + "', grid '" + gridName + "'";
-  std::error_code ec;
-  require(std::filesystem::is_regular_file(path, ec), where, ": file not found or not a regular file");
-  openvdb::GridBase::Ptr grid;
-  try {
-    // io::Stream over an ifstream that throws on any short read: io::File
-    // silently accepts some truncated files, and its delayed loading maps the
-    // file, so a later access to a truncated page would crash.
-    std::ifstream in;
-    in.exceptions(std::ios::badbit | std::ios::failbit);
-    in.open(path, std::ios::in | std::ios::binary);
-    openvdb::io::Stream stream(in, /*delayLoad=*/false);
-    const auto grids = stream.getGrids();
-    std::string names;
-    for (const auto& g : *grids) {
-      if (g && g->getName() == gridName && !grid) grid = g;
-      if (g) names += (names.empty() ? "" : ", ") + g->getName();
-    }
-    if (!grid) throw InvalidArgument(concat(where, ": no such grid; the file holds [", names, "]"));
-  } catch (const InvalidArgument&) {
-    throw;
-  } catch (const std::exception& e) {
-    throw InvalidArgument(concat(where, ": cannot read (corrupt, truncated or not a VDB file): ", e.what()));
-  }
-  require(grid != nullptr, where, ": cannot read");
+  std::string names;
+  const openvdb::GridBase::Ptr grid = detail::findGrid(detail::readVdbChecked(path, where), gridName, names);
+  require(grid != nullptr, where, ": no such grid; the file holds [", names, "]");
   require(accept(*grid), where, ": expected ", wanted, ", found ", grid->type());
   return grid;
 }

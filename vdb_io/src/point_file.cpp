@@ -12,6 +12,7 @@
 
 #include "lodestone/core/base/error.h"
 #include "vdb_atomic_write.h"
+#include "vdb_checked_read.h"
 #include "lodestone/vdb_io/grid_conversion.h"
 
 namespace lodestone {
@@ -119,26 +120,14 @@ void writeParticlesVdb(const std::string& path, const MpmParticles& p, const Poi
 }
 
 ParticleVdbData readParticlesVdb(const std::string& path) {
-  initializeVdb();
   ParticleVdbData out;
-  vp::PointDataGrid::Ptr grid;
-  try {
-    openvdb::io::File file(path);
-    file.open();
-    const auto meta = file.getMetadata();
-    if (auto m = meta->getMetadata<openvdb::Int64Metadata>("frame")) out.frame = m->value();
-    if (auto m = meta->getMetadata<openvdb::DoubleMetadata>("time_s")) out.time = m->value();
-    if (!file.hasGrid(kGridName)) {
-      file.close();
-      throw InvalidArgument(concat("VDB file '", path, "': no grid named '", kGridName, "'"));
-    }
-    grid = openvdb::gridPtrCast<vp::PointDataGrid>(file.readGrid(kGridName));
-    file.close();
-  } catch (const InvalidArgument&) {
-    throw;
-  } catch (const std::exception& e) {
-    throw InvalidArgument(concat("VDB file '", path, "': cannot read: ", e.what()));
-  }
+  const detail::VdbFileContents file = detail::readVdbChecked(path, concat("VDB file '", path, "'"));
+  if (auto m = file.meta->getMetadata<openvdb::Int64Metadata>("frame")) out.frame = m->value();
+  if (auto m = file.meta->getMetadata<openvdb::DoubleMetadata>("time_s")) out.time = m->value();
+  std::string names;
+  const openvdb::GridBase::Ptr found = detail::findGrid(file, kGridName, names);
+  require(found != nullptr, "VDB file '", path, "': no grid named '", kGridName, "' (the file holds [", names, "])");
+  const vp::PointDataGrid::Ptr grid = openvdb::gridPtrCast<vp::PointDataGrid>(found);
   require(grid != nullptr, "VDB file '", path, "': grid '", kGridName, "' is not a PointDataGrid");
   out.voxelSize = grid->voxelSize()[0];
 
