@@ -20,6 +20,7 @@
 
 #include "lodestone/core/base/error.h"
 #include "lodestone/core/mpm/constitutive.h"
+#include "lodestone/core/base/constants.h"
 #include "lodestone/core/mpm/solver.h"
 #include "lodestone/core/mpm/surface_tension.h"
 
@@ -98,7 +99,16 @@ double outlineRatio(const MpmParticles& p, std::size_t* stray = nullptr) {
 double equivalentRadius(const MpmParticles& p) {
   double volume = 0;
   for (std::size_t q = 0; q < p.size(); ++q) volume += p.volume0[q] * p.J[q];
-  return std::cbrt(3 * volume / (4 * 3.14159265358979));
+  return std::cbrt(3 * volume / (4 * kPi));
+}
+
+/// Adds water of viscosity mu (Pa*s) and bulk modulus K (Pa) with surface
+/// tension kSigma to `solver`; returns its material index.
+std::uint32_t addWater(MpmSolver& solver, double mu, double K) {
+  MpmMaterial water = viscousFluid(mu, K, kRho);
+  water.surfaceTension = kSigma;
+  water.validate();
+  return solver.addMaterial(water);
 }
 
 /// A drop of radius R cells settled for 0.3 s (about 2.5 capillary times
@@ -120,10 +130,7 @@ SettledDrop settledDrop(double cells) {
   d.K = 25 * 2 * kSigma / d.R;  // the Laplace pressure compresses it by 4%
   const int nodes = int(2 * cells) + 8;
   MpmSolver solver(dropSettings(nodes));
-  MpmMaterial water = viscousFluid(d.mu, d.K, kRho);
-  water.surfaceTension = kSigma;
-  water.validate();
-  const std::uint32_t m = solver.addMaterial(water);
+  const std::uint32_t m = addWater(solver, d.mu, d.K);
   solver.emit(EmitterShape::sphere(Pose::at(centreOf(nodes)), d.R), m, {});
   d.substeps = runFor(solver, 0.3, 0.05);
   const MpmParticles& p = solver.particles();
@@ -256,9 +263,7 @@ TEST(SurfaceTension, SpuriousCurrentsInARestingDropAreSmall) {
 TEST(SurfaceTension, CubeOfLiquidRelaxesTowardASphere) {
   const int nodes = 28;
   MpmSolver solver(dropSettings(nodes));
-  MpmMaterial water = viscousFluid(0.5, 350, kRho);
-  water.surfaceTension = kSigma;
-  const std::uint32_t m = solver.addMaterial(water);
+  const std::uint32_t m = addWater(solver, 0.5, 350);
   const double half = 7 * kDx;  // a 14-cell cube
   solver.emit(EmitterShape::box(Pose::at(centreOf(nodes)), {half, half, half}), m, {});
   const double before = outlineRatio(solver.particles());
@@ -282,9 +287,7 @@ TEST(SurfaceTension, CubeOfLiquidRelaxesTowardASphere) {
 TEST(SurfaceTension, IsolatedDropConservesMomentum) {
   const int nodes = 26;
   MpmSolver solver(dropSettings(nodes));
-  MpmMaterial water = viscousFluid(0.5, 350, kRho);
-  water.surfaceTension = kSigma;
-  const std::uint32_t m = solver.addMaterial(water);
+  const std::uint32_t m = addWater(solver, 0.5, 350);
   // A box, off-centre and rotated: strong, asymmetric capillary forces.
   solver.emit(EmitterShape::box(Pose::fromAxisAngle(centreOf(nodes) + Vec3d{0.4, -0.3, 0.2} * kDx, {1, 2, 3}, 0.7),
                                 {5 * kDx, 4 * kDx, 3 * kDx}),
@@ -318,9 +321,7 @@ TEST(SurfaceTension, DropOscillatesAtRayleighsFrequency) {
   const int nodes = 30;
   const double R = 10 * kDx, mu = 0.02, K = 25 * 2 * kSigma / R;
   MpmSolver solver(dropSettings(nodes));
-  MpmMaterial water = viscousFluid(mu, K, kRho);
-  water.surfaceTension = kSigma;
-  const std::uint32_t m = solver.addMaterial(water);
+  const std::uint32_t m = addWater(solver, mu, K);
   const Vec3d c0 = centreOf(nodes);
   solver.emit(EmitterShape::sphere(Pose::at(c0), R), m, {});
   const double a = 1.08, b = 1 / std::sqrt(a);
