@@ -85,12 +85,6 @@ SampledSdf readLevelSetVdb(const std::string& path, const std::string& gridName)
   return toSampledSdf(*grid, levelSetName(path, gridName));
 }
 
-double TriangleMesh::volume() const {
-  double sixV = 0;  // sum of a . (b x c) over the triangles = 6 V
-  for (const auto& t : triangles) sixV += dot(vertices[t[0]], cross(vertices[t[1]], vertices[t[2]]));
-  return sixV / 6;
-}
-
 TriangleMesh parseObj(const std::string& text, const std::string& sourceName) {
   TriangleMesh mesh;
   std::istringstream in(text);

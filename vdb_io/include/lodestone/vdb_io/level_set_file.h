@@ -14,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "lodestone/core/base/triangle_mesh.h"
 #include "lodestone/core/mpm/sampled_sdf.h"
 #include "lodestone/core/base/vec3.h"
 
@@ -25,15 +26,6 @@ namespace lodestone {
 /// uniform scale and translation, or it has no voxel inside (phi <= 0).
 SampledSdf readLevelSetVdb(const std::string& path, const std::string& gridName = "surface");
 
-/// A triangle mesh (vertices in m, triangles as 0-based vertex indices).
-struct TriangleMesh {
-  std::vector<Vec3d> vertices;
-  std::vector<std::array<std::uint32_t, 3>> triangles;
-
-  /// Signed enclosed volume, m^3 (divergence theorem; positive for a closed
-  /// mesh with outward, counter-clockwise faces).
-  double volume() const;
-};
 
 /// Parses Wavefront OBJ text: `v x y z [w]` and `f a b c ...` lines (indices
 /// 1-based, negative = relative to the end, `a/t/n` forms accepted; polygons
