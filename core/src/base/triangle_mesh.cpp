@@ -1,6 +1,7 @@
 #include "lodestone/core/base/triangle_mesh.h"
 
 namespace lodestone {
+inline namespace base {
 
 double TriangleMesh::volume() const {
   double sixV = 0;  // sum of a . (b x c) over the triangles = 6 V
@@ -8,4 +9,5 @@ double TriangleMesh::volume() const {
   return sixV / 6;
 }
 
+}  // namespace base
 }  // namespace lodestone

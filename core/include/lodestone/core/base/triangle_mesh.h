@@ -10,6 +10,7 @@
 #include "lodestone/core/base/vec3.h"
 
 namespace lodestone {
+inline namespace base {
 
 struct TriangleMesh {
   std::vector<Vec3d> vertices;                          ///< m
@@ -22,4 +23,5 @@ struct TriangleMesh {
   double volume() const;
 };
 
+}  // namespace base
 }  // namespace lodestone
