@@ -86,11 +86,14 @@ int dispatch(const FarmArgs& a, const std::string& jobName, const fs::path& dir,
       std::printf("dry run: wrote %s (submit with: sbatch %s)\n", script.string().c_str(), script.string().c_str());
       return 0;
     }
-    const std::string id = submitArray(job, script.string(), a.wait);
-    output::writeFileAtomically((dir / (jobName + ".jobid")).string(), id + "\n");
-    std::printf("submitted Slurm job array %s (%zu tasks, script %s, logs %s/%s_N.log)\n", id.c_str(), lines.size(),
-                script.string().c_str(), logs.string().c_str(), jobName.c_str());
-    return 0;
+    const SubmittedArray sub = submitArray(job, script.string(), a.wait);
+    output::writeFileAtomically((dir / (jobName + ".jobid")).string(), sub.id + "\n");
+    std::printf("submitted Slurm job array %s (%zu tasks, script %s, logs %s/%s_N.log)\n", sub.id.c_str(),
+                lines.size(), script.string().c_str(), logs.string().c_str(), jobName.c_str());
+    if (sub.status != 0)
+      std::fprintf(stderr, "lodestone: a task of job array %s failed (sbatch --wait status %d); see %s\n",
+                   sub.id.c_str(), sub.status, logs.string().c_str());
+    return sub.status == 0 ? 0 : 1;
   }
   if (a.dryRun) {
     for (std::size_t i = 0; i < lines.size(); ++i) std::printf("%zu %s: %s\n", i, names[i].c_str(), lines[i].c_str());
@@ -300,21 +303,21 @@ int wedge(FarmArgs& a) {
   output::writeFileAtomically((dir / kWedgeManifest).string(), manifest.dump(2) + "\n");
   output::writeFileAtomically((dir / kWedgeCsv).string(), wedgeManifestCsv(manifest));
   std::printf("wrote %s/%s and %s\n", dir.string().c_str(), kWedgeManifest, kWedgeCsv);
-  const int code = dispatch(a, "wedge", dir, lines, names);
-  if (a.dryRun || code != 0) return code;
+  int code = dispatch(a, "wedge", dir, lines, names);
+  if (a.dryRun) return code;
   if (a.slurm && !a.wait) {
     std::printf("when the array has finished: lodestone wedge-summary %s\n", dir.string().c_str());
-    return 0;
+    return code;
   }
   wedgeSummary(dir);
-  // With sbatch --wait a failed task shows in the table's status column.
+  // A wedge that failed shows in the table's status column too.
   for (const nlohmann::json& w : manifest["wedges"])
     if (wedgeStats(dir / w.at("out").get<std::string>()).status != "complete") {
       std::fprintf(stderr, "lodestone: wedge %s did not complete (see %s/logs)\n",
                    w.at("name").get<std::string>().c_str(), dir.string().c_str());
-      return 1;
+      code = 1;
     }
-  return 0;
+  return code;
 }
 
 // ---------------------------------------------------------------------------
@@ -446,18 +449,19 @@ void addRunnerOptions(CLI::App& c, FarmArgs& a) {
              "write the files (and the batch script), print what would run, run and submit nothing");
 }
 
-void addFrames(CLI::App& c, FarmArgs& a, const std::string& help) {
+// --frames A:B, lowest <= A <= B.
+void addFrames(CLI::App& c, FarmArgs& a, const std::string& help, int lowest) {
   c.add_option_function<std::string>(
        "--frames",
-       [&a](const std::string& f) {
-         readFrameRange(f, a.first, a.last);
+       [&a, lowest](const std::string& f) {
+         readFrameRange(f, a.first, a.last, lowest);
          a.framesGiven = true;
        },
        help)
       ->type_name("A:B")
-      ->check(cli::rule("", [](const std::string& f) {
+      ->check(cli::rule("", [lowest](const std::string& f) {
         int first = 0, last = 0;
-        return readFrameRange(f, first, last);
+        return readFrameRange(f, first, last, lowest);
       }));
 }
 
@@ -474,7 +478,7 @@ void addFarmCommands(CLI::App& app, FarmArgs& a) {
       ->type_name("KEY=V1,V2,...")
       ->allow_extra_args(false);
   w.add_option("--out", a.dir, "wedge directory (created)")->required()->type_name("DIR");
-  addFrames(w, a, "write frames A..B of each wedge (as lodestone run --frames)");
+  addFrames(w, a, "write frames A..B of each wedge (as lodestone run --frames)", 1);
   cli::addNumber(w, "--checkpoint-every", a.checkpointEvery,
                  "checkpoint each wedge every N frames, so that a requeued or re-run task continues (0 = none)")
       ->type_name("N")
@@ -512,7 +516,7 @@ void addFarmCommands(CLI::App& app, FarmArgs& a) {
       ->type_name("K")
       ->check(cli::wholeNumber(1, 1000000, "frames"))
       ->default_str(cli::formatNumber(a.framesPerTask));
-  addFrames(p, a, "only frames A..B (default: every frame with an input file)");
+  addFrames(p, a, "only frames A..B (default: every frame with an input file; frame 0 is the initial state)", 0);
   p.add_option("--scene", a.postScene, "the run's scene file (default: as recorded in DIR/lodestone_run.json)")
       ->type_name("FILE");
   p.add_flag("--here", a.here, "run the frames in this process, one after the other (what each task runs)");

@@ -128,7 +128,7 @@ std::string arrayScript(const ArrayJob& job) {
   return s.str();
 }
 
-std::string submitArray(const ArrayJob& job, const std::string& scriptPath, bool wait) {
+SubmittedArray submitArray(const ArrayJob& job, const std::string& scriptPath, bool wait) {
   std::filesystem::create_directories(job.logDir);
   output::writeFileAtomically(scriptPath, arrayScript(job));
   std::filesystem::permissions(scriptPath, std::filesystem::perms::owner_exec, std::filesystem::perm_options::add);
@@ -145,7 +145,7 @@ std::string submitArray(const ArrayJob& job, const std::string& scriptPath, bool
   if (status != 0 && !(wait && !id.empty()))
     throw Error(concat("sbatch failed with status ", status, " (", commandLine(args), ")"));
   if (id.empty()) throw Error(concat("sbatch printed no job id (", commandLine(args), ")"));
-  return id;
+  return {id, status};
 }
 
 }  // namespace lodestone::examples

@@ -42,10 +42,16 @@ struct ArrayJob {
 /// 0..n-1, output, --requeue, --open-mode=append, partition).
 std::string arrayScript(const ArrayJob& job);
 
+/// A submitted array: its job id, and with sbatch --wait its exit status
+/// (the highest of its tasks'; 0 without --wait).
+struct SubmittedArray {
+  std::string id;
+  int status = 0;
+};
+
 /// Writes the script to `scriptPath` and submits it with sbatch (with
-/// `wait`: sbatch --wait, which returns when every task has ended). Returns
-/// the job id. Throws lodestone::Error with sbatch's message when it fails
-/// or is not installed.
-std::string submitArray(const ArrayJob& job, const std::string& scriptPath, bool wait);
+/// `wait`: sbatch --wait, which returns when every task has ended). Throws
+/// lodestone::Error when sbatch refuses it or is not installed.
+SubmittedArray submitArray(const ArrayJob& job, const std::string& scriptPath, bool wait);
 
 }  // namespace lodestone::examples

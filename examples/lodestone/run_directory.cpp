@@ -138,7 +138,7 @@ std::vector<int> checkpointFrames(const std::string& dir) {
   return frames;
 }
 
-std::string readFrameRange(const std::string& text, int& first, int& last) {
+std::string readFrameRange(const std::string& text, int& first, int& last, int lowest) {
   const auto colon = text.find(':');
   if (colon == std::string::npos) return concat("expected A:B, got '", text, "'");
   for (const std::string& part : {text.substr(0, colon), text.substr(colon + 1)}) {
@@ -148,7 +148,7 @@ std::string readFrameRange(const std::string& text, int& first, int& last) {
   }
   first = int(*cli::toNumber(text.substr(0, colon)));
   last = int(*cli::toNumber(text.substr(colon + 1)));
-  if (first < 1 || last < first) return concat("need 1 <= A <= B, got ", text);
+  if (first < lowest || last < first) return concat("need ", lowest, " <= A <= B, got ", text);
   return "";
 }
 
