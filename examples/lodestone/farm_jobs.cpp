@@ -117,6 +117,12 @@ std::string arrayScript(const ArrayJob& job) {
     << "#SBATCH --open-mode=append\n"
     << "#SBATCH --requeue\n";
   if (!job.partition.empty()) s << "#SBATCH --partition=" << job.partition << "\n";
+  for (const std::string& a : job.sbatchArgs) {
+    if (a.size() < 2 || a[0] != '-' || a.find('\n') != std::string::npos)
+      throw InvalidArgument(concat("--sbatch-args '", a, "': give each sbatch option as one argument, like ",
+                                   "--sbatch-args=--account=fx"));
+    s << "#SBATCH " << a << "\n";
+  }
   s << "# Task i runs line i below; a requeued task runs it again (the commands\n"
     << "# continue from their own checkpoints).\n"
     << "set -eu\n"
@@ -134,7 +140,6 @@ SubmittedArray submitArray(const ArrayJob& job, const std::string& scriptPath, b
   std::filesystem::permissions(scriptPath, std::filesystem::perms::owner_exec, std::filesystem::perm_options::add);
   std::vector<std::string> args{"sbatch", "--parsable"};
   if (wait) args.push_back("--wait");
-  args.insert(args.end(), job.sbatchArgs.begin(), job.sbatchArgs.end());
   args.push_back(scriptPath);
   std::string out;
   const int status = runCapture(args, &out);

@@ -35,11 +35,13 @@ struct ArrayJob {
   std::string logDir;                     ///< task i logs to logDir/NAME_i.log (appended across requeues)
   std::vector<std::string> taskCommands;  ///< one shell command line per task
   std::string partition;                  ///< "" = the cluster's default
-  std::vector<std::string> sbatchArgs;    ///< more sbatch options, as given
+  std::vector<std::string> sbatchArgs;    ///< more sbatch options, one argument each ("--account=fx")
 };
 
 /// The batch script of the array (bash; #SBATCH lines: job name, array
-/// 0..n-1, output, --requeue, --open-mode=append, partition).
+/// 0..n-1, output, --requeue, --open-mode=append, partition, then each of
+/// sbatchArgs). Throws lodestone::InvalidArgument naming an sbatch argument
+/// that is not one option ("fx" without its --account=).
 std::string arrayScript(const ArrayJob& job);
 
 /// A submitted array: its job id, and with sbatch --wait its exit status

@@ -229,13 +229,18 @@ TEST(FarmPool, CapturesOutput) {
 }
 
 TEST(FarmSlurmScript, OneTaskPerLineRequeuedAndAppending) {
-  ArrayJob job{"wedge", "/farm/logs", {"exec run a", "exec run 'b c'", "exec run d"}, "gpu", {}};
+  ArrayJob job{"wedge", "/farm/logs", {"exec run a", "exec run 'b c'", "exec run d"}, "gpu", {"--account=fx"}};
   const std::string s = arrayScript(job);
   EXPECT_EQ(s.rfind("#!/bin/bash\n", 0), 0u);
   for (const char* line : {"#SBATCH --array=0-2\n", "#SBATCH --requeue\n", "#SBATCH --open-mode=append\n",
                            "#SBATCH --output=/farm/logs/wedge_%a.log\n", "#SBATCH --partition=gpu\n",
+                           "#SBATCH --account=fx\n",
                            "  0) exec run a ;;\n", "  1) exec run 'b c' ;;\n", "  2) exec run d ;;\n"})
     EXPECT_NE(s.find(line), std::string::npos) << line << " not in\n" << s;
+  job.sbatchArgs = {"fx"};
+  EXPECT_NE(errorOf([&] { arrayScript(job); }).find("--sbatch-args 'fx': give each sbatch option as one argument"),
+            std::string::npos);
+  job.sbatchArgs.clear();
   job.partition.clear();
   EXPECT_EQ(arrayScript(job).find("--partition"), std::string::npos);
   job.taskCommands.clear();
