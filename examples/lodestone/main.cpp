@@ -33,6 +33,7 @@
 #include "lodestone/plugin/output/png_writer.h"
 #include "preview.h"
 #include "lodestone/plugin/output/progress.h"
+#include "farm_commands.h"
 #include "plan_report.h"
 #include "run_directory.h"
 #include "lodestone/plugin/output/stats_json.h"
@@ -53,6 +54,7 @@ struct Args {
   int frame = 0;            // export-fields: scene frame number
   bool frameGiven = false;  // export-fields: --frame given (else the initial state)
   std::string density, densityGrid = "n";  // export-fields: n (1/m^3) from a .vdb instead of the particles
+  std::string particles;     // export-fields: the particles of a cache file instead of a simulated state
   bool png = true, ply = true;
   int checkpointEvery = -1;  // -1: the scene's output.checkpoint_every
   bool resume = false, checkFinite = false;
@@ -61,6 +63,7 @@ struct Args {
   double maxLost = 0.01;      // run: fraction of the particles that may be lost as non-finite
   long long maxSubsteps = 100000;  // run, export-fields: substeps per frame refused beyond
   bool markdown = false;      // nodes
+  FarmArgs farm;              // wedge, wedge-summary, farm-post
   std::vector<std::string> args;  // the command line as given
 };
 
@@ -71,21 +74,6 @@ constexpr int kExitBrokenPipe = 141;  // standard output closed (128 + SIGPIPE)
 
 [[noreturn]] void usageError(const std::string& message) {
   throw InvalidArgument(message + " (see lodestone --help)");
-}
-
-// "A:B", 1 <= A <= B, into first and last; returns the error ("" when good).
-std::string readFrameRange(const std::string& text, int& first, int& last) {
-  const auto colon = text.find(':');
-  if (colon == std::string::npos) return concat("expected A:B, got '", text, "'");
-  for (const std::string& part : {text.substr(0, colon), text.substr(colon + 1)}) {
-    const std::optional<double> v = cli::toNumber(part);
-    if (!v) return concat("'", part, "' is not a number");
-    if (*v != std::floor(*v) || std::fabs(*v) > 1e9) return concat("'", part, "' is not a whole number of frames");
-  }
-  first = int(*cli::toNumber(text.substr(0, colon)));
-  last = int(*cli::toNumber(text.substr(colon + 1)));
-  if (first < 1 || last < first) return concat("need 1 <= A <= B, got ", text);
-  return "";
 }
 
 /// The commands and their options, declared once: the help text is generated
@@ -224,8 +212,15 @@ std::optional<int> parseArgs(int argc, char** argv, Args& a) {
   exportFields.add_option("--density-grid", a.densityGrid, "the grid of --density to read")
       ->type_name("G")
       ->capture_default_str();
+  exportFields
+      .add_option("--particles", a.particles,
+                  "solve for the particles of this cache file (particles_NNNN.vdb of output.vdb_points) at its "
+                  "frame and time instead of simulating; magnets at their keyframed pose then")
+      ->type_name("P.vdb");
   addMaxSubsteps(exportFields);
   addResolution(exportFields);
+
+  addFarmCommands(app, a.farm);
 
   CLI::App& nodes = *app.add_subcommand("nodes", "list the node library");
   nodes.add_flag("--markdown", a.markdown, "as Markdown (docs/nodes.md is this output)");
@@ -240,7 +235,10 @@ std::optional<int> parseArgs(int argc, char** argv, Args& a) {
   a.command = app.get_subcommands().front()->get_name();
   a.frameGiven = frameOption->count() > 0;
   if (a.clean && a.resume) usageError("--clean and --resume exclude each other");
+  if (!a.particles.empty() && (a.frameGiven || !a.density.empty()))
+    usageError("--particles excludes --frame and --density (the file gives the state)");
   a.args.assign(argv, argv + argc);
+  a.farm.args = a.args;
   return std::nullopt;
 }
 /// Substeps per frame the time step takes: time.dt's, or (CFL) the first
@@ -450,7 +448,9 @@ const MpmMaterial* magneticLaw(const MpmSolver& solver) {
 /// given. The solver must have a magnetic material.
 std::unique_ptr<MagneticForceStage> solveFieldsNow(const Scene& scene, const MpmSolver& solver,
                                                    MagneticStageReport& report, const std::string& density = "",
-                                                   const std::string& densityGrid = "n") {
+                                                   const std::string& densityGrid = "n",
+                                                   const std::vector<Vec3d>* cacheX = nullptr,
+                                                   const std::vector<double>* cacheN = nullptr) {
   const MpmMaterial* law = magneticLaw(solver);
   if (!law)
     throw InvalidArgument(concat(scene.file, ": the scene has no magnetic material; there is no field to solve"));
@@ -467,6 +467,8 @@ std::unique_ptr<MagneticForceStage> solveFieldsNow(const Scene& scene, const Mpm
     (void)densityGrid;
     throw Error(concat("cannot read ", density, ": this lodestone was built without OpenVDB"));
 #endif
+  } else if (cacheX) {
+    report = stage->run({cacheX->data(), cacheN->data(), cacheX->size()}, solver.appliedField(), solver.time());
   } else {
     const MpmParticles& p = solver.particles();
     std::vector<Vec3d> x;
@@ -757,9 +759,46 @@ int run(const Args& a) {
   return 0;
 }
 
+#if LODESTONE_HAVE_VDB
+/// The magnetic particles of a cache file (x, n) and its frame and time.
+ParticleVdbData magneticParticles(const std::string& path, const MpmSolver& solver, std::vector<Vec3d>& x,
+                                  std::vector<double>& n) {
+  ParticleVdbData d = readParticlesVdb(path);
+  for (std::size_t i = 0; i < d.size(); ++i) {
+    if (d.material[i] >= solver.materials().size())
+      throw InvalidArgument(concat(path, ": particle ", d.id[i], " has material ", d.material[i], " but the scene has ",
+                                   solver.materials().size(), " materials: is it a cache of this scene?"));
+    if (solver.materials()[d.material[i]].isMagnetic()) {
+      x.push_back(d.x[i]);
+      n.push_back(d.count[i]);
+    }
+  }
+  return d;
+}
+#endif
+
 int exportFields(const Args& a) {
   if (a.out.empty()) usageError("export-fields needs --out FILE.vdb");
   const Scene scene = loadScene(a.scene, a.options);
+  if (!a.particles.empty()) {
+    // A frame of a particle cache: its particles at its time, no simulation.
+#if LODESTONE_HAVE_VDB
+    auto solver = buildSolver(scene);
+    std::vector<Vec3d> x;
+    std::vector<double> n;
+    const ParticleVdbData d = magneticParticles(a.particles, *solver, x, n);
+    solver->setTime(d.time);
+    MagneticStageReport rep;
+    const std::unique_ptr<MagneticForceStage> stage = solveFieldsNow(scene, *solver, rep, "", "n", &x, &n);
+    std::printf("%s", rep.summary().c_str());
+    writeFields(a.out, scene, *stage, int(d.frame), d.time, nullptr, false);
+    std::printf("wrote %s (frame %d, t = %g s, %zu magnetic particles of %s)\n", a.out.c_str(), int(d.frame), d.time,
+                x.size(), a.particles.c_str());
+    return rep.converged() ? 0 : 1;
+#else
+    throw Error(concat("cannot read ", a.particles, ": this lodestone was built without OpenVDB"));
+#endif
+  }
   const int frame = a.frameGiven ? a.frame : scene.initialFrame();
   if (frame < scene.initialFrame() || frame > scene.lastFrame())
     usageError(concat("--frame ", frame, ": the scene has ", scene.frames, " frames (", scene.startFrame, "..",
@@ -810,6 +849,7 @@ int main(int argc, char** argv) {
     if (a.command == "validate") return validate(a);
     if (a.command == "plan") return plan(a);
     if (a.command == "export-fields") return exportFields(a);
+    if (const std::optional<int> code = runFarmCommand(a.command, a.farm)) return *code;
     usageError(concat("unknown command '", a.command, "'"));
   } catch (const std::exception& e) {
     std::fprintf(stderr, "lodestone: %s\n", e.what());

@@ -6,12 +6,15 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cmath>
+#include <optional>
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <regex>
 
+#include "lodestone/cli/command_line.h"
 #include "lodestone/core/base/error.h"
 #include "lodestone/core/base/hash.h"
 #include "lodestone/plugin/json_reader.h"
@@ -133,6 +136,20 @@ std::vector<int> checkpointFrames(const std::string& dir) {
   if (ec) throw Error(concat("cannot list '", dir, "' (", ec.message(), ")"));
   std::sort(frames.rbegin(), frames.rend());
   return frames;
+}
+
+std::string readFrameRange(const std::string& text, int& first, int& last, int lowest) {
+  const auto colon = text.find(':');
+  if (colon == std::string::npos) return concat("expected A:B, got '", text, "'");
+  for (const std::string& part : {text.substr(0, colon), text.substr(colon + 1)}) {
+    const std::optional<double> v = cli::toNumber(part);
+    if (!v) return concat("'", part, "' is not a number");
+    if (*v != std::floor(*v) || std::fabs(*v) > 1e9) return concat("'", part, "' is not a whole number of frames");
+  }
+  first = int(*cli::toNumber(text.substr(0, colon)));
+  last = int(*cli::toNumber(text.substr(colon + 1)));
+  if (first < lowest || last < first) return concat("need ", lowest, " <= A <= B, got ", text);
+  return "";
 }
 
 std::string commandLine(const std::vector<std::string>& args) {

@@ -65,6 +65,10 @@ std::string checkpointName(int frame);
 /// The frames of the checkpoint_NNNN.lsck files in `dir`, newest first.
 std::vector<int> checkpointFrames(const std::string& dir);
 
+/// "A:B", lowest <= A <= B (whole numbers), into first and last; returns
+/// the error ("" when good): the rule of --frames.
+std::string readFrameRange(const std::string& text, int& first, int& last, int lowest = 1);
+
 /// The command line as one shell-quoted string.
 std::string commandLine(const std::vector<std::string>& args);
 
