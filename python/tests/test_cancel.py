@@ -1,0 +1,136 @@
+"""Cancellation, progress callbacks and the GIL.
+
+A long scene run and a loop of stage solves are interrupted by SIGINT sent to
+the process from a timer thread; the KeyboardInterrupt must reach the caller
+within 100 ms of the signal. Progress callables can stop a run by returning
+False, and their exceptions propagate. Runs release the GIL.
+"""
+import os
+import signal
+import threading
+import time
+
+import numpy as np
+import pytest
+
+import lodestone
+from conftest import SOURCE_DIR, ball_particles, stage_grid, stage_sources
+
+LATENCY_BOUND_S = 0.100
+
+
+def long_scene():
+    # The cube scene on a coarse grid: short substeps, 150 frames (minutes of work).
+    return lodestone.Scene.load(str(SOURCE_DIR / "examples/scenes/cube_langevin.json"), dx=0.03)
+
+
+def interrupt_after(seconds):
+    sent = {}
+
+    def fire():
+        sent["t"] = time.perf_counter()
+        os.kill(os.getpid(), signal.SIGINT)
+
+    timer = threading.Timer(seconds, fire)
+    timer.start()
+    return sent, timer
+
+
+def test_keyboard_interrupt_stops_a_scene_run_within_100_ms():
+    scene = long_scene()
+    gaps, last = [], [time.perf_counter()]
+
+    def progress(report):
+        now = time.perf_counter()
+        gaps.append(now - last[0])
+        last[0] = now
+        return True
+
+    # After 1 s: past the first (cold) field solve, whose substep is the longest.
+    sent, timer = interrupt_after(1.0)
+    t0 = time.perf_counter()
+    with pytest.raises(KeyboardInterrupt):
+        scene.run(progress=progress)
+    caught = time.perf_counter()
+    timer.join()
+    latency = caught - sent["t"]
+    print(f"scene run: interrupted after {caught - t0:.3f} s, latency {latency * 1e3:.1f} ms, "
+          f"{len(gaps)} substeps, longest substep {max(gaps) * 1e3:.1f} ms")
+    assert len(gaps) > 10  # the run was under way when the signal came
+    assert latency < LATENCY_BOUND_S
+
+
+def test_keyboard_interrupt_stops_stage_solves_within_100_ms():
+    x, n = ball_particles(4000)
+    settings = lodestone.StageSettings()
+    settings.warm_start = False
+    grid = lodestone.Grid((-0.04, -0.04, -0.02), 0.002, (41, 41, 31))
+    stage = lodestone.MagneticForceStage(grid, lodestone.paper_material(), settings)
+    sources = stage_sources()
+    sent, timer = interrupt_after(0.5)
+    runs = 0
+    with pytest.raises(KeyboardInterrupt):
+        while True:
+            stage.run(x, n, sources)
+            runs += 1
+    caught = time.perf_counter()
+    timer.join()
+    print(f"stage: {runs} runs before the signal, latency {(caught - sent['t']) * 1e3:.1f} ms")
+    assert caught - sent["t"] < LATENCY_BOUND_S
+
+
+def test_progress_returning_false_cancels():
+    x, n = ball_particles()
+    stage = lodestone.MagneticForceStage(stage_grid(), lodestone.paper_material())
+    seen = []
+    report = stage.run(x, n, stage_sources(), progress=lambda r: seen.append(r) or False)
+    assert report.status == "cancelled"
+    assert len(seen) == 1 and seen[0]["stage"] == "newton" and seen[0]["iteration"] >= 0
+    full = stage.run(x, n, stage_sources(), progress=lambda r: True)
+    assert full.converged and full.newton_iterations >= 1
+
+    scene = long_scene()
+    solver, frames = scene.run(frames=3, progress=lambda r: r["substep"] < 5)
+    assert len(frames) == 1 and frames[0]["cancelled"]
+    assert frames[0]["substeps"] == 5
+
+
+def test_progress_exceptions_propagate():
+    x, n = ball_particles()
+    stage = lodestone.MagneticForceStage(stage_grid(), lodestone.paper_material())
+
+    def boom(report):
+        raise RuntimeError("stop here")
+
+    with pytest.raises(RuntimeError, match="stop here"):
+        stage.run(x, n, stage_sources(), progress=boom)
+    assert stage.run(x, n, stage_sources()).converged  # the stage is usable afterwards
+
+
+def test_runs_release_the_gil():
+    # A stage run without a progress callable never takes the GIL back until
+    # it returns: a thread ticking every millisecond meanwhile shows that the
+    # call released it (holding it, the other thread would not tick at all).
+    x, n = ball_particles(4000)
+    grid = lodestone.Grid((-0.04, -0.04, -0.02), 0.002, (41, 41, 31))
+    stage = lodestone.MagneticForceStage(grid, lodestone.paper_material())
+    ticks = [0]
+    done = threading.Event()
+
+    def count():
+        while not done.is_set():
+            ticks[0] += 1
+            time.sleep(0.001)
+
+    counter = threading.Thread(target=count)
+    counter.start()
+    time.sleep(0.01)
+    before = ticks[0]
+    t0 = time.perf_counter()
+    stage.run(x, n, stage_sources())
+    elapsed = time.perf_counter() - t0
+    during = ticks[0] - before
+    done.set()
+    counter.join()
+    print(f"{during} ticks of the other thread during a {elapsed:.3f} s run")
+    assert elapsed > 0.05 and during > 10
