@@ -17,22 +17,12 @@
 #include "lodestone/core/sources/cylinder_magnet.h"
 #include "lodestone/core/sources/field_source_set.h"
 #include "lodestone/core/stage/magnetic_stage.h"
+#include "raw_doubles.h"
 
 namespace {
 
 using namespace lodestone;
 using Clock = std::chrono::steady_clock;
-
-std::vector<double> readDoubles(const std::string& path) {
-  std::FILE* f = std::fopen(path.c_str(), "rb");
-  if (!f) throw Error(concat("cannot open '", path, "'"));
-  std::vector<double> v;
-  double buf[4096];
-  std::size_t n = 0;
-  while ((n = std::fread(buf, sizeof(double), 4096, f)) > 0) v.insert(v.end(), buf, buf + n);
-  std::fclose(f);
-  return v;
-}
 
 double since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
@@ -44,11 +34,9 @@ int main(int argc, char** argv) {
     return 2;
   }
   try {
-    const std::vector<double> xs = readDoubles(argv[1]);
-    const std::vector<double> counts = readDoubles(argv[2]);
+    const std::vector<Vec3d> x = python::readVec3s(argv[1]);
+    const std::vector<double> counts = python::readDoubles(argv[2]);
     const int repeats = std::atoi(argv[3]);
-    std::vector<Vec3d> x(xs.size() / 3);
-    for (std::size_t p = 0; p < x.size(); ++p) x[p] = {xs[3 * p], xs[3 * p + 1], xs[3 * p + 2]};
 
     // Stage: mirrored in bench_python_overhead.py (stage_setup).
     FieldSourceSet sources;

@@ -7,9 +7,11 @@ Two measures:
   in-call:    the wall time of the Python call minus the C++ time the call's
               own report gives, relative (stage.run against its
               seconds_total; MPM step against the substep's seconds_total);
-  vs C++:     the fastest of REPEATS Python calls (stage: run plus
-              particle_forces) against the fastest of REPEATS C++ calls of
-              the same set-up in the C++ program.
+  vs C++:     the fastest of ROUNDS x REPEATS Python calls (stage: run plus
+              particle_forces) against the fastest of ROUNDS x REPEATS C++
+              calls of the same set-up in the C++ program; the rounds
+              alternate the two, so that a slow spell of a shared machine
+              does not fall on one side only.
 Prints a table and writes CSV (kind, measure, seconds or percent).
 
     PYTHONPATH=build/python python3 python/bench/bench_python_overhead.py \
@@ -81,24 +83,31 @@ def main():
     parser.add_argument("--cpp", required=True, help="path of lodestone_python_bench")
     parser.add_argument("--particles", type=int, default=100000)
     parser.add_argument("--repeats", type=int, default=10)
+    parser.add_argument("--rounds", type=int, default=3)
     parser.add_argument("--csv", default="python_overhead.csv")
     args = parser.parse_args()
 
     x, n = particles(args.particles)
-    with tempfile.TemporaryDirectory() as tmp:
-        x.tofile(f"{tmp}/x.f64")
-        n.tofile(f"{tmp}/n.f64")
-        cpp = subprocess.run([args.cpp, f"{tmp}/x.f64", f"{tmp}/n.f64", str(args.repeats)], check=True,
-                             capture_output=True, text=True)
     cpp_times = {}
-    for line in cpp.stdout.splitlines():
-        kind, _, seconds = line.split(",")
-        cpp_times.setdefault(kind, []).append(float(seconds))
+    stage_wall, stage_inner, mpm_wall, mpm_inner = [], [], [], []
+    for _ in range(args.rounds):
+        with tempfile.TemporaryDirectory() as tmp:
+            x.tofile(f"{tmp}/x.f64")
+            n.tofile(f"{tmp}/n.f64")
+            cpp = subprocess.run([args.cpp, f"{tmp}/x.f64", f"{tmp}/n.f64", str(args.repeats)], check=True,
+                                 capture_output=True, text=True)
+        for line in cpp.stdout.splitlines():
+            kind, _, seconds = line.split(",")
+            cpp_times.setdefault(kind, []).append(float(seconds))
+        wall, inner = stage_times(x, n, args.repeats)
+        stage_wall += wall
+        stage_inner += inner
+        wall, inner, mpm_count = mpm_times(args.repeats)
+        mpm_wall += wall
+        mpm_inner += inner
 
     rows = []
-    stage_wall, stage_inner = stage_times(x, n, args.repeats)
-    mpm_wall, mpm_inner, mpm_count = mpm_times(args.repeats)
-    print(f"{args.particles} stage particles, {mpm_count} MPM particles, {args.repeats} repeats (fastest and median)")
+    print(f"{args.particles} stage particles, {mpm_count} MPM particles, {args.rounds} x {args.repeats} repeats (fastest and median)")
     print(f"{'':10} {'C++ s':>10} {'Python s':>10} {'vs C++':>8} {'in-call':>8}")
     for kind, wall, inner in (("stage_run", stage_wall, stage_inner), ("mpm_step", mpm_wall, mpm_inner)):
         c = cpp_times[kind]

@@ -1,5 +1,6 @@
 #include "arrays.h"
 
+#include <algorithm>
 #include <cstdint>
 #include <cstring>
 #include <sstream>
@@ -172,6 +173,12 @@ py::array gridView(GridView<const Vec3d> view, const py::handle& owner) {
               {s, s * d.i, s * d.i * d.j, py::ssize_t(sizeof(double))}, reinterpret_cast<const double*>(view.data),
               owner);
   py::detail::array_proxy(a.ptr())->flags &= ~py::detail::npy_api::NPY_ARRAY_WRITEABLE_;
+  return a;
+}
+
+py::array_t<double> copyToNumpy(const std::vector<Vec3d>& values) {
+  py::array_t<double> a({py::ssize_t(values.size()), py::ssize_t(3)});
+  std::copy(values.begin(), values.end(), reinterpret_cast<Vec3d*>(a.mutable_data()));
   return a;
 }
 

@@ -92,6 +92,13 @@ py::array_t<double> vec3Output(const py::object& out, std::size_t count,
 py::array gridView(GridView<const double> view, const py::handle& owner);
 py::array gridView(GridView<const Vec3d> view, const py::handle& owner);
 
+/// New numpy arrays holding copies: (N, 3) float64 of Vec3d, (N,) of scalars.
+py::array_t<double> copyToNumpy(const std::vector<Vec3d>& values);
+template <typename T>
+py::array_t<T> copyToNumpy(const std::vector<T>& values) {
+  return py::array_t<T>(py::ssize_t(values.size()), values.data());
+}
+
 /// A 3-vector argument: a sequence or array of 3 numbers.
 Vec3d toVec3(const py::handle& object, const char* name);
 py::array_t<double> fromVec3(const Vec3d& v);

@@ -26,19 +26,6 @@ BoundaryCondition boundaryFrom(const std::string& mode, double friction) {
   return bc;
 }
 
-// A copy of one per-particle array as numpy: (N, 3) for Vec3d, (N,) for scalars.
-py::array_t<double> copyVec3(const std::vector<Vec3d>& v) {
-  py::array_t<double> a({py::ssize_t(v.size()), py::ssize_t(3)});
-  std::copy(v.begin(), v.end(), reinterpret_cast<Vec3d*>(a.mutable_data()));
-  return a;
-}
-template <typename T>
-py::array_t<T> copyScalars(const std::vector<T>& v) {
-  py::array_t<T> a(py::ssize_t(v.size()));
-  std::copy(v.begin(), v.end(), a.mutable_data());
-  return a;
-}
-
 }  // namespace
 
 py::dict frameReportDict(const MpmFrameReport& r) {
@@ -211,17 +198,17 @@ void bindMpm(py::module_& m) {
           "Ctrl-C raises KeyboardInterrupt at the next substep. Returns the frame report as a dict.")
       .def_property_readonly("time", &MpmSolver::time, "Simulation time, s.")
       .def_property_readonly("particle_count", [](const MpmSolver& s) { return s.particles().size(); })
-      .def_property_readonly("positions", [](const MpmSolver& s) { return copyVec3(s.particles().x); },
+      .def_property_readonly("positions", [](const MpmSolver& s) { return copyToNumpy(s.particles().x); },
                              "Positions, m, (N, 3) copy.")
-      .def_property_readonly("velocities", [](const MpmSolver& s) { return copyVec3(s.particles().v); },
+      .def_property_readonly("velocities", [](const MpmSolver& s) { return copyToNumpy(s.particles().v); },
                              "Velocities, m/s, (N, 3) copy.")
-      .def_property_readonly("counts", [](const MpmSolver& s) { return copyScalars(s.particles().count); },
+      .def_property_readonly("counts", [](const MpmSolver& s) { return copyToNumpy(s.particles().count); },
                              "n_p, micro-particles, (N,) copy.")
-      .def_property_readonly("masses", [](const MpmSolver& s) { return copyScalars(s.particles().mass); },
+      .def_property_readonly("masses", [](const MpmSolver& s) { return copyToNumpy(s.particles().mass); },
                              "kg, (N,) copy.")
-      .def_property_readonly("ids", [](const MpmSolver& s) { return copyScalars(s.particles().id); },
+      .def_property_readonly("ids", [](const MpmSolver& s) { return copyToNumpy(s.particles().id); },
                              "Persistent identities, (N,) uint64 copy.")
-      .def_property_readonly("magnetic_forces", [](const MpmSolver& s) { return copyVec3(s.particles().magneticForce); },
+      .def_property_readonly("magnetic_forces", [](const MpmSolver& s) { return copyToNumpy(s.particles().magneticForce); },
                              "Per-particle magnetic force of the last solve (N), when the stage grid differs.")
       .def(
           "set_velocities",

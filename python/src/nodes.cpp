@@ -58,12 +58,6 @@ py::dict nodeDict(const plugin::NodeDecl& n) {
   return d;
 }
 
-py::array_t<double> vec3Copy(const std::vector<Vec3d>& v) {
-  py::array_t<double> a({py::ssize_t(v.size()), py::ssize_t(3)});
-  std::copy(v.begin(), v.end(), reinterpret_cast<Vec3d*>(a.mutable_data()));
-  return a;
-}
-
 // A cooked value as a dict: "type" and the value's arrays (copies) or objects.
 py::dict valueDict(const plugin::NodeValue& value) {
   using namespace plugin;
@@ -74,10 +68,8 @@ py::dict valueDict(const plugin::NodeValue& value) {
   }
   d["type"] = toString(typeOf(value));
   if (const auto* p = std::get_if<std::shared_ptr<const ParticlesData>>(&value)) {
-    d["positions"] = vec3Copy((*p)->particles.x);
-    py::array_t<double> counts(py::ssize_t((*p)->particles.count.size()));
-    std::copy((*p)->particles.count.begin(), (*p)->particles.count.end(), counts.mutable_data());
-    d["counts"] = counts;
+    d["positions"] = copyToNumpy((*p)->particles.x);
+    d["counts"] = copyToNumpy((*p)->particles.count);
   } else if (const auto* mat = std::get_if<std::shared_ptr<const MaterialData>>(&value)) {
     d["name"] = (*mat)->name;
     d["material"] = (*mat)->material;
@@ -97,14 +89,14 @@ py::dict valueDict(const plugin::NodeValue& value) {
     d["stage"] = (*f)->stage;
     d["report"] = (*f)->report;
   } else if (const auto* fo = std::get_if<std::shared_ptr<const ForcesData>>(&value)) {
-    d["forces"] = vec3Copy((*fo)->particleForces);
+    d["forces"] = copyToNumpy((*fo)->particleForces);
     d["total"] = fromVec3((*fo)->total);
     d["report"] = (*fo)->report;
   } else if (const auto* sim = std::get_if<std::shared_ptr<const SimulationData>>(&value)) {
     d["solver"] = (*sim)->solver;
     d["frames"] = (*sim)->frames;
     d["time"] = (*sim)->time;
-    d["centre_of_mass"] = vec3Copy((*sim)->centreOfMass);
+    d["centre_of_mass"] = copyToNumpy((*sim)->centreOfMass);
   }
   return d;
 }

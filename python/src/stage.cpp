@@ -44,6 +44,17 @@ MagneticStageReport runHooked(MagneticForceStage& stage, const py::object& progr
   return report;
 }
 
+// A grid field sampled at positions without the GIL.
+template <typename Sample>
+py::array_t<double> sampleAt(const py::object& positions, const py::object& out, const Sample& sample) {
+  const Vec3Input x(positions, "positions");
+  Vec3d* o = nullptr;
+  py::array_t<double> result = vec3Output(out, x.size(), {{"positions", {x.begin(), x.end()}}}, o);
+  py::gil_scoped_release release;
+  sample(x.data(), x.size(), o);
+  return result;
+}
+
 }  // namespace
 
 void bindStage(py::module_& m) {
@@ -183,28 +194,17 @@ void bindStage(py::module_& m) {
       .def(
           "sample_force_density",
           [](const MagneticForceStage& stage, const py::object& positions, const py::object& out) {
-            const Vec3Input x(positions, "positions");
-            Vec3d* o = nullptr;
-            py::array_t<double> result = vec3Output(out, x.size(), {{"positions", {x.begin(), x.end()}}}, o);
-            {
-              py::gil_scoped_release release;
-              stage.sampleForceDensity(x.data(), x.size(), o);
-            }
-            return result;
+            return sampleAt(positions, out, [&](const Vec3d* x, std::size_t n, Vec3d* o) {
+              stage.sampleForceDensity(x, n, o);
+            });
           },
           py::arg("positions"), py::arg("out") = py::none(),
           "Force density (N/m^3) interpolated at positions (m, shape (N, 3)).")
       .def(
           "sample_field",
           [](const MagneticForceStage& stage, const py::object& positions, const py::object& out) {
-            const Vec3Input x(positions, "positions");
-            Vec3d* o = nullptr;
-            py::array_t<double> result = vec3Output(out, x.size(), {{"positions", {x.begin(), x.end()}}}, o);
-            {
-              py::gil_scoped_release release;
-              stage.sampleField(x.data(), x.size(), o);
-            }
-            return result;
+            return sampleAt(positions, out,
+                            [&](const Vec3d* x, std::size_t n, Vec3d* o) { stage.sampleField(x, n, o); });
           },
           py::arg("positions"), py::arg("out") = py::none(), "H (A/m) interpolated at positions (m, shape (N, 3)).")
       .def("reset_warm_start", &MagneticForceStage::resetWarmStart, "The next solve starts from phi = 0.")

@@ -76,15 +76,10 @@ void bindVdb(py::module_& m) {
 #if LODESTONE_PYTHON_HAVE_VDB
         const ParticleVdbData p = readParticlesVdb(path);
         py::dict d;
-        auto vec = [](const std::vector<Vec3d>& v) {
-          py::array_t<double> a({py::ssize_t(v.size()), py::ssize_t(3)});
-          std::copy(v.begin(), v.end(), reinterpret_cast<Vec3d*>(a.mutable_data()));
-          return a;
-        };
-        d["positions"] = vec(p.x);
-        d["velocities"] = vec(p.v);
-        d["counts"] = py::array_t<double>(py::ssize_t(p.count.size()), p.count.data());
-        d["ids"] = py::array_t<std::uint64_t>(py::ssize_t(p.id.size()), p.id.data());
+        d["positions"] = copyToNumpy(p.x);
+        d["velocities"] = copyToNumpy(p.v);
+        d["counts"] = copyToNumpy(p.count);
+        d["ids"] = copyToNumpy(p.id);
         d["frame"] = p.frame;
         d["time"] = p.time;
         return d;

@@ -27,27 +27,14 @@
 #include "lodestone/core/stage/magnetic_stage.h"
 #include "lodestone/plugin/node_registry.h"
 #include "lodestone/plugin/scene.h"
+#include "raw_doubles.h"
 
 namespace {
 
 using namespace lodestone;
-
-std::vector<double> readDoubles(const std::string& path) {
-  std::FILE* f = std::fopen(path.c_str(), "rb");
-  if (!f) throw Error(concat("cannot open '", path, "'"));
-  std::vector<double> v;
-  double buf[1024];
-  std::size_t n = 0;
-  while ((n = std::fread(buf, sizeof(double), 1024, f)) > 0) v.insert(v.end(), buf, buf + n);
-  std::fclose(f);
-  return v;
-}
-
-void writeDoubles(const std::string& path, const double* data, std::size_t count) {
-  std::FILE* f = std::fopen(path.c_str(), "wb");
-  if (!f || std::fwrite(data, sizeof(double), count, f) != count) throw Error(concat("cannot write '", path, "'"));
-  std::fclose(f);
-}
+using python::readDoubles;
+using python::readVec3s;
+using python::writeDoubles;
 
 void writeVec3(const std::string& path, const std::vector<Vec3d>& v) {
   writeDoubles(path, reinterpret_cast<const double*>(v.data()), 3 * v.size());
@@ -118,11 +105,9 @@ int main(int argc, char** argv) {
     return 2;
   }
   try {
-    const std::vector<double> xs = readDoubles(argv[1]);
+    const std::vector<Vec3d> x = readVec3s(argv[1]);
     const std::vector<double> counts = readDoubles(argv[2]);
     const std::string out = argv[3];
-    std::vector<Vec3d> x(xs.size() / 3);
-    for (std::size_t p = 0; p < x.size(); ++p) x[p] = {xs[3 * p], xs[3 * p + 1], xs[3 * p + 2]};
 
     // The stage: a ball of the paper's material above a box magnet, in a weak uniform field.
     FieldSourceSet sources;

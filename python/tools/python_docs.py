@@ -9,6 +9,7 @@ from the module's docstrings.
 import argparse
 import inspect
 import pathlib
+import re
 import sys
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
@@ -30,7 +31,9 @@ def signature_and_doc(obj, name):
 
 
 def clean(sig):
-    return sig.replace("lodestone.", "").replace("numpy.ndarray[numpy.float64]", "ndarray")
+    # Default objects print with their address: name their type instead, so the page is reproducible.
+    sig = sig.replace("lodestone.", "").replace("numpy.ndarray[numpy.float64]", "ndarray")
+    return re.sub(r"<(\w+) object at 0x[0-9a-f]+>", r"\1()", sig)
 
 
 def document_routine(out, obj, name, level):
