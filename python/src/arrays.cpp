@@ -37,6 +37,9 @@ py::array asFloatArray(const py::handle& object, const char* name) {
   if (kind != 'f' || (size != 4 && size != 8))
     throw py::value_error(concat(name, ": expected float32 or float64 values, got dtype ",
                                  std::string(py::str(a.dtype()))));
+  if (a.dtype().byteorder() == '>')
+    throw py::value_error(concat(name, ": expected native (little-endian) byte order, got dtype ",
+                                 std::string(py::str(a.dtype()))));
   return a;
 }
 

@@ -57,6 +57,7 @@ def test_lists_are_accepted():
     (np.zeros((10, 3), dtype=np.complex128), "positions: expected float32 or float64 values, got dtype complex128"),
     (np.zeros((10, 3), dtype=np.float16), "positions: expected float32 or float64 values, got dtype float16"),
     ("abc", "positions: expected float32 or float64 values"),
+    (np.zeros((10, 3), dtype=">f8"), "positions: expected native (little-endian) byte order, got dtype >f8"),
 ])
 def test_wrong_shapes_and_dtypes_raise_value_error_naming_argument_and_shape(bad, message):
     stage = lodestone.MagneticForceStage(stage_grid(), lodestone.paper_material())
