@@ -1,0 +1,89 @@
+// Scene files: load, validate, build the solver and run frames.
+#include <memory>
+
+#include <pybind11/stl.h>
+
+#include "arrays.h"
+#include "bindings.h"
+#include "cancel.h"
+#include "mpm_reports.h"
+#include "lodestone/plugin/scene.h"
+
+namespace lodestone::python {
+
+void bindScene(py::module_& m) {
+  using plugin::Scene;
+  py::class_<Scene>(m, "Scene",
+                    "A scene file (docs/scenes.md): domain, materials, bodies, magnets, fields, colliders and time "
+                    "line, read strictly (unknown keys, wrong types and out-of-range values raise ValueError "
+                    "naming the entry).")
+      .def_static(
+          "load",
+          [](const std::string& path, bool full, double dx) {
+            plugin::SceneOptions o;
+            o.full = full;
+            o.dx = dx;
+            return plugin::loadScene(path, o);
+          },
+          py::arg("path"), py::arg("full") = false, py::arg("dx") = 0.0,
+          "Reads and validates a scene file; `full` uses its full-resolution dx, `dx` > 0 overrides the grid "
+          "spacing (m).")
+      .def_static(
+          "parse",
+          [](const std::string& text, const std::string& sourceName, double dx) {
+            plugin::SceneOptions o;
+            o.dx = dx;
+            return plugin::parseScene(text, sourceName, o);
+          },
+          py::arg("text"), py::arg("source_name") = "<string>", py::arg("dx") = 0.0,
+          "The same from JSON text; `source_name` appears in messages and resolves relative file paths.")
+      .def_readonly("name", &Scene::name)
+      .def_readonly("description", &Scene::description)
+      .def_readonly("start_frame", &Scene::startFrame, "The number of the first simulated frame.")
+      .def_readonly("frames", &Scene::frames, "Frames to simulate.")
+      .def_readonly("fps", &Scene::fps, "Frames per second.")
+      .def_property_readonly("frame_duration", &Scene::frameDuration, "s")
+      .def_property_readonly("grid", [](const Scene& s) { return s.settings.grid; }, "The MPM Grid.")
+      .def_property_readonly("settings", [](const Scene& s) { return s.settings; }, "The MpmSettings (a copy).")
+      .def("build_solver", [](const Scene& s) { return std::shared_ptr<MpmSolver>(plugin::buildSolver(s)); },
+           "A new MpmSolver with the scene's bodies, magnets, fields and colliders at the scene's start time.")
+      .def(
+          "run",
+          [](const Scene& scene, int frames, const py::object& progress, const py::object& onFrame) {
+            std::shared_ptr<MpmSolver> solver(plugin::buildSolver(scene));
+            const int count = frames > 0 ? frames : scene.frames;
+            py::list reports;
+            Hook hook(progress);
+            for (int f = 0; f < count; ++f) {
+              const int frame = scene.startFrame + f;
+              MpmFrameReport r;
+              {
+                py::gil_scoped_release release;
+                r = solver->advanceFrame(scene.frameDuration(), [&](const MpmProgress& p) {
+                  return hook.poll([&](py::dict& d) {
+                    d["stage"] = "substep";
+                    d["frame"] = frame;
+                    d["substep"] = p.substep;
+                    d["time"] = p.time;
+                    d["fraction"] = (f + p.fraction) / count;
+                  });
+                });
+              }
+              hook.rethrow();
+              py::dict d = frameReportDict(r);
+              d["frame"] = frame;
+              reports.append(d);
+              if (r.cancelled) break;
+              if (!onFrame.is_none()) onFrame(frame, solver);
+            }
+            return py::make_tuple(solver, reports);
+          },
+          py::arg("frames") = 0, py::arg("progress") = py::none(), py::arg("on_frame") = py::none(),
+          "Builds the solver and simulates `frames` frames (0: the scene's count), releasing the GIL while it "
+          "steps. `progress(dict)` runs after each substep (keys: stage, frame, substep, time (s), fraction of "
+          "the run); returning False stops the run, and Ctrl-C raises KeyboardInterrupt there (the `lodestone "
+          "run` command stops at the same point). `on_frame(frame, solver)` runs after each frame, with the "
+          "GIL. Returns (solver, list of frame report dicts).");
+}
+
+}  // namespace lodestone::python
