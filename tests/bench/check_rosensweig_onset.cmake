@@ -1,11 +1,14 @@
 # The Rosensweig onset and spacing of examples/scenes/rosensweig.json
-# (docs/ferrofluid.md): runs lodestone-bench-rosensweig at 0.8 and 1.3 times
-# the onset field H0_c and checks its CSV:
+# (docs/ferrofluid.md): runs lodestone-bench-rosensweig at 0.8, 1.15 and 1.3
+# times the onset field H0_c and checks its CSV:
 #   - 0.8 H0_c stays flat: the surface's rms height stays below half a cell
 #     from 0.2 s on (measured: at most 0.25 cells);
+#   - 1.15 H0_c: the spikes' mean nearest distance over the last 10 frames
+#     within 15% of lambda_c (measured 0.90 lambda_c);
 #   - 1.3 H0_c forms spikes: rms height above one cell at the end (measured
-#     1.96), at least 6 spikes (16), and their mean nearest distance over the
-#     last 10 frames within 30% of lambda_c (measured 0.78 lambda_c).
+#     1.96), at least 6 spikes (16), closer together than at 1.15 H0_c
+#     (0.77 lambda_c: above the onset the fastest-growing wavelength
+#     shortens).
 #
 #   cmake -DBENCH=path/to/lodestone-bench-rosensweig -DOUT=dir -P check_rosensweig_onset.cmake
 foreach(var BENCH OUT)
@@ -14,7 +17,7 @@ foreach(var BENCH OUT)
   endif()
 endforeach()
 file(MAKE_DIRECTORY ${OUT})
-execute_process(COMMAND ${BENCH} --ratios 0.8,1.3 --csv ${OUT}/rosensweig.csv --table ${OUT}/rosensweig.md
+execute_process(COMMAND ${BENCH} --ratios 0.8,1.15,1.3 --csv ${OUT}/rosensweig.csv --table ${OUT}/rosensweig.md
                 RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
 if(NOT rc EQUAL 0)
   message(FATAL_ERROR "lodestone-bench-rosensweig exited with ${rc}:\n${out}\n${err}")
@@ -24,10 +27,19 @@ list(POP_FRONT lines header)
 if(NOT header MATCHES "^law,ratio,applied_H_A_per_m,frame,time_s,range_m,range_cells,rms_cells,peaks,mean_nearest_m,mean_nearest_over_lambda,tallest_cells$")
   message(FATAL_ERROR "unexpected CSV header: ${header}")
 endif()
+
+# A decimal as a whole number of millionths (CMake has no floating-point math).
+function(to_millionths value out)
+  string(REGEX MATCH "^([0-9]+)(\\.([0-9]+))?" m "${value}")
+  set(whole "${CMAKE_MATCH_1}")
+  string(SUBSTRING "${CMAKE_MATCH_3}000000" 0 6 frac)
+  string(REGEX REPLACE "^0+([0-9])" "\\1" frac "${frac}")
+  math(EXPR v "${whole} * 1000000 + ${frac}")
+  set(${out} ${v} PARENT_SCOPE)
+endfunction()
+
 set(flatWorst 0)
 set(lastFrame 0)
-set(spacingSum 0)
-set(spacingCount 0)
 foreach(line IN LISTS lines)
   string(REPLACE "," ";" f "${line}")
   list(GET f 1 ratio)
@@ -35,47 +47,55 @@ foreach(line IN LISTS lines)
   list(GET f 4 t)
   list(GET f 7 rms)
   list(GET f 8 peaks)
-  list(GET f 10 spacing)
-  if(ratio STREQUAL "0.8")
-    if(t GREATER_EQUAL 0.2 AND rms GREATER flatWorst)
-      set(flatWorst ${rms})
-    endif()
-  elseif(ratio STREQUAL "1.3")
-    if(frame GREATER lastFrame)
-      set(lastFrame ${frame})
-      set(endRms ${rms})
-      set(endPeaks ${peaks})
-    endif()
+  if(frame GREATER lastFrame)
+    set(lastFrame ${frame})
+  endif()
+  if(ratio STREQUAL "0.8" AND t GREATER_EQUAL 0.2 AND rms GREATER flatWorst)
+    set(flatWorst ${rms})
+  endif()
+  if(ratio STREQUAL "1.3")
+    set(endRms ${rms})
+    set(endPeaks ${peaks})
   endif()
 endforeach()
-math(EXPR from "${lastFrame} - 9")
-foreach(line IN LISTS lines)
-  string(REPLACE "," ";" f "${line}")
-  list(GET f 1 ratio)
-  list(GET f 3 frame)
-  list(GET f 10 spacing)
-  if(ratio STREQUAL "1.3" AND frame GREATER_EQUAL from AND NOT spacing STREQUAL "nan")
-    # CMake has no floating-point math: sum in millionths.
-    string(REGEX MATCH "^([0-9]+)(\\.([0-9]+))?" m "${spacing}")
-    set(whole "${CMAKE_MATCH_1}")
-    string(SUBSTRING "${CMAKE_MATCH_3}000000" 0 6 frac)
-    string(REGEX REPLACE "^0+([0-9])" "\\1" frac "${frac}")
-    math(EXPR spacingSum "${spacingSum} + ${whole} * 1000000 + ${frac}")
-    math(EXPR spacingCount "${spacingCount} + 1")
+
+# Mean nearest spike distance (millionths of lambda_c) over the last 10 frames of one ratio.
+function(late_spacing which out)
+  math(EXPR from "${lastFrame} - 9")
+  set(sum 0)
+  set(count 0)
+  foreach(line IN LISTS lines)
+    string(REPLACE "," ";" f "${line}")
+    list(GET f 1 ratio)
+    list(GET f 3 frame)
+    list(GET f 10 spacing)
+    if(ratio STREQUAL "${which}" AND frame GREATER_EQUAL from AND NOT spacing STREQUAL "nan")
+      to_millionths(${spacing} v)
+      math(EXPR sum "${sum} + ${v}")
+      math(EXPR count "${count} + 1")
+    endif()
+  endforeach()
+  if(count EQUAL 0)
+    message(FATAL_ERROR "${which} H0_c: no spikes in the last 10 frames")
   endif()
-endforeach()
-if(spacingCount EQUAL 0)
-  message(FATAL_ERROR "1.3 H0_c: no spike spacing in the last 10 frames")
-endif()
-math(EXPR meanSpacing "${spacingSum} / ${spacingCount}")  # millionths of lambda_c
-message(STATUS "0.8 H0_c: largest rms height from 0.2 s on ${flatWorst} cells; 1.3 H0_c: rms ${endRms} cells, "
-               "${endPeaks} spikes, mean nearest distance ${meanSpacing}e-6 lambda_c over the last 10 frames")
+  math(EXPR mean "${sum} / ${count}")
+  set(${out} ${mean} PARENT_SCOPE)
+endfunction()
+late_spacing(1.15 spacingLow)
+late_spacing(1.3 spacingHigh)
+
+message(STATUS "0.8 H0_c: largest rms height from 0.2 s on ${flatWorst} cells; 1.15 H0_c: mean nearest spike distance "
+               "${spacingLow}e-6 lambda_c; 1.3 H0_c: rms ${endRms} cells, ${endPeaks} spikes, mean nearest distance "
+               "${spacingHigh}e-6 lambda_c (last 10 frames)")
 if(NOT flatWorst LESS 0.5)
   message(FATAL_ERROR "0.8 H0_c: the surface did not stay flat (rms ${flatWorst} cells >= 0.5)")
+endif()
+if(spacingLow LESS 850000 OR spacingLow GREATER 1150000)
+  message(FATAL_ERROR "1.15 H0_c: mean spike distance ${spacingLow}e-6 lambda_c, not within 15% of lambda_c")
 endif()
 if(NOT endRms GREATER 1.0 OR endPeaks LESS 6)
   message(FATAL_ERROR "1.3 H0_c: no spikes (rms ${endRms} cells, ${endPeaks} spikes)")
 endif()
-if(meanSpacing LESS 700000 OR meanSpacing GREATER 1300000)
-  message(FATAL_ERROR "1.3 H0_c: mean spike distance ${meanSpacing}e-6 lambda_c, not within 30% of lambda_c")
+if(NOT spacingHigh LESS spacingLow)
+  message(FATAL_ERROR "1.3 H0_c: spikes not closer (${spacingHigh}e-6 lambda_c) than at 1.15 H0_c (${spacingLow}e-6)")
 endif()
