@@ -11,6 +11,8 @@
 #include "lodestone/core/base/coloured_scatter.h"
 #include "lodestone/core/base/error.h"
 #include "lodestone/core/field/element_build.h"
+#include "lodestone/core/field/multipole_blocks.h"
+#include "lodestone/core/field/open_wall_lattice.h"
 #include "lodestone/core/field/langevin_batch.h"
 #include "lodestone/core/base/parallel.h"
 #include "lodestone/core/field/q1_element.h"
@@ -21,21 +23,6 @@ inline namespace field {
 
 namespace {
 constexpr q1::Tables kQ1 = q1::makeTables();
-
-// A cell's moments about a block centre `rel` away from the cell's origin
-// (rel = origin - centre), from its dipole sum_q w M_q and upper[a], the
-// same sum over the Gauss points with bit a set (the upper abscissa on axis
-// a): the Gauss point at bits (qa, qb, qd) lies at o + dx (g[qa], g[qb],
-// g[qd]), so sum_q w M_q (x_q - c)_a = dipole (o - c)_a + dx (g0 dipole +
-// (g1 - g0) upper[a]). The centre field is left unset.
-Multipole cellMultipole(const Vec3d& dipole, const Vec3d upper[3], const Vec3d& rel, double h) {
-  const double g0 = q1::gaussAbscissa(0), g1 = q1::gaussAbscissa(1);
-  Multipole m;
-  m.dipole = dipole;
-  for (int i = 0; i < 3; ++i)
-    for (int a = 0; a < 3; ++a) m.quadrupole[i][a] = dipole[i] * (rel[a] + h * g0) + h * (g1 - g0) * upper[a][i];
-  return m;
-}
 
 struct EnergyTotals {
   double energy = 0, energyAbs = 0;
@@ -179,31 +166,14 @@ void MagnetostaticProblem::setMaterial(GridView<const double> n, const AppliedFi
   totalCount_ = mom.count;
   centroid_ = mom.count > 0 ? mom.first / mom.count : 0.5 * (grid_.origin + grid_.maxCorner());
 
-  // Multipole blocks: cells grouped per axis into runs of `edge` cells
-  // counted from both ends towards the middle (a middle cell of an odd count
-  // is its own run), so that the tiling, and with it the truncated far field,
-  // is mirror-symmetric about the grid's mid-planes; sorted by (block, slot)
-  // so the per-block sums have a fixed order. The edge grows with the
-  // distance to the wall so that edge / clearance stays <= 1/2 beyond 8 cells
-  // (the truncated octupole of a block falls as (edge / distance)^3).
-  int edge = kMultipoleBlock;
-  while (edge < 32 && 4 * edge <= wallClearance_) edge *= 2;
-  blockEdge_ = edge;
-  const auto runsPerHalf = [edge](int cellCount) { return (cellCount / 2 + edge - 1) / edge; };
-  const auto run = [edge](int c, int cellCount, int half) {
-    const int mirrored = cellCount - 1 - c;
-    if (c < cellCount / 2) return c / edge;
-    if (mirrored < cellCount / 2) return 2 * half - mirrored / edge;
-    return half;  // the middle cell of an odd count
-  };
-  const int hx = runsPerHalf(cd.i), hy = runsPerHalf(cd.j), hz = runsPerHalf(cd.k);
-  const std::uint64_t bx = std::uint64_t(2 * hx + 1), by = std::uint64_t(2 * hy + 1);
+  // Multipole blocks (multipole_blocks.h), sorted by (block, slot) so the
+  // per-block sums have a fixed order.
+  blockEdge_ = multipoleBlockEdgeFor(wallClearance_);
+  const MultipoleBlockTiling tiling(cd, blockEdge_);
   std::vector<std::uint64_t> key(cells);
   tbb::parallel_for(std::size_t(0), cells, [&](std::size_t s) {
     const std::size_t b = cellBase_[s], nx = std::size_t(grid_.dims.i), ny = std::size_t(grid_.dims.j);
-    const int i = int(b % nx), j = int((b / nx) % ny), k = int(b / (nx * ny));
-    key[s] = std::uint64_t(run(i, cd.i, hx)) +
-             bx * (std::uint64_t(run(j, cd.j, hy)) + by * std::uint64_t(run(k, cd.k, hz)));
+    key[s] = tiling.key(int(b % nx), int((b / nx) % ny), int(b / (nx * ny)));
   });
   blockCells_.resize(cells);
   std::iota(blockCells_.begin(), blockCells_.end(), std::size_t(0));
@@ -471,28 +441,7 @@ void MagnetostaticProblem::applyOpenBoundary(const std::vector<Multipole>& multi
   // (bi)linearly in between: relative error about (s/d)^2/8 <= 0.4%, below
   // the blocks' truncated octupole.
   const int nx = grid_.dims.i, ny = grid_.dims.j, nz = grid_.dims.k;
-  int s = 2;
-  while (s < 16 && 6 * (2 * s) <= wallClearance_) s *= 2;
-  // The lattice is counted from both ends of each axis (and holds the middle
-  // node, or the two middle nodes of an even count), so that it and the
-  // interpolation between its nodes are mirror-symmetric about the grid's
-  // mid-planes.
-  const auto onLattice = [s](int c, int count) {
-    const int fromEnd = std::min(c, count - 1 - c);
-    return fromEnd % s == 0 || fromEnd == (count - 1) / 2;
-  };
-  // Per axis, the nearest lattice coordinates below and above each coordinate.
-  struct Bracket {
-    std::vector<int> lo, hi;
-  };
-  const auto bracket = [&](int count) {
-    Bracket b{std::vector<int>(std::size_t(count)), std::vector<int>(std::size_t(count))};
-    for (int c = 0, last = 0; c < count; ++c) b.lo[std::size_t(c)] = last = onLattice(c, count) ? c : last;
-    for (int c = count - 1, next = count - 1; c >= 0; --c)
-      b.hi[std::size_t(c)] = next = onLattice(c, count) ? c : next;
-    return b;
-  };
-  const Bracket brackets[3] = {bracket(nx), bracket(ny), bracket(nz)};
+  const OpenWallLattice lattice(grid_, wallClearance_);
   const auto forWallNodes = [&](const auto& fn) {
     tbb::parallel_for(0, nz, [&](int k) {
       for (int j = 0; j < ny; ++j) {
@@ -501,66 +450,17 @@ void MagnetostaticProblem::applyOpenBoundary(const std::vector<Multipole>& multi
       }
     });
   };
-  // The blocks as arrays, padded to a multiple of 4 with empty blocks, so
-  // that the sum over blocks runs in 4 independent lanes (which the compiler
-  // vectorizes) and in a fixed order. With r = x - c:
-  //   4 pi phi = (m.r - tr N) / r^3 + 3 r^T N r / r^5.
-  enum { kCx, kCy, kCz, kMx, kMy, kMz, kNxx, kNyy, kNzz, kNxy, kNxz, kNyz, kTr, kFields };
-  const std::size_t nb = multipoles.size(), padded = (nb + 3) / 4 * 4;
-  std::vector<double> soa(std::size_t(kFields) * padded, 0.0);
-  for (std::size_t b = 0; b < nb; ++b) {
-    const Multipole& mp = multipoles[b];
-    const auto& N = mp.quadrupole;
-    const double v[kFields] = {mp.centre.x, mp.centre.y, mp.centre.z, mp.dipole.x, mp.dipole.y, mp.dipole.z,
-                               N[0][0], N[1][1], N[2][2], N[0][1] + N[1][0], N[0][2] + N[2][0], N[1][2] + N[2][1],
-                               N[0][0] + N[1][1] + N[2][2]};
-    for (int f = 0; f < kFields; ++f) soa[std::size_t(f) * padded + b] = v[f];
-  }
-  const auto field = [&](int f) { return soa.data() + std::size_t(f) * padded; };
-  const double *cx = field(kCx), *cy = field(kCy), *cz = field(kCz), *mx = field(kMx), *my = field(kMy),
-               *mz = field(kMz), *nxx = field(kNxx), *nyy = field(kNyy), *nzz = field(kNzz), *nxy = field(kNxy),
-               *nxz = field(kNxz), *nyz = field(kNyz), *tr = field(kTr);
-  const MultipoleArrays blocks{cx, cy, cz, mx, my, mz, nxx, nyy, nzz, nxy, nxz, nyz, tr, padded};
+  const PackedMultipoles packed(multipoles);
+  const MultipoleArrays& blocks = packed.arrays();
   forWallNodes([&](int i, int j, int k) {
-    if (!onLattice(i, nx) || !onLattice(j, ny) || !onLattice(k, nz)) return;
+    if (!lattice.onLattice(i, j, k)) return;
     phi[grid_.index(i, j, k)] = multipoleSum(blocks, grid_.nodePosition(i, j, k)) / (4.0 * kPi);
   });
-  // Off-lattice wall nodes: along each off-lattice axis, between the nearest
-  // lattice coordinates below and above. The wall's normal coordinate (0 or
-  // count - 1) is always on the lattice.
+  // Off-lattice wall nodes: interpolated between the lattice nodes around them.
   forWallNodes([&](int i, int j, int k) {
-    const int c[3] = {i, j, k}, count[3] = {nx, ny, nz};
-    int lo[3], hi[3];
-    double t[3];
-    bool all = true;
-    for (int a = 0; a < 3; ++a) {
-      if (onLattice(c[a], count[a])) {
-        lo[a] = hi[a] = c[a];
-        t[a] = 0;
-      } else {
-        all = false;
-        lo[a] = brackets[a].lo[std::size_t(c[a])];
-        hi[a] = brackets[a].hi[std::size_t(c[a])];
-        t[a] = double(c[a] - lo[a]) / double(hi[a] - lo[a]);
-      }
-    }
-    if (all) return;
-    double v = 0;
-    for (int corner = 0; corner < 8; ++corner) {
-      double w = 1;
-      int p[3];
-      for (int a = 0; a < 3; ++a) {
-        const bool up = (corner >> a) & 1;
-        if (lo[a] == hi[a] && up) {
-          w = 0;
-          break;
-        }
-        p[a] = up ? hi[a] : lo[a];
-        w *= lo[a] == hi[a] ? 1.0 : (up ? t[a] : 1.0 - t[a]);
-      }
-      if (w != 0) v += w * phi[grid_.index(p[0], p[1], p[2])];
-    }
-    phi[grid_.index(i, j, k)] = v;
+    if (lattice.onLattice(i, j, k)) return;
+    phi[grid_.index(i, j, k)] =
+        lattice.interpolate(i, j, k, [&](int p, int q, int r) { return phi[grid_.index(p, q, r)]; });
   });
 }
 

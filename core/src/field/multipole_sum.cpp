@@ -73,6 +73,23 @@ __attribute__((target("avx2,fma"))) double sumAvx2(const MultipoleArrays& B, con
 
 }  // namespace
 
+PackedMultipoles::PackedMultipoles(const std::vector<Multipole>& blocks) {
+  enum { kCx, kCy, kCz, kMx, kMy, kMz, kNxx, kNyy, kNzz, kNxy, kNxz, kNyz, kTr, kFields };
+  const std::size_t nb = blocks.size(), padded = (nb + 3) / 4 * 4;
+  soa_.assign(std::size_t(kFields) * padded, 0.0);
+  for (std::size_t b = 0; b < nb; ++b) {
+    const Multipole& mp = blocks[b];
+    const auto& N = mp.quadrupole;
+    const double v[kFields] = {mp.centre.x, mp.centre.y, mp.centre.z, mp.dipole.x, mp.dipole.y, mp.dipole.z,
+                               N[0][0], N[1][1], N[2][2], N[0][1] + N[1][0], N[0][2] + N[2][0], N[1][2] + N[2][1],
+                               N[0][0] + N[1][1] + N[2][2]};
+    for (int f = 0; f < kFields; ++f) soa_[std::size_t(f) * padded + b] = v[f];
+  }
+  const auto field = [&](int f) { return soa_.data() + std::size_t(f) * padded; };
+  arrays_ = {field(kCx),  field(kCy),  field(kCz),  field(kMx),  field(kMy),  field(kMz), field(kNxx),
+             field(kNyy), field(kNzz), field(kNxy), field(kNxz), field(kNyz), field(kTr), padded};
+}
+
 double multipoleSum(const MultipoleArrays& blocks, const Vec3d& x) {
 #if defined(LODESTONE_MULTIPOLE_AVX2)
   if (cpuHasAvx2Fma()) return sumAvx2(blocks, x);

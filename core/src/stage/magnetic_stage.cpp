@@ -21,19 +21,14 @@ inline namespace stage {
 
 namespace {
 using Clock = std::chrono::steady_clock;
+}  // namespace
 
-// The applied field as material sees it: inside a magnet's body, the field
-// outside continued through its nearest face (FieldSource::exteriorContinuation),
-// so that nodes and Gauss points that the transfer's spread puts inside a
-// magnet do not see its demagnetizing field (and the force does not jump when
-// a node crosses a face).
 AppliedFieldFunction appliedFieldOf(const FieldSource& sources, double time) {
   return [&sources, time](const Vec3d* x, std::size_t count, Vec3d* H) {
     for (std::size_t m = 0; m < count; ++m) H[m] = sources.exteriorContinuation(x[m], time);
     sources.accumulateField(x, count, time, H);
   };
 }
-}  // namespace
 
 void MagneticStageSettings::validate() const {
   solve.validate();
@@ -114,8 +109,22 @@ MagneticStageReport MagneticForceStage::runOnDensity(GridView<const double> dens
   return rep;
 }
 
+MagneticStageReport MagneticForceStage::runOnPotential(GridView<const double> density, GridView<const double> phi,
+                                                       const FieldSolveReport& solve, const FieldSource& sources,
+                                                       double time) {
+  const auto t0 = Clock::now();
+  require(density.spec == grid_, "magnetic stage: the density grid does not match the stage grid");
+  require(phi.spec == grid_, "magnetic stage: the potential grid does not match the stage grid");
+  std::copy(density.data, density.data + grid_.nodeCount(), n_.data());
+  lastParticles_.reset();
+  MagneticStageReport rep = solveAndForce(sources, time, MagneticStageReport{}, &phi, &solve);
+  rep.secondsTotal = secondsSince(t0);
+  return rep;
+}
+
 MagneticStageReport MagneticForceStage::solveAndForce(const FieldSource& sources, double time,
-                                                      MagneticStageReport rep) {
+                                                      MagneticStageReport rep, const GridView<const double>* givenPhi,
+                                                      const FieldSolveReport* givenSolve) {
   require(std::isfinite(time), "magnetic stage: time must be finite, got ", time, " s");
   const AppliedFieldFunction applied = appliedFieldOf(sources, time);
 
@@ -153,7 +162,10 @@ MagneticStageReport MagneticForceStage::solveAndForce(const FieldSource& sources
   // Field solve.
   t = Clock::now();
   if (!settings_.warmStart || settings_.appliedFieldOnly) resetWarmStart();
-  if (settings_.appliedFieldOnly) {
+  if (givenPhi) {
+    std::copy(givenPhi->data, givenPhi->data + count, phi_.begin());
+    rep.solve = *givenSolve;
+  } else if (settings_.appliedFieldOnly) {
     rep.solve = FieldSolveReport{};
     rep.solve.status = SolveStatus::Trivial;
     rep.solve.materialCells = problem.materialCellCount();

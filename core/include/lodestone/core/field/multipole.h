@@ -6,6 +6,7 @@
 // so that H = -grad phi is the field of M seen from far away.
 #include <cmath>
 #include <cstddef>
+#include <vector>
 
 #include "lodestone/core/base/constants.h"
 #include "lodestone/core/base/vec3.h"
@@ -48,6 +49,18 @@ struct Multipole {
 struct MultipoleArrays {
   const double *cx, *cy, *cz, *mx, *my, *mz, *nxx, *nyy, *nzz, *nxy, *nxz, *nyz, *tr;
   std::size_t count;
+};
+
+/// Expansions packed as MultipoleArrays (the storage they point into),
+/// padded to a multiple of 4 with empty blocks.
+class PackedMultipoles {
+ public:
+  explicit PackedMultipoles(const std::vector<Multipole>& blocks);
+  const MultipoleArrays& arrays() const { return arrays_; }
+
+ private:
+  std::vector<double> soa_;
+  MultipoleArrays arrays_{};
 };
 
 /// 4 pi times the summed potential of all blocks at x (a point at a block's

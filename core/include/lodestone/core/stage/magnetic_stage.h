@@ -62,6 +62,14 @@ struct MagneticStageReport {
   std::string summary() const;
 };
 
+/// The applied field as material sees it (A/m): inside a magnet's body, the
+/// field outside continued through its nearest face
+/// (FieldSource::exteriorContinuation), so that nodes and Gauss points that
+/// the transfer's spread puts inside a magnet do not see its demagnetizing
+/// field (and the force does not jump when a node crosses a face). `sources`
+/// must outlive the function.
+AppliedFieldFunction appliedFieldOf(const FieldSource& sources, double time);
+
 class MagneticForceStage {
  public:
   /// Throws InvalidArgument on a bad grid or settings.
@@ -72,6 +80,11 @@ class MagneticForceStage {
   MagneticStageReport run(const ParticleView& particles, const FieldSource& sources, double time);
   /// Solve + force for a density grid n (1/m^3) the host transferred itself.
   MagneticStageReport runOnDensity(GridView<const double> density, const FieldSource& sources, double time);
+  /// Fields and force of density n (1/m^3) with potential phi (A) from a
+  /// field solve done elsewhere (dist/'s solve across MPI ranks): no solve
+  /// here, `solve` is reported as given; phi becomes the next warm start.
+  MagneticStageReport runOnPotential(GridView<const double> density, GridView<const double> phi,
+                                     const FieldSolveReport& solve, const FieldSource& sources, double time);
 
   /// Force on each material point (N), conservative: the nodal forces are
   /// first moved onto the support of n (gatherToSupport), then shared among
@@ -124,7 +137,11 @@ class MagneticForceStage {
                           double time) const;
 
  private:
-  MagneticStageReport solveAndForce(const FieldSource& sources, double time, MagneticStageReport rep);
+  /// The stage after the density is in n_; with givenPhi, its potential
+  /// (and givenSolve's report) instead of a solve.
+  MagneticStageReport solveAndForce(const FieldSource& sources, double time, MagneticStageReport rep,
+                                    const GridView<const double>* givenPhi = nullptr,
+                                    const FieldSolveReport* givenSolve = nullptr);
 
   GridSpec grid_;
   MagneticMaterial material_;

@@ -1,0 +1,17 @@
+#include "lodestone/dist/petsc_session.h"
+
+#include <petscsys.h>
+
+#include "lodestone/core/base/error.h"
+
+namespace lodestone {
+inline namespace dist {
+
+PetscSession::PetscSession(int* argc, char*** argv) {
+  if (PetscInitialize(argc, argv, nullptr, nullptr) != 0) throw Error("PETSc could not be initialized");
+}
+
+PetscSession::~PetscSession() { PetscFinalize(); }
+
+}  // namespace dist
+}  // namespace lodestone
