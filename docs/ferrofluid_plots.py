@@ -12,27 +12,27 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 
 here = os.path.dirname(os.path.abspath(__file__))
-runs = defaultdict(lambda: {"t": [], "range": [], "peaks": []})
+runs = defaultdict(lambda: {"t": [], "rms": [], "peaks": []})
 with open(os.path.join(here, "data", "rosensweig.csv")) as f:
     for row in csv.DictReader(f):
         r = runs[float(row["ratio"])]
         r["t"].append(float(row["time_s"]))
-        r["range"].append(float(row["range_cells"]))
+        r["rms"].append(float(row["rms_cells"]))
         r["peaks"].append(int(row["peaks"]))
 
 fig, (a, b) = plt.subplots(1, 2, figsize=(10, 4), dpi=110)
 for ratio in sorted(runs):
     r = runs[ratio]
-    a.plot(r["t"], r["range"], "-", label=f"H0 = {ratio:g} H0_c")
+    a.plot(r["t"], r["rms"], "-", label=f"H0 = {ratio:g} H0_c")
     b.plot(r["t"], r["peaks"], "-", label=f"{ratio:g} H0_c")
 a.axhline(0.5, color="k", lw=0.8, ls="--")
 a.set_xlabel("time (s)")
-a.set_ylabel("surface peak-to-trough height (cells)")
+a.set_ylabel("surface rms height (cells)")
 a.set_title("Ferrofluid layer: surface height")
 a.legend(fontsize=8)
 a.grid(True, alpha=0.3)
 b.set_xlabel("time (s)")
-b.set_ylabel("spikes (prominence >= 0.5 cells)")
+b.set_ylabel("spikes (prominence >= max(0.5 cells, 1.5 rms))")
 b.set_title("Spikes found")
 b.grid(True, alpha=0.3)
 fig.tight_layout()
