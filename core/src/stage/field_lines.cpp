@@ -414,6 +414,23 @@ std::vector<Vec3d> pointCloudBoundarySeeds(const Vec3d* points, std::size_t n, d
   return farthestPointSubset(candidates, count);
 }
 
+std::vector<Vec3d> sceneFieldLineSeeds(const std::vector<const MagnetSource*>& magnets, const Vec3d* material,
+                                       std::size_t materialCount, double cell, std::size_t perMagnet,
+                                       std::size_t materialSeeds) {
+  require(std::isfinite(cell) && cell > 0, "field-line seeds: cell must be a positive length in m, got ", cell);
+  std::vector<Vec3d> seeds;
+  for (const MagnetSource* m : magnets) {
+    require(m != nullptr, "field-line seeds: null magnet");
+    const std::vector<Vec3d> s = magnetSurfaceSeeds(*m, perMagnet, 0.25 * cell);
+    seeds.insert(seeds.end(), s.begin(), s.end());
+  }
+  if (materialCount > 0 && materialSeeds > 0) {
+    const std::vector<Vec3d> s = pointCloudBoundarySeeds(material, materialCount, cell, materialSeeds);
+    seeds.insert(seeds.end(), s.begin(), s.end());
+  }
+  return seeds;
+}
+
 double segmentDistance(const Vec3d& p1, const Vec3d& q1, const Vec3d& p2, const Vec3d& q2) {
   // Closest points of two segments (Ericson, Real-Time Collision Detection, 5.1.9).
   const Vec3d d1 = q1 - p1, d2 = q2 - p2, r = p1 - p2;

@@ -92,6 +92,13 @@ std::vector<Vec3d> magnetSurfaceSeeds(const MagnetSource& magnet, std::size_t co
 /// farthest-point subset.
 std::vector<Vec3d> pointCloudBoundarySeeds(const Vec3d* points, std::size_t n, double cell, std::size_t count);
 
+/// The seeds of a scene's field lines: `perMagnet` on each magnet's surface
+/// (magnetSurfaceSeeds, `cell` / 4 outside it) then `material` on the
+/// boundary of the material points (pointCloudBoundarySeeds with `cell`, m).
+std::vector<Vec3d> sceneFieldLineSeeds(const std::vector<const MagnetSource*>& magnets, const Vec3d* material,
+                                       std::size_t materialCount, double cell, std::size_t perMagnet,
+                                       std::size_t materialSeeds);
+
 /// Shortest distance (m) between segments [a0, a1] and [b0, b1].
 double segmentDistance(const Vec3d& a0, const Vec3d& a1, const Vec3d& b0, const Vec3d& b1);
 
