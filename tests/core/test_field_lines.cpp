@@ -15,6 +15,9 @@
 #include "lodestone/core/sources/sphere_magnet.h"
 #include "lodestone/core/stage/field_lines.h"
 #include "lodestone/core/stage/induction_field.h"
+#include "lodestone/core/stage/magnetic_stage.h"
+#include "lodestone/core/sources/uniform_field.h"
+#include "lodestone/core/field/material.h"
 
 using namespace lodestone;
 
@@ -186,6 +189,23 @@ TEST(FieldLines, InductionFieldAddsTheInterpolatedMaterialPart) {
   EXPECT_EQ(B(far), kMu0 * magnet.field(far, 0));
   const Vec3d centre{0, 0, 0};
   EXPECT_NEAR(B.sourcesPart(centre).z, kMu0 * (2.0 / 3.0) * 8e5, 1e-9);
+}
+
+TEST(FieldLines, StageFieldTakesTheSourcesAtTheSolveTime) {
+  // A field ramped from 0 (t = 0) to 1e4 A/m (t = 1 s); the stage solved at
+  // t = 0 with no material: at t = 1 s the induction is the sources' alone.
+  GridSpec g;
+  g.origin = {-0.05, -0.05, -0.05};
+  g.dx = 0.01;
+  g.dims = {11, 11, 11};
+  MagneticForceStage stage(g, paperMaterial());
+  const UniformField ramped({0, 0, 1e4}, TimeProfile::ramp(0.0, 1.0));
+  DenseGrid<double> empty(g, 0.0);
+  stage.runOnDensity(empty.view(), ramped, 0.0);
+  EXPECT_EQ(stage.time(), 0.0);
+  const InductionField B = InductionField::ofStage(stage, ramped, 1.0);
+  EXPECT_NEAR(B({0.012, -0.003, 0.02}).z, kMu0 * 1e4, 1e-12);
+  EXPECT_NEAR(norm(B.materialPart({0.012, -0.003, 0.02})), 0.0, 1e-12);
 }
 
 TEST(FieldLines, SeedsLieOnTheSurfaceAndSpreadEvenly) {

@@ -26,13 +26,14 @@ InductionField InductionField::ofStage(const MagneticForceStage& stage, const Fi
   require(B.data != nullptr && B.spec.nodeCount() > 0, "induction field: the magnetic stage has not run yet");
   DenseGrid<Vec3d> part(B.spec);
   const GridSpec& g = B.spec;
+  const double solved = stage.time();
   parallelForEach(
       g.nodeCount(),
       [&](std::size_t m) {
         const int i = int(m % std::size_t(g.dims.i)), j = int((m / std::size_t(g.dims.i)) % std::size_t(g.dims.j)),
                   k = int(m / (std::size_t(g.dims.i) * std::size_t(g.dims.j)));
         const Vec3d x = g.nodePosition(i, j, k);
-        part[m] = B[m] - kMu0 * (sources.field(x, time) + sources.magnetization(x, time));
+        part[m] = B[m] - kMu0 * (sources.field(x, solved) + sources.magnetization(x, solved));
       },
       1024);
   return InductionField(sources, time, std::move(part));

@@ -117,6 +117,7 @@ MagneticStageReport MagneticForceStage::runOnDensity(GridView<const double> dens
 MagneticStageReport MagneticForceStage::solveAndForce(const FieldSource& sources, double time,
                                                       MagneticStageReport rep) {
   require(std::isfinite(time), "magnetic stage: time must be finite, got ", time, " s");
+  time_ = time;
   const AppliedFieldFunction applied = appliedFieldOf(sources, time);
 
   // Applied field at the nodes (kept when the sources are unchanged: a

@@ -26,8 +26,13 @@ class InductionField {
   InductionField(const FieldSource& sources, double time);
   /// The sources plus the material's part (T, one value per node).
   InductionField(const FieldSource& sources, double time, DenseGrid<Vec3d> materialPart);
-  /// The field of the stage's last run: its nodal B less the sources' B at
-  /// the nodes. `sources` and `time` must be those of that run.
+  /// The sources at `time` (s) plus the material's part of the stage's last
+  /// run: its nodal B less the sources' B at the nodes at the time of that
+  /// run (stage.time()). `sources` must be those of that run (a host that
+  /// solves once per frame or substep interval gets the applied field of
+  /// `time` and the material's response of its last solve; magnets that
+  /// moved since then are subtracted at their current pose, which the
+  /// solver keeps within its re-solve distance).
   static InductionField ofStage(const MagneticForceStage& stage, const FieldSource& sources, double time);
 
   InductionField(const InductionField& other);
