@@ -18,11 +18,11 @@
 
 #include "field_line_output.h"
 #include "lodestone/cli/command_line.h"
-#include "lodestone/core/base/constants.h"
 #include "lodestone/core/base/error.h"
 #include "lodestone/core/base/stopwatch.h"
 #include "lodestone/plugin/output/mesh_render.h"
 #include "lodestone/plugin/scene.h"
+#include "lodestone_test/sphere_mesh.h"
 #include "preview.h"
 
 using namespace lodestone;
@@ -37,22 +37,8 @@ TriangleMesh sphereAround(const std::vector<Vec3d>& points, std::size_t triangle
     for (int a = 0; a < 3; ++a) lo[a] = std::min(lo[a], p[a]), hi[a] = std::max(hi[a], p[a]);
   const Vec3d c = 0.5 * (lo + hi);
   const double r = 0.5 * norm(hi - lo) / std::sqrt(3.0);
-  const int rings = std::max(4, int(std::sqrt(double(triangles) / 4))), segments = 2 * rings;
-  TriangleMesh m;
-  for (int i = 0; i <= rings; ++i)
-    for (int j = 0; j < segments; ++j) {
-      const double th = kPi * i / rings, ph = 2 * kPi * j / segments;
-      const Vec3d n{std::sin(th) * std::cos(ph), std::sin(th) * std::sin(ph), std::cos(th)};
-      m.vertices.push_back(c + r * n);
-      m.normals.push_back(n);
-    }
-  for (int i = 0; i < rings; ++i)
-    for (int j = 0; j < segments; ++j) {
-      const auto at = [&](int a, int b) { return std::uint32_t(a * segments + (b % segments)); };
-      m.triangles.push_back({at(i, j), at(i + 1, j), at(i + 1, j + 1)});
-      m.triangles.push_back({at(i, j), at(i + 1, j + 1), at(i, j + 1)});
-    }
-  return m;
+  const int rings = std::max(4, int(std::sqrt(double(triangles) / 4)));
+  return test::latLongSphere(c, r, rings, 2 * rings);
 }
 
 }  // namespace

@@ -12,29 +12,15 @@
 #include "lodestone/core/base/error.h"
 #include "lodestone/plugin/output/contact_sheet.h"
 #include "lodestone/plugin/output/mesh_render.h"
+#include "lodestone_test/sphere_mesh.h"
 
 using namespace lodestone;
 using namespace lodestone::output;
 
 namespace {
 
-/// A latitude-longitude sphere of radius r about c with outward normals.
 TriangleMesh sphereMesh(const Vec3d& c, double r, int rings = 96, int segments = 192) {
-  TriangleMesh m;
-  for (int i = 0; i <= rings; ++i)
-    for (int j = 0; j < segments; ++j) {
-      const double th = kPi * i / rings, ph = 2 * kPi * j / segments;
-      const Vec3d n{std::sin(th) * std::cos(ph), std::sin(th) * std::sin(ph), std::cos(th)};
-      m.vertices.push_back(c + r * n);
-      m.normals.push_back(n);
-    }
-  const auto at = [&](int i, int j) { return std::uint32_t(i * segments + (j % segments)); };
-  for (int i = 0; i < rings; ++i)
-    for (int j = 0; j < segments; ++j) {
-      m.triangles.push_back({at(i, j), at(i + 1, j), at(i + 1, j + 1)});
-      m.triangles.push_back({at(i, j), at(i + 1, j + 1), at(i, j + 1)});
-    }
-  return m;
+  return test::latLongSphere(c, r, rings, segments);
 }
 
 MeshRenderSettings flatSettings() {

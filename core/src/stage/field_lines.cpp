@@ -68,6 +68,28 @@ Vec3d rkStep(const InductionSampler& B, const Vec3d& x, const Vec3d& k0, double 
   return y;
 }
 
+/// The step length in [0, h] at which the end point of rkStep from x
+/// leaves `before` (true at 0, false at h), bisected 40 times: `lo` (last
+/// end point `before`) and `hi`; returns the end point at `lo` (x when none).
+template <typename Before>
+Vec3d bisectStep(const InductionSampler& B, const Vec3d& x, const Vec3d& k0, double h, double sign,
+                 const Before& before, double& lo, double& hi) {
+  lo = 0, hi = h;
+  Vec3d at = x;
+  for (int it = 0; it < 40; ++it) {
+    const double hm = 0.5 * (lo + hi);
+    const Vec3d y = rkStep(B, x, k0, hm, sign);
+    if (!isFinite(y)) break;
+    if (before(y)) {
+      lo = hm;
+      at = y;
+    } else {
+      hi = hm;
+    }
+  }
+  return at;
+}
+
 /// Traces from the seed along sign * B. `closable`: watch for the line
 /// returning to the seed (the forward half only).
 HalfLine traceHalf(const InductionSampler& B, const Vec3d& seed, double sign, bool closable,
@@ -139,18 +161,7 @@ HalfLine traceHalf(const InductionSampler& B, const Vec3d& seed, double sign, bo
       // The last vertex on the box and on the curve: bisect the step length
       // for the Runge-Kutta end point on the box.
       double lo = 0, hi = h;
-      Vec3d xe = x;
-      for (int it = 0; it < 40; ++it) {
-        const double hm = 0.5 * (lo + hi);
-        const Vec3d y = rkStep(B, x, k[0], hm, sign);
-        if (!isFinite(y)) break;
-        if (inside(s, y)) {
-          lo = hm;
-          xe = y;
-        } else {
-          hi = hm;
-        }
-      }
+      Vec3d xe = bisectStep(B, x, k[0], h, sign, [&](const Vec3d& y) { return inside(s, y); }, lo, hi);
       // Onto the face it reached (moves it by at most h 2^-40).
       const Vec3d beyond = rkStep(B, x, k[0], hi, sign);
       if (isFinite(beyond))
@@ -170,14 +181,8 @@ HalfLine traceHalf(const InductionSampler& B, const Vec3d& seed, double sign, bo
           // The crossing on the curve: bisect the step length for the
           // Runge-Kutta end point on the seed's plane.
           double lo = 0, hi = h;
-          Vec3d c = guess;
-          for (int it = 0; it < 40; ++it) {
-            const double hm = 0.5 * (lo + hi);
-            const Vec3d y = rkStep(B, x, k[0], hm, sign);
-            if (!isFinite(y)) break;
-            c = y;
-            (dot(y - seed, t0) < 0 ? lo : hi) = hm;
-          }
+          const Vec3d c = bisectStep(
+              B, x, k[0], h, sign, [&](const Vec3d& y) { return dot(y - seed, t0) < 0; }, lo, hi);
           // The loop misses the seed by the error accumulated along it:
           // spread that miss over the line in proportion to arc length (a
           // turn of |miss| / length), so that it ends on its seed.

@@ -47,6 +47,14 @@ float bitsFloat(std::uint32_t u) {
   return f;
 }
 
+// The nearest fragment wins a pixel: atomic minimum of (depth bits << 32 | index).
+void depositKey(std::atomic<std::uint64_t>& slot, float depth, std::size_t index) {
+  const std::uint64_t key = (std::uint64_t(floatBits(depth)) << 32) | std::uint64_t(index);
+  std::uint64_t current = slot.load(std::memory_order_relaxed);
+  while (key < current && !slot.compare_exchange_weak(current, key, std::memory_order_relaxed)) {
+  }
+}
+
 bool finitePose(const Pose& p) {
   if (!isFinite(p.position)) return false;
   for (int i = 0; i < 3; ++i)
@@ -573,7 +581,8 @@ RgbImage renderScene(const Camera& camera, const SceneContent& content, const Re
   for (std::size_t i = 0; i < pixels; ++i) visibility[i].store(kEmpty, std::memory_order_relaxed);
 
   auto radiusOf = [&](std::size_t n) { return particles.radii ? particles.radii[n] : particles.radius; };
-  using Counts = std::pair<std::size_t, std::size_t>;  // particles drawn, fragments
+  using Counts = std::pair<std::size_t, std::size_t>;  // particles (triangles) drawn, fragments
+  const auto joinCounts = [](Counts a, const Counts& b) { return Counts{a.first + b.first, a.second + b.second}; };
   const Counts counts = tbb::parallel_reduce(
       tbb::blocked_range<std::size_t>(0, count, 2048), Counts{0, 0},
       [&](const tbb::blocked_range<std::size_t>& range, Counts acc) {
@@ -601,10 +610,7 @@ RgbImage renderScene(const Camera& camera, const SceneContent& content, const Re
               if (!inside && !(i == ci && j == cj)) continue;
               const double q = inside ? d2 / r2 : 1.0;
               const float depth = float(s.depth - s.radius * std::sqrt(1.0 - q));
-              const std::uint64_t key = (std::uint64_t(floatBits(depth)) << 32) | std::uint64_t(n);
-              std::uint64_t current = row[i].load(std::memory_order_relaxed);
-              while (key < current && !row[i].compare_exchange_weak(current, key, std::memory_order_relaxed)) {
-              }
+              depositKey(row[i], depth, n);
               ++acc.second;
               drawn = true;
             }
@@ -613,9 +619,7 @@ RgbImage renderScene(const Camera& camera, const SceneContent& content, const Re
         }
         return acc;
       },
-      [](Counts a, const Counts& b) {
-        return Counts{a.first + b.first, a.second + b.second};
-      });
+      joinCounts);
   local.particlesDrawn = counts.first;
   local.fragments = counts.second;
   // Triangles: the pixels of each one's projected bounding box whose ray hits it.
@@ -647,11 +651,7 @@ RgbImage renderScene(const Camera& camera, const SceneContent& content, const Re
               double t = 0, u = 0, v = 0;
               if (!rayTriangle(camera.position, d, p[0], p[1], p[2], t, u, v)) continue;
               const float depth = float(t * dot(d, cam.forward()));
-              const std::uint64_t key = (std::uint64_t(floatBits(depth)) << 32) | std::uint64_t(n);
-              std::atomic<std::uint64_t>& slot = visibility[std::size_t(j) * std::size_t(W) + std::size_t(i)];
-              std::uint64_t current = slot.load(std::memory_order_relaxed);
-              while (key < current && !slot.compare_exchange_weak(current, key, std::memory_order_relaxed)) {
-              }
+              depositKey(visibility[std::size_t(j) * std::size_t(W) + std::size_t(i)], depth, n);
               ++acc.second;
               drawn = true;
             }
@@ -659,9 +659,7 @@ RgbImage renderScene(const Camera& camera, const SceneContent& content, const Re
         }
         return acc;
       },
-      [](Counts a, const Counts& b) {
-        return Counts{a.first + b.first, a.second + b.second};
-      });
+      joinCounts);
   local.trianglesDrawn = triCounts.first;
   local.fragments += triCounts.second;
   local.rasterSeconds = seconds(clock);
