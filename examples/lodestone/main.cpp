@@ -31,6 +31,7 @@
 #endif
 #include "lodestone/plugin/output/ply_writer.h"
 #include "lodestone/plugin/output/png_writer.h"
+#include "field_line_output.h"
 #include "preview.h"
 #include "lodestone/plugin/output/progress.h"
 #include "farm_commands.h"
@@ -56,6 +57,7 @@ struct Args {
   std::string density, densityGrid = "n";  // export-fields: n (1/m^3) from a .vdb instead of the particles
   std::string particles;     // export-fields: the particles of a cache file instead of a simulated state
   bool png = true, ply = true;
+  bool fieldLines = false;  // run: field_lines_NNNN.ply/.obj, drawn in the previews
   int checkpointEvery = -1;  // -1: the scene's output.checkpoint_every
   bool resume = false, checkFinite = false;
   bool clean = false;         // run: delete another run's output in --out first
@@ -127,6 +129,9 @@ std::optional<int> parseArgs(int argc, char** argv, Args& a) {
       ->default_str(cli::formatNumber(a.threads));
   run.add_flag_callback("--no-png", [&] { a.png = false; }, "skip previews");
   run.add_flag_callback("--no-ply", [&] { a.ply = false; }, "skip particle files");
+  run.add_flag("--field-lines", a.fieldLines,
+               "write field_lines_NNNN.ply and .obj (lines of B from seeds on the magnets and the magnetic "
+               "material) and draw them in the previews");
   cli::addNumber(run, "--checkpoint-every", a.checkpointEvery,
                  "write DIR/checkpoint_NNNN.lsck every N frames (overrides the scene's output.checkpoint_every; "
                  "0 = none)")
@@ -157,6 +162,8 @@ std::optional<int> parseArgs(int argc, char** argv, Args& a) {
       "Writes, in DIR:\n"
       "  frame_NNNN.ply      particles (x y z in m, vx vy vz in m/s, n_p, material, J)\n"
       "  frame_NNNN.png      a preview render (magnetic materials dark, magnets red)\n"
+      "  contact_sheet.png   thumbnails of the previews this run rendered (up to 48)\n"
+      "  field_lines_NNNN.ply/.obj  lines of B (with --field-lines): PLY edges with |B| in T, OBJ l lines\n"
       "  fields_NNNN.vdb     the grids listed in the scene's output.vdb (n, phi, H, M, B, force)\n"
       "  particles_NNNN.vdb  the particles as OpenVDB points (when output.vdb_points is true)\n"
       "  stats.json          per-frame time split by stage, field-solve reports, particle\n"
@@ -483,7 +490,8 @@ std::unique_ptr<MagneticForceStage> solveFieldsNow(const Scene& scene, const Mpm
   return stage;
 }
 
-void writeFrameFiles(const Args& a, const Scene& scene, const MpmSolver& solver, int frame) {
+void writeFrameFiles(const Args& a, const Scene& scene, const MpmSolver& solver, int frame,
+                     ContactSheetCollector& sheet) {
   const std::string number = frameNumber(frame);
   std::string name;
   const MpmParticles& p = solver.particles();
@@ -515,10 +523,16 @@ void writeFrameFiles(const Args& a, const Scene& scene, const MpmSolver& solver,
     name = "particles_" + number + ".vdb";
     writeParticles((std::filesystem::path(a.out) / name).string(), solver, frame);
   }
+  std::vector<FieldLine> lines;
+  if (a.fieldLines) {
+    lines = solverFieldLines(scene, solver);
+    writeFieldLineFiles(a.out, number, lines, scene, frame, solver.time());
+  }
   if (a.png && scene.output.png) {
     name = "frame_" + number + ".png";
-    const RgbImage img = renderPreview(scene, solver);
+    const RgbImage img = renderPreview(scene, solver, lines);
     writePng((std::filesystem::path(a.out) / name).string(), img.width, img.height, img.rgb.data());
+    sheet.add(frame, img);
   }
 }
 
@@ -672,10 +686,11 @@ int run(const Args& a) {
   ProgressOptions progressOptions{isTerminal(stdout)};
   progressOptions.firstFrame = initialFrame;
   ProgressPrinter progress(std::cout, last - initialFrame, progressOptions);
+  ContactSheetCollector sheet(first == scene.startFrame ? initialFrame : first, last);
   int frame = startFrame;
   try {
     if (first == scene.startFrame && startFrame == initialFrame)
-      writeFrameFiles(a, scene, *solver, initialFrame);  // the initial state
+      writeFrameFiles(a, scene, *solver, initialFrame, sheet);  // the initial state
     for (frame = startFrame + 1; frame <= last; ++frame) {
       const MpmFrameReport r = solver->advanceFrame(scene.frameDuration(), keepGoing);
       if (r.cancelled) {
@@ -683,7 +698,7 @@ int run(const Args& a) {
         return stopMessage(frame, solver->time(), true);
       }
       const auto tio = std::chrono::steady_clock::now();
-      if (frame >= first) writeFrameFiles(a, scene, *solver, frame);
+      if (frame >= first) writeFrameFiles(a, scene, *solver, frame, sheet);
       const double io = std::chrono::duration<double>(std::chrono::steady_clock::now() - tio).count();
       stats["frames"].push_back(frameJson(frame, r, solver->particles().size(), io));
       lost += std::int64_t(r.nonFinite);
@@ -745,6 +760,7 @@ int run(const Args& a) {
     throw;
   }
   progress.finish();
+  sheet.write((std::filesystem::path(a.out) / "contact_sheet.png").string());
   directory.record(command, first, last, "complete", last);
   if (lost > 0)
     std::printf("%lld of the %zu particles (%.3g%%) were lost as non-finite (within --max-lost %g)\n",

@@ -7,6 +7,9 @@
 #include "lodestone/core/sources/cuboid_magnet.h"
 #include "lodestone/core/sources/cylinder_magnet.h"
 #include "lodestone/core/sources/sphere_magnet.h"
+#include "lodestone/plugin/output/contact_sheet.h"
+#include "lodestone/plugin/output/mesh_render.h"
+#include "lodestone/plugin/output/png_writer.h"
 #include "lodestone/plugin/output/particle_render.h"
 
 namespace lodestone::examples {
@@ -41,26 +44,10 @@ void levelSetSurfacePoints(const MpmCollider& c, const Pose& pose, double spacin
         out.push_back(pose.toWorld(xb - phi * sdf.normal(xb)));
       }
 }
-}  // namespace
-
-RgbImage renderPreview(const plugin::Scene& scene, const MpmSolver& solver) {
-  const MpmParticles& p = solver.particles();
+/// The magnets (solid), colliders and the domain (wireframes).
+std::vector<Primitive> scenePrimitives(const plugin::Scene& scene, const MpmSolver& solver) {
   const GridSpec& g = scene.settings.grid;
-  std::vector<Rgb> colours(p.size());
-  for (std::size_t i = 0; i < p.size(); ++i) {
-    const std::uint32_t m = p.material[i];
-    colours[i] = solver.materials()[m].isMagnetic() ? kMagneticColours[m % 3] : kPlainColours[m % 4];
-  }
   std::vector<Primitive> shapes;
-  // Level-set and mesh colliders are drawn as points on their surface.
-  std::vector<Vec3d> points(p.x);
-  const Rgb surface{200, 200, 196};
-  for (std::size_t i = 0; i < solver.colliderCount(); ++i) {
-    const MpmCollider& c = solver.collider(i);
-    if (c.shape().kind == ColliderShapeKind::LevelSet)
-      levelSetSurfacePoints(c, c.motion().poseAt(solver.time()), 0.5 * g.dx, points);
-  }
-  colours.resize(points.size(), surface);
   for (std::size_t i = 0; i < solver.magnetCount(); ++i) shapes.push_back(magnetPrimitive(solver.magnet(i)));
   for (std::size_t i = 0; i < solver.colliderCount(); ++i) {
     const MpmCollider& c = solver.collider(i);
@@ -74,15 +61,16 @@ RgbImage renderPreview(const plugin::Scene& scene, const MpmSolver& solver) {
     else if (s.kind == ColliderShapeKind::Cylinder)
       shapes.push_back(Primitive::cylinder(pose, s.radius, s.halfLength, grey, Primitive::Style::Wireframe));
   }
-  // The domain as a wireframe box.
   const Vec3d lo = g.origin, hi = g.maxCorner();
   shapes.push_back(Primitive::box(Pose::at(0.5 * (lo + hi)), 0.5 * (hi - lo), Rgb{160, 165, 175},
                                   Primitive::Style::Wireframe));
+  return shapes;
+}
+
+/// The scene's camera, or one framing `box` when it asks for an automatic one.
+Camera previewCamera(const plugin::Scene& scene, const Bounds3& box) {
   Camera cam;
   if (scene.output.autoCamera) {
-    Bounds3 box;
-    box.add(lo);
-    box.add(hi);
     cam = frameCamera(box, {0.55, 1.0, -0.45}, {0, 0, 1}, scene.output.fovDegrees, scene.output.width,
                       scene.output.height, 1.02);
   } else {
@@ -92,16 +80,78 @@ RgbImage renderPreview(const plugin::Scene& scene, const MpmSolver& solver) {
     cam.width = scene.output.width;
     cam.height = scene.output.height;
   }
-  output::ParticleView view;
-  view.positions = points.data();
-  view.count = points.size();
-  view.colours = colours.data();
-  // Sphere impostors about the particle spacing (dx / ppc^(1/3) for 8 ppc).
-  view.radius = 0.5 * g.dx * 0.62;
+  return cam;
+}
+
+RenderSettings previewSettings(const GridSpec& g) {
   RenderSettings rs;
-  rs.groundHeight = lo.z;
+  rs.groundHeight = g.origin.z;
   rs.gridSpacing = 8 * g.dx;
-  return renderScene(cam, view, shapes, rs);
+  return rs;
+}
+}  // namespace
+
+RgbImage renderPreview(const plugin::Scene& scene, const MpmSolver& solver, const std::vector<FieldLine>& fieldLines) {
+  const MpmParticles& p = solver.particles();
+  const GridSpec& g = scene.settings.grid;
+  std::vector<Rgb> colours(p.size());
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    const std::uint32_t m = p.material[i];
+    colours[i] = solver.materials()[m].isMagnetic() ? kMagneticColours[m % 3] : kPlainColours[m % 4];
+  }
+  // Level-set and mesh colliders are drawn as points on their surface.
+  std::vector<Vec3d> points(p.x);
+  const Rgb surface{200, 200, 196};
+  for (std::size_t i = 0; i < solver.colliderCount(); ++i) {
+    const MpmCollider& c = solver.collider(i);
+    if (c.shape().kind == ColliderShapeKind::LevelSet)
+      levelSetSurfacePoints(c, c.motion().poseAt(solver.time()), 0.5 * g.dx, points);
+  }
+  colours.resize(points.size(), surface);
+  Bounds3 box;
+  box.add(g.origin);
+  box.add(g.maxCorner());
+  SceneContent content;
+  content.primitives = scenePrimitives(scene, solver);
+  content.polylines = fieldLinePolylines(fieldLines);
+  content.particles.positions = points.data();
+  content.particles.count = points.size();
+  content.particles.colours = colours.data();
+  // Sphere impostors about the particle spacing (dx / ppc^(1/3) for 8 ppc).
+  content.particles.radius = 0.5 * g.dx * 0.62;
+  return renderScene(previewCamera(scene, box), content, previewSettings(g));
+}
+
+RgbImage renderMeshPreview(const plugin::Scene& scene, const MpmSolver& solver, const TriangleMesh& surface,
+                           const std::vector<FieldLine>& fieldLines) {
+  const GridSpec& g = scene.settings.grid;
+  Bounds3 box = boundsOf(surface);
+  if (box.empty()) {  // no material: the domain
+    box.add(g.origin);
+    box.add(g.maxCorner());
+  }
+  MeshRenderSettings s;
+  s.render = previewSettings(g);
+  s.meshColour = kMagneticColours[0];
+  return renderMesh(previewCamera(scene, box), surface, scenePrimitives(scene, solver), fieldLines, s);
+}
+
+namespace {
+constexpr int kSheetThumbnails = 48, kSheetColumns = 8, kThumbnailWidth = 160;
+}
+
+ContactSheetCollector::ContactSheetCollector(int first, int last)
+    : first_(first), stride_(contactSheetStride(std::max(1, last - first + 1), kSheetThumbnails)) {}
+
+void ContactSheetCollector::add(int frame, const RgbImage& preview) {
+  if ((frame - first_) % stride_ != 0 || frame < first_) return;
+  thumbnails_.push_back(thumbnail(preview, std::min(kThumbnailWidth, preview.width)));
+}
+
+void ContactSheetCollector::write(const std::string& path) const {
+  if (thumbnails_.empty()) return;
+  const RgbImage sheet = contactSheet(thumbnails_, kSheetColumns);
+  writePng(path, sheet.width, sheet.height, sheet.rgb.data());
 }
 
 }  // namespace lodestone::examples

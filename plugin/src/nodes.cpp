@@ -13,9 +13,12 @@
 #include "lodestone/core/sources/point_dipole.h"
 #include "lodestone/core/sources/sphere_magnet.h"
 #include "lodestone/core/sources/uniform_field.h"
+#include "lodestone/core/stage/field_lines.h"
+#include "lodestone/core/stage/induction_field.h"
 #include "lodestone/plugin/errors.h"
 #include "lodestone/plugin/node_builders.h"
 #include "lodestone/plugin/node_registry.h"
+#include "lodestone/plugin/output/field_line_files.h"
 
 namespace lodestone::plugin {
 
@@ -748,12 +751,70 @@ NodeDecl vdbExportNode() {
   return d;
 }
 
+// ---- field lines -----------------------------------------------------------------------
+NodeDecl fieldLinesNode() {
+  NodeDecl d;
+  d.type = "field_lines";
+  d.label = "Field Lines";
+  d.category = "io";
+  d.help =
+      "Traces lines of the magnetic induction B of a solve (its nodal B inside the grid plus the sources' closed "
+      "form) from seeds spread on the magnets and on the material's boundary, and writes them as a .ply (vertices "
+      "with |B| in T, edges) or .obj (l polylines) file (docs/vdb.md). Lines close, leave the grid's box or stop at "
+      "10 box diagonals.";
+  auto& q = d.params;
+  q.push_back(required(stringParam("path", "Path", "field_lines.ply", "File to write (.ply or .obj, atomically).")));
+  q.push_back(intParam("seeds_per_magnet", "Seeds per magnet", 24, 0, 100000, "Seeds spread on each magnet's surface."));
+  q.push_back(intParam("material_seeds", "Material seeds", 48, 0, 100000,
+                       "Seeds spread on the boundary of the material (nodes with density > 0)."));
+  q.push_back(range(floatParam("separation", "Separation", 0.5, "cells",
+                               "A seed closer than this to a line traced before is dropped (in grid cells)."),
+                    0, 1000));
+  q.push_back(range(floatParam("max_turn", "Max turn", FieldLineSettings().maxTurn, "rad",
+                               "Largest turn of B's direction over one step (polyline smoothness)."),
+                    1e-3, 1.0));
+  q.push_back(floatParam("time", "Time", 0.0, "s", "Time at which the sources are evaluated (the solve's)."));
+  d.inputs = {{"field", PortType::Field, "A solved field."},
+              {"sources", PortType::Sources, "The sources of that solve (none: no field).", true, true}};
+  d.outputs = {{"field", PortType::Field, "The input, unchanged (after the file is written)."}};
+  d.cook = [](const CookContext& c) {
+    const auto field = c.input<FieldData>("field");
+    const SourcesData sources = mergeSources(c.inputs("sources"));
+    const double time = c.params().getFloat("time");
+    const MagneticForceStage& stage = *field->stage;
+    const GridSpec& g = stage.grid();
+    const InductionField B = InductionField::ofStage(stage, sources.all(), time);
+    std::vector<const MagnetSource*> magnets;
+    for (const SourcesData::Magnet& m : sources.magnets) magnets.push_back(m.magnet.get());
+    std::vector<Vec3d> material;
+    const GridView<const double> n = stage.density();
+    for (int k = 0; k < g.dims.k; ++k)
+      for (int j = 0; j < g.dims.j; ++j)
+        for (int i = 0; i < g.dims.i; ++i)
+          if (n(i, j, k) > 0) material.push_back(g.nodePosition(i, j, k));
+    const std::vector<Vec3d> seeds =
+        sceneFieldLineSeeds(magnets, material.data(), material.size(), g.dx,
+                            std::size_t(c.params().getInt("seeds_per_magnet")),
+                            std::size_t(c.params().getInt("material_seeds")));
+    FieldLineSettings s;
+    s.domainMin = g.origin;
+    s.domainMax = g.maxCorner();
+    s.separation = c.params().getFloat("separation") * g.dx;
+    s.maxTurn = c.params().getFloat("max_turn");
+    const std::vector<FieldLine> lines = traceFieldLines([&](const Vec3d& x) { return B(x); }, seeds, s);
+    output::writeFieldLines(c.params().getString("path"), lines, concat(lines.size(), " lines, t = ", time, " s"));
+    return CookOutputs{{"field", NodeValue(field)}};
+  };
+  return d;
+}
+
 }  // namespace
 
 std::vector<NodeDecl> buildRegistry() {
   return {particleSourceNode(), particleEmitterNode(), hostParticlesNode(), materialNode(),
           magnetNode(),         appliedFieldNode(),    transferNode(),      fieldSolveNode(),
-          magneticForceNode(),  mpmSolverNode(),       colliderNode(),      vdbExportNode()};
+          magneticForceNode(),  mpmSolverNode(),       colliderNode(),      vdbExportNode(),
+          fieldLinesNode()};
 }
 
 }  // namespace lodestone::plugin

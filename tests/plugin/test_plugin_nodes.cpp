@@ -47,7 +47,7 @@ void addWithProviders(Network& net, const std::string& type, const std::string& 
 TEST(PluginNodes, RegistryHasTheNodeLibrary) {
   const char* expected[] = {
       "particle_source", "material",       "magnet",     "applied_field", "magnetization_transfer",
-      "field_solve",     "magnetic_force", "mpm_solver", "collider",      "vdb_export"};
+      "field_solve",     "magnetic_force", "mpm_solver", "collider",      "vdb_export", "field_lines"};
   for (const char* t : expected) EXPECT_NE(findNode(t), nullptr) << t;
   for (const NodeDecl& d : nodeRegistry()) {
     EXPECT_FALSE(d.outputs.empty()) << d.type;
@@ -66,6 +66,13 @@ TEST(PluginNodes, EveryNodeCooksWithItsDefaults) {
     Network net;
     addWithProviders(net, d.type, "node");
     if (d.type == "vdb_export") net.setParam("node", "path", ::testing::TempDir() + "defaults.vdb");
+    if (d.type == "field_lines") {
+      // Traced through the default solve's field and sources.
+      net.setParam("node", "path", ::testing::TempDir() + "defaults_lines.obj");
+      net.addNode("magnet", "m");
+      net.connect("m", "sources", "node_field", "sources");
+      net.connect("m", "sources", "node", "sources");
+    }
     if (d.type == "vdb_export" && !vdbBuilt()) {
       try {
         net.cook("node");
@@ -78,6 +85,13 @@ TEST(PluginNodes, EveryNodeCooksWithItsDefaults) {
     try {
       const CookOutputs& out = net.cook("node");
       for (const PortDecl& p : d.outputs) EXPECT_EQ(typeOf(out.at(p.name)), p.type) << d.type << "." << p.name;
+      if (d.type == "field_lines") {
+        std::ifstream in(::testing::TempDir() + "defaults_lines.obj");
+        std::string line;
+        int polylines = 0;
+        while (std::getline(in, line)) polylines += line.rfind("l ", 0) == 0;
+        EXPECT_GE(polylines, 10) << "field lines of the default magnet and material";
+      }
     } catch (const std::exception& e) {
       ADD_FAILURE() << d.type << ": " << e.what();
     }

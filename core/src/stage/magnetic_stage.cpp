@@ -126,6 +126,7 @@ MagneticStageReport MagneticForceStage::solveAndForce(const FieldSource& sources
                                                       MagneticStageReport rep, const GridView<const double>* givenPhi,
                                                       const FieldSolveReport* givenSolve) {
   require(std::isfinite(time), "magnetic stage: time must be finite, got ", time, " s");
+  time_ = time;
   const AppliedFieldFunction applied = appliedFieldOf(sources, time);
 
   // Applied field at the nodes (kept when the sources are unchanged: a

@@ -47,6 +47,14 @@ float bitsFloat(std::uint32_t u) {
   return f;
 }
 
+// The nearest fragment wins a pixel: atomic minimum of (depth bits << 32 | index).
+void depositKey(std::atomic<std::uint64_t>& slot, float depth, std::size_t index) {
+  const std::uint64_t key = (std::uint64_t(floatBits(depth)) << 32) | std::uint64_t(index);
+  std::uint64_t current = slot.load(std::memory_order_relaxed);
+  while (key < current && !slot.compare_exchange_weak(current, key, std::memory_order_relaxed)) {
+  }
+}
+
 bool finitePose(const Pose& p) {
   if (!isFinite(p.position)) return false;
   for (int i = 0; i < 3; ++i)
@@ -201,6 +209,26 @@ void checkPrimitive(const Primitive& p, std::size_t k) {
               p.halfLength);
       break;
   }
+}
+
+// ---- triangles
+
+// Moller-Trumbore: the ray o + t d (t > 0) hits triangle (a, b, c) at
+// barycentric (1 - u - v, u, v); both sides count.
+bool rayTriangle(const Vec3d& o, const Vec3d& d, const Vec3d& a, const Vec3d& b, const Vec3d& c, double& t, double& u,
+                 double& v) {
+  const Vec3d e1 = b - a, e2 = c - a, p = cross(d, e2);
+  const double det = dot(e1, p);
+  if (!(std::abs(det) > 1e-300)) return false;
+  const double inv = 1.0 / det;
+  const Vec3d s = o - a;
+  u = dot(s, p) * inv;
+  if (u < 0 || u > 1) return false;
+  const Vec3d q = cross(s, e1);
+  v = dot(d, q) * inv;
+  if (v < 0 || u + v > 1) return false;
+  t = dot(e2, q) * inv;
+  return t > 0;
 }
 
 // ---- wireframes
@@ -459,6 +487,12 @@ Primitive Primitive::cylinder(const Pose& pose, double radius, double halfLength
   return p;
 }
 
+Bounds3 boundsOf(const TriangleMesh& mesh) {
+  Bounds3 b;
+  for (const Vec3d& v : mesh.vertices) b.add(v);
+  return b;
+}
+
 Bounds3 boundsOf(const ParticleView& particles) {
   Bounds3 b;
   for (std::size_t n = 0; n < particles.count; ++n)
@@ -471,10 +505,49 @@ Bounds3 boundsOf(const ParticleView& particles) {
 
 RgbImage renderScene(const Camera& camera, const ParticleView& particles, const std::vector<Primitive>& primitives,
                      const RenderSettings& settings, RenderStats* stats) {
+  SceneContent content;
+  content.particles = particles;
+  content.primitives = primitives;
+  return renderScene(camera, content, settings, stats);
+}
+
+RgbImage renderScene(const Camera& camera, const SceneContent& content, const RenderSettings& settings,
+                     RenderStats* stats) {
   const CameraProjection cam(camera);
+  const ParticleView& particles = content.particles;
+  const std::vector<Primitive>& primitives = content.primitives;
   const std::size_t count = particles.count;
   require(count == 0 || particles.positions != nullptr, "renderScene: ", count, " particles but no positions");
-  require(count < std::size_t(0xffffffffu), "renderScene: at most 2^32 - 2 particles, got ", count);
+  // Triangles follow the particles in the visibility keys' index space.
+  std::vector<std::size_t> firstTriangle{count};
+  for (std::size_t m = 0; m < content.meshes.size(); ++m) {
+    const TriangleMesh* mesh = content.meshes[m].mesh;
+    require(mesh != nullptr, "renderScene: mesh ", m, " is null");
+    const std::size_t nv = mesh->vertices.size();
+    require(mesh->normals.empty() || mesh->normals.size() == nv, "renderScene: mesh ", m, " has ",
+            mesh->normals.size(), " normals for ", nv, " vertices");
+    for (std::size_t v = 0; v < nv; ++v)
+      require(isFinite(mesh->vertices[v]), "renderScene: vertex ", v, " of mesh ", m, " is not finite");
+    for (std::size_t t = 0; t < mesh->triangles.size(); ++t)
+      for (const std::uint32_t k : mesh->triangles[t])
+        require(k < nv, "renderScene: triangle ", t, " of mesh ", m, " names vertex ", k, " of ", nv);
+    firstTriangle.push_back(firstTriangle.back() + mesh->triangles.size());
+  }
+  for (std::size_t l = 0; l < content.polylines.size(); ++l)
+    require(content.polylines[l].colours.empty() || content.polylines[l].colours.size() == content.polylines[l].points.size(),
+            "renderScene: polyline ", l, " has ", content.polylines[l].colours.size(), " colours for ",
+            content.polylines[l].points.size(), " points");
+  const std::size_t keys = firstTriangle.back();
+  require(keys < std::size_t(0xffffffffu), "renderScene: at most 2^32 - 2 particles and triangles, got ", keys);
+  // (mesh, triangle) of a key index >= count.
+  const auto triangleOf = [&](std::size_t key, std::size_t& mesh, std::size_t& tri) {
+    mesh = std::size_t(std::upper_bound(firstTriangle.begin(), firstTriangle.end(), key) - firstTriangle.begin()) - 1;
+    tri = key - firstTriangle[mesh];
+  };
+  const auto corners = [&](std::size_t mesh, std::size_t tri, Vec3d (&p)[3]) {
+    const TriangleMesh& m = *content.meshes[mesh].mesh;
+    for (int c = 0; c < 3; ++c) p[c] = m.vertices[m.triangles[tri][std::size_t(c)]];
+  };
   if (particles.radii == nullptr) {
     require(count == 0 || (std::isfinite(particles.radius) && particles.radius > 0),
             "renderScene: particle radius must be finite and > 0 m, got ", particles.radius);
@@ -508,7 +581,8 @@ RgbImage renderScene(const Camera& camera, const ParticleView& particles, const 
   for (std::size_t i = 0; i < pixels; ++i) visibility[i].store(kEmpty, std::memory_order_relaxed);
 
   auto radiusOf = [&](std::size_t n) { return particles.radii ? particles.radii[n] : particles.radius; };
-  using Counts = std::pair<std::size_t, std::size_t>;  // particles drawn, fragments
+  using Counts = std::pair<std::size_t, std::size_t>;  // particles (triangles) drawn, fragments
+  const auto joinCounts = [](Counts a, const Counts& b) { return Counts{a.first + b.first, a.second + b.second}; };
   const Counts counts = tbb::parallel_reduce(
       tbb::blocked_range<std::size_t>(0, count, 2048), Counts{0, 0},
       [&](const tbb::blocked_range<std::size_t>& range, Counts acc) {
@@ -536,10 +610,7 @@ RgbImage renderScene(const Camera& camera, const ParticleView& particles, const 
               if (!inside && !(i == ci && j == cj)) continue;
               const double q = inside ? d2 / r2 : 1.0;
               const float depth = float(s.depth - s.radius * std::sqrt(1.0 - q));
-              const std::uint64_t key = (std::uint64_t(floatBits(depth)) << 32) | std::uint64_t(n);
-              std::uint64_t current = row[i].load(std::memory_order_relaxed);
-              while (key < current && !row[i].compare_exchange_weak(current, key, std::memory_order_relaxed)) {
-              }
+              depositKey(row[i], depth, n);
               ++acc.second;
               drawn = true;
             }
@@ -548,11 +619,49 @@ RgbImage renderScene(const Camera& camera, const ParticleView& particles, const 
         }
         return acc;
       },
-      [](Counts a, const Counts& b) {
-        return Counts{a.first + b.first, a.second + b.second};
-      });
+      joinCounts);
   local.particlesDrawn = counts.first;
   local.fragments = counts.second;
+  // Triangles: the pixels of each one's projected bounding box whose ray hits it.
+  const Counts triCounts = tbb::parallel_reduce(
+      tbb::blocked_range<std::size_t>(count, keys, 512), Counts{0, 0},
+      [&](const tbb::blocked_range<std::size_t>& range, Counts acc) {
+        for (std::size_t n = range.begin(); n != range.end(); ++n) {
+          std::size_t mesh = 0, tri = 0;
+          triangleOf(n, mesh, tri);
+          Vec3d p[3];
+          corners(mesh, tri, p);
+          double lo_x = kInf, hi_x = -kInf, lo_y = kInf, hi_y = -kInf;
+          bool visible = true;
+          for (const Vec3d& q : p) {
+            double px = 0, py = 0, z = 0;
+            if (!cam.project(q, px, py, z)) {
+              visible = false;  // a corner behind the camera: not drawn (previews look at the scene)
+              break;
+            }
+            lo_x = std::min(lo_x, px), hi_x = std::max(hi_x, px), lo_y = std::min(lo_y, py), hi_y = std::max(hi_y, py);
+          }
+          if (!visible || hi_x < 0 || hi_y < 0 || lo_x > W || lo_y > H) continue;
+          const int i0 = std::max(0, int(std::floor(lo_x - 0.5))), i1 = std::min(W - 1, int(std::ceil(hi_x - 0.5)));
+          const int j0 = std::max(0, int(std::floor(lo_y - 0.5))), j1 = std::min(H - 1, int(std::ceil(hi_y - 0.5)));
+          bool drawn = false;
+          for (int j = j0; j <= j1; ++j)
+            for (int i = i0; i <= i1; ++i) {
+              const Vec3d d = cam.rayDirection(i + 0.5, j + 0.5);
+              double t = 0, u = 0, v = 0;
+              if (!rayTriangle(camera.position, d, p[0], p[1], p[2], t, u, v)) continue;
+              const float depth = float(t * dot(d, cam.forward()));
+              depositKey(visibility[std::size_t(j) * std::size_t(W) + std::size_t(i)], depth, n);
+              ++acc.second;
+              drawn = true;
+            }
+          if (drawn) ++acc.first;
+        }
+        return acc;
+      },
+      joinCounts);
+  local.trianglesDrawn = triCounts.first;
+  local.fragments += triCounts.second;
   local.rasterSeconds = seconds(clock);
   clock = std::chrono::steady_clock::now();
 
@@ -609,11 +718,11 @@ RgbImage renderScene(const Camera& camera, const ParticleView& particles, const 
         const double px = i + 0.5, py = j + 0.5;
         const Vec3d dir = cam.rayDirection(px, py);
         const double dirDepth = dot(dir, cam.forward());  // camera depth per unit of ray length
-        enum { None, Particle, Shape, Ground } kind = None;
+        enum { None, Particle, Triangle, Shape, Ground } kind = None;
         double best = kInf;
         const std::uint64_t key = visibility[at].load(std::memory_order_relaxed);
         if (key != kEmpty) {
-          kind = Particle;
+          kind = (key & 0xffffffffu) < count ? Particle : Triangle;
           best = double(bitsFloat(std::uint32_t(key >> 32)));
         }
         const Solid* hitSolid = nullptr;
@@ -646,6 +755,25 @@ RgbImage renderScene(const Camera& camera, const ParticleView& particles, const 
           }
           const double nz = std::sqrt(std::max(0.0, 1.0 - nx * nx - ny * ny));
           colour = lighting.shade(particles.colours ? particles.colours[n] : settings.particleColour, {nx, ny, nz});
+        } else if (kind == Triangle) {
+          std::size_t mesh = 0, tri = 0;
+          triangleOf(std::size_t(key & 0xffffffffu), mesh, tri);
+          Vec3d p[3];
+          corners(mesh, tri, p);
+          double t = 0, u = 0, v = 0;
+          rayTriangle(camera.position, dir, p[0], p[1], p[2], t, u, v);
+          const TriangleMesh& m = *content.meshes[mesh].mesh;
+          Vec3d nw = cross(p[1] - p[0], p[2] - p[0]);
+          if (!m.normals.empty()) {
+            const auto& f = m.triangles[tri];
+            const Vec3d blend = (1 - u - v) * m.normals[f[0]] + u * m.normals[f[1]] + v * m.normals[f[2]];
+            if (norm2(blend) > 0) nw = blend;
+          }
+          nw = normalised(nw);
+          if (!isFinite(nw)) nw = -dir;
+          if (dot(nw, dir) > 0) nw = -nw;  // seen from behind
+          colour = lighting.shade(content.meshes[mesh].colour,
+                                  {dot(nw, cam.right()), dot(nw, cam.upward()), -dot(nw, cam.forward())});
         } else if (kind == Shape) {
           Vec3d nw = hitSolid->prim->pose.vectorToWorld(hitNormal);
           if (dot(nw, dir) > 0) nw = -nw;  // seen from inside
@@ -676,6 +804,11 @@ RgbImage renderScene(const Camera& camera, const ParticleView& particles, const 
   LineDrawer lines(cam, image, depthBuffer, settings.hiddenLineAlpha);
   for (const Primitive& p : primitives)
     if (p.style == Primitive::Style::Wireframe) drawWireframe(lines, p, p.pose.toLocal(camera.position));
+  for (const Polyline& l : content.polylines) {
+    const std::size_t n = l.points.size();
+    for (std::size_t i = 0; i + 1 < n + (l.closed && n > 2 ? 1 : 0); ++i)
+      lines.segment(l.points[i], l.points[(i + 1) % n], l.colours.empty() ? l.colour : l.colours[i]);
+  }
   local.wireSeconds = seconds(clock);
   if (stats) *stats = local;
   return image;

@@ -131,6 +131,13 @@ void PlyPointCloud::addColours(const std::vector<Rgb>& colours) {
   }
 }
 
+void PlyPointCloud::addEdges(const std::vector<std::array<std::uint32_t, 2>>& edges) {
+  for (const auto& e : edges)
+    require(e[0] < count_ && e[1] < count_, "PLY point cloud: edge (", e[0], ", ", e[1], ") names a point beyond the ",
+            count_, " points");
+  edges_.insert(edges_.end(), edges.begin(), edges.end());
+}
+
 void PlyPointCloud::addComment(const std::string& text) {
   require(text.find_first_of("\r\n") == std::string::npos, "PLY point cloud: comment '", text,
           "' must be a single line");
@@ -148,6 +155,7 @@ std::string PlyPointCloud::header() const {
   for (const std::string& c : comments_) h += "comment " + c + "\n";
   h += concat("element vertex ", count_, "\n");
   for (const Column& c : columns_) h += concat("property ", plyTypeName(c.type), " ", c.name, "\n");
+  if (!edges_.empty()) h += concat("element edge ", edges_.size(), "\nproperty int vertex1\nproperty int vertex2\n");
   h += "end_header\n";
   return h;
 }
@@ -156,7 +164,7 @@ std::vector<std::uint8_t> PlyPointCloud::encode() const {
   const std::string h = header();
   std::size_t record = 0;
   for (const Column& c : columns_) record += plyTypeSize(c.type);
-  std::vector<std::uint8_t> out(h.size() + record * count_);
+  std::vector<std::uint8_t> out(h.size() + record * count_ + 8 * edges_.size());
   std::memcpy(out.data(), h.data(), h.size());
   // Interleave the columns into records, one column at a time (sequential reads).
   std::size_t offset = 0;
@@ -170,6 +178,12 @@ std::vector<std::uint8_t> PlyPointCloud::encode() const {
       for (std::size_t n = 0; n < count_; ++n, dst += record, ++src) *dst = *src;
     }
     offset += s;
+  }
+  std::uint8_t* e = out.data() + h.size() + record * count_;
+  for (const auto& edge : edges_) {
+    putLe32(e, edge[0]);
+    putLe32(e + 4, edge[1]);
+    e += 8;
   }
   return out;
 }

@@ -111,6 +111,8 @@ class MagneticForceStage {
   void setMaterial(const MagneticMaterial& material);
 
   const GridSpec& grid() const { return grid_; }
+  /// The time (s) of the last run (0 before the first).
+  double time() const { return time_; }
   const MagneticMaterial& material() const { return material_; }
   const MagneticStageSettings& settings() const { return settings_; }
 
@@ -147,6 +149,7 @@ class MagneticForceStage {
   MagneticMaterial material_;
   MagneticStageSettings settings_;
   SolveProgress progress_;
+  double time_ = 0;  // s, of the last run
   ParticleBinning binning_;
   DenseGrid<double> n_;
   std::vector<double> phi_;

@@ -1,6 +1,7 @@
 #pragma once
 // A small software renderer for previews of MPM runs: particles as shaded
-// sphere impostors, magnets and colliders as ray-cast boxes, spheres and
+// sphere impostors, triangle meshes (a material's surface) shaded with their
+// vertex normals, polylines (field lines) drawn like wireframes, magnets and colliders as ray-cast boxes, spheres and
 // cylinders (solid) or as line drawings (wireframe), over a ground plane with
 // a grid and a background gradient, seen by a perspective (pinhole) camera.
 // No text, no anti-aliasing, no shadows: enough to see what a scene does.
@@ -24,13 +25,18 @@
 // centre relative to the disc radius; shading is Lambert plus a small specular
 // highlight from a light fixed to the camera (upper left, in front).
 //
-// Visibility and determinism. Particles are rasterised in parallel (TBB)
+// Meshes. A pixel is covered by a triangle when the ray through its centre
+// hits it (Moller-Trumbore); the fragment's depth is the hit's, its normal
+// the barycentric blend of the vertex normals (the face normal when the mesh
+// has none), turned towards the viewer.
+//
+// Visibility and determinism. Particles and triangles are rasterised in parallel (TBB)
 // into a visibility buffer of 64-bit keys (float depth bits << 32 | particle
 // index) with an atomic minimum, so the nearest fragment wins and equal depths
-// go to the lower index: the image does not depend on the thread count or the
+// go to the lower index (particles first, then triangles): the image does not depend on the thread count or the
 // scheduling. A per-pixel pass then compares that fragment with the
 // ray-cast solid primitives and the ground, and shades the nearest. Wireframe
-// primitives are drawn last, serially: full colour where in front of the
+// primitives and polylines are drawn last, serially: full colour where in front of the
 // depth buffer, faintly where hidden.
 #include <cstddef>
 #include <cstdint>
@@ -38,6 +44,7 @@
 
 #include "lodestone/plugin/output/colormap.h"
 #include "lodestone/core/base/pose.h"
+#include "lodestone/core/base/triangle_mesh.h"
 #include "lodestone/core/base/vec3.h"
 
 namespace lodestone::output {
@@ -124,6 +131,32 @@ struct ParticleView {
 
 /// Bounds of the particle spheres (radius included); empty when count == 0.
 Bounds3 boundsOf(const ParticleView& particles);
+/// Bounds of a mesh's vertices; empty when it has none.
+Bounds3 boundsOf(const TriangleMesh& mesh);
+
+/// A triangle mesh to draw (owned by the caller), in one colour.
+struct MeshView {
+  const TriangleMesh* mesh = nullptr;
+  Rgb colour{70, 130, 200};
+};
+
+/// A polyline to draw over the shaded image, like a wireframe edge: full
+/// colour where in front, faint where hidden. `colours`: one per point (a
+/// segment takes its first point's) or empty for `colour`.
+struct Polyline {
+  std::vector<Vec3d> points;  ///< m
+  std::vector<Rgb> colours;
+  Rgb colour{240, 200, 60};
+  bool closed = false;  ///< also join the last point to the first
+};
+
+/// Everything renderScene draws.
+struct SceneContent {
+  ParticleView particles;
+  std::vector<MeshView> meshes;
+  std::vector<Primitive> primitives;
+  std::vector<Polyline> polylines;
+};
 
 struct RenderSettings {
   Rgb backgroundTop{58, 63, 74};
@@ -152,7 +185,8 @@ struct RenderSettings {
 /// Where the time went (s) and what was drawn.
 struct RenderStats {
   std::size_t particlesDrawn = 0;  ///< particles with at least one pixel on screen
-  std::size_t fragments = 0;       ///< particle pixels tested
+  std::size_t fragments = 0;       ///< particle and triangle pixels tested
+  std::size_t trianglesDrawn = 0;  ///< triangles with at least one pixel on screen
   double rasterSeconds = 0, resolveSeconds = 0, wireSeconds = 0;
 };
 
@@ -162,5 +196,12 @@ struct RenderStats {
 /// positions, behind the camera or off screen are skipped.
 RgbImage renderScene(const Camera& camera, const ParticleView& particles, const std::vector<Primitive>& primitives,
                      const RenderSettings& settings = {}, RenderStats* stats = nullptr);
+/// The same with meshes and polylines; also throws on a mesh that is null,
+/// has a vertex index out of range, non-finite vertices or a normal count
+/// other than zero or its vertex count, and on a polyline whose colour
+/// count is neither zero nor its point count. At most 2^32 - 2 particles
+/// and triangles together.
+RgbImage renderScene(const Camera& camera, const SceneContent& content, const RenderSettings& settings = {},
+                     RenderStats* stats = nullptr);
 
 }  // namespace lodestone::output

@@ -17,8 +17,13 @@
 //   property float y
 //   property float z
 //   property <float|int|uchar> <name>   (in the order added)
+//   element edge <E>                    (only when edges were added)
+//   property int vertex1
+//   property int vertex2
 //   end_header
-// followed by N records of the properties in that order, packed, little-endian.
+// followed by N records of the properties in that order, packed, little-endian,
+// then E records of two int vertex indices (polylines: field lines).
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <string>
@@ -60,6 +65,10 @@ class PlyPointCloud {
                const std::vector<Vec3d>& values);
   /// uchar red, green, blue (the names viewers use for point colours).
   void addColours(const std::vector<Rgb>& colours);
+  /// Edges between points (0-based indices < size(), else InvalidArgument),
+  /// written as the standard `edge` element (vertex1, vertex2).
+  void addEdges(const std::vector<std::array<std::uint32_t, 2>>& edges);
+  std::size_t edgeCount() const { return edges_.size(); }
   /// A header comment (one line: no '\n' or '\r'), e.g. "units: m, m/s".
   void addComment(const std::string& text);
 
@@ -84,6 +93,7 @@ class PlyPointCloud {
   std::size_t count_ = 0;
   std::vector<std::string> comments_;
   std::vector<Column> columns_;
+  std::vector<std::array<std::uint32_t, 2>> edges_;
 };
 
 }  // namespace lodestone::output
