@@ -148,6 +148,7 @@ std::string PlyPointCloud::header() const {
   for (const std::string& c : comments_) h += "comment " + c + "\n";
   h += concat("element vertex ", count_, "\n");
   for (const Column& c : columns_) h += concat("property ", plyTypeName(c.type), " ", c.name, "\n");
+  if (hasFaces_) h += concat("element face ", faces_.size(), "\nproperty list uchar int vertex_indices\n");
   h += "end_header\n";
   return h;
 }
@@ -156,7 +157,7 @@ std::vector<std::uint8_t> PlyPointCloud::encode() const {
   const std::string h = header();
   std::size_t record = 0;
   for (const Column& c : columns_) record += plyTypeSize(c.type);
-  std::vector<std::uint8_t> out(h.size() + record * count_);
+  std::vector<std::uint8_t> out(h.size() + record * count_ + 13 * faces_.size());
   std::memcpy(out.data(), h.data(), h.size());
   // Interleave the columns into records, one column at a time (sequential reads).
   std::size_t offset = 0;
@@ -171,7 +172,26 @@ std::vector<std::uint8_t> PlyPointCloud::encode() const {
     }
     offset += s;
   }
+  // Faces: a count byte (3), then three little-endian int32 indices.
+  std::uint8_t* dst = out.data() + h.size() + record * count_;
+  for (const auto& t : faces_) {
+    *dst++ = 3;
+    for (const std::uint32_t v : t) {
+      const std::int32_t index = std::int32_t(v);
+      std::memcpy(dst, &index, 4);
+      dst += 4;
+    }
+  }
   return out;
+}
+
+void PlyPointCloud::setTriangles(const std::vector<std::array<std::uint32_t, 3>>& triangles) {
+  for (const auto& t : triangles)
+    for (const std::uint32_t v : t)
+      if (v >= count_ || v > std::uint32_t(INT32_MAX))
+        throw InvalidArgument(concat("PLY triangle vertex index ", v, " out of range (", count_, " vertices)"));
+  faces_ = triangles;
+  hasFaces_ = true;
 }
 
 void PlyPointCloud::write(const std::string& path) const { writeFileAtomically(path, encode()); }
