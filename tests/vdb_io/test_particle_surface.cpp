@@ -73,6 +73,15 @@ SurfaceOptions optionsFor(SurfaceMethod method) {
   return o;
 }
 
+/// The grids of a .vdb file (listed by name).
+openvdb::GridPtrVecPtr fileGrids(const std::string& path) {
+  openvdb::io::File file(path);
+  file.open();
+  openvdb::GridPtrVecPtr grids = file.getGrids();
+  file.close();
+  return grids;
+}
+
 const SurfaceMethod kMethods[] = {SurfaceMethod::Splat, SurfaceMethod::SmoothedDensity};
 
 }  // namespace
@@ -176,10 +185,7 @@ TEST(ParticleSurface, VolumeFractionIntegratesToTheMaterialVolume) {
   RenderFrame frame(p, o, {"ferrofluid"});
   const std::string path = (std::filesystem::temp_directory_path() / "lodestone_volume_test.vdb").string();
   frame.writeVolumeVdb(path, {});
-  openvdb::io::File file(path);
-  file.open();
-  const openvdb::GridPtrVecPtr grids = file.getGrids();
-  file.close();
+  const openvdb::GridPtrVecPtr grids = fileGrids(path);
   ASSERT_GE(grids->size(), 2u);
   EXPECT_EQ((*grids)[0]->getName(), "density");
   const auto density = openvdb::GridBase::grid<openvdb::FloatGrid>((*grids)[0]);
@@ -211,10 +217,7 @@ TEST(ParticleSurface, SurfaceFileHasUnionAndMaterials) {
   RenderFrame frame(p, optionsFor(SurfaceMethod::SmoothedDensity), {"oil", "iron"});
   const std::string path = (std::filesystem::temp_directory_path() / "lodestone_surface_test.vdb").string();
   frame.writeSurfaceVdb(path, {});
-  openvdb::io::File file(path);
-  file.open();
-  const openvdb::GridPtrVecPtr grids = file.getGrids();
-  file.close();
+  const openvdb::GridPtrVecPtr grids = fileGrids(path);
   // (getGrids lists them by name.)
   ASSERT_EQ(grids->size(), 3u);
   EXPECT_EQ((*grids)[0]->getName(), "surface");
