@@ -35,8 +35,10 @@
 #include "preview.h"
 #include "lodestone/plugin/output/progress.h"
 #include "farm_commands.h"
+#include "outputs.h"
 #include "plan_report.h"
 #include "run_directory.h"
+#include "surface_command.h"
 #include "lodestone/plugin/output/stats_json.h"
 
 using namespace lodestone;
@@ -57,7 +59,8 @@ struct Args {
   std::string density, densityGrid = "n";  // export-fields: n (1/m^3) from a .vdb instead of the particles
   std::string particles;     // export-fields: the particles of a cache file instead of a simulated state
   bool png = true, ply = true;
-  bool fieldLines = false;  // run: field_lines_NNNN.ply/.obj, drawn in the previews
+  std::string outputs;        // run: --outputs LIST ("" = the scene's choice)
+  SurfaceCommandArgs surface; // surface DIR
   int checkpointEvery = -1;  // -1: the scene's output.checkpoint_every
   bool resume = false, checkFinite = false;
   bool clean = false;         // run: delete another run's output in --out first
@@ -127,11 +130,16 @@ std::optional<int> parseArgs(int argc, char** argv, Args& a) {
       ->type_name("N")
       ->check(cli::wholeNumber(0, 1024))
       ->default_str(cli::formatNumber(a.threads));
-  run.add_flag_callback("--no-png", [&] { a.png = false; }, "skip previews");
-  run.add_flag_callback("--no-ply", [&] { a.ply = false; }, "skip particle files");
-  run.add_flag("--field-lines", a.fieldLines,
-               "write field_lines_NNNN.ply and .obj (lines of B from seeds on the magnets and the magnetic "
-               "material) and draw them in the previews");
+  std::string outputNames;
+  for (const OutputKind& k : outputKinds()) outputNames += concat(outputNames.empty() ? "" : ", ", k.name);
+  run.add_option("--outputs", a.outputs,
+                 concat("what to write per frame, comma-separated, of: ", outputNames,
+                        "; default the scene's output settings (particles, png, and fields and points when "
+                        "output.vdb / output.vdb_points ask)"))
+      ->type_name("LIST")
+      ->check(cli::rule("", [](const std::string& list) { return OutputSelection::check(list); }));
+  run.add_flag_callback("--no-png", [&] { a.png = false; }, "skip previews (removes png from the outputs)");
+  run.add_flag_callback("--no-ply", [&] { a.ply = false; }, "skip particle files (removes particles)");
   cli::addNumber(run, "--checkpoint-every", a.checkpointEvery,
                  "write DIR/checkpoint_NNNN.lsck every N frames (overrides the scene's output.checkpoint_every; "
                  "0 = none)")
@@ -161,11 +169,15 @@ std::optional<int> parseArgs(int argc, char** argv, Args& a) {
   run.footer(
       "Writes, in DIR:\n"
       "  frame_NNNN.ply      particles (x y z in m, vx vy vz in m/s, n_p, material, J)\n"
-      "  frame_NNNN.png      a preview render (magnetic materials dark, magnets red)\n"
+      "  frame_NNNN.png      a preview render (magnetic materials dark, magnets red; shaded from\n"
+      "                      the surface mesh when --outputs has mesh)\n"
       "  contact_sheet.png   thumbnails of the previews this run rendered (up to 48)\n"
-      "  field_lines_NNNN.ply/.obj  lines of B (with --field-lines): PLY edges with |B| in T, OBJ l lines\n"
+      "  field_lines_NNNN.ply/.obj  lines of B (--outputs field_lines): PLY edges with |B| in T, OBJ l lines\n"
       "  fields_NNNN.vdb     the grids listed in the scene's output.vdb (n, phi, H, M, B, force)\n"
       "  particles_NNNN.vdb  the particles as OpenVDB points (when output.vdb_points is true)\n"
+      "  surface_NNNN.vdb    level sets surface and surface_<material> (--outputs surface)\n"
+      "  mesh_NNNN.ply/.obj  the surface as a triangle mesh (--outputs mesh)\n"
+      "  volume_NNNN.vdb     density (volume fraction), vel, magnetization (--outputs volume)\n"
       "  stats.json          per-frame time split by stage, field-solve reports, particle\n"
       "                      count and energies (rewritten after every frame)\n"
       "  lodestone_run.json  what wrote DIR: scene, content hash, grid, command, version,\n"
@@ -228,6 +240,41 @@ std::optional<int> parseArgs(int argc, char** argv, Args& a) {
   addResolution(exportFields);
 
   addFarmCommands(app, a.farm);
+  CLI::App& surface = *app.add_subcommand(
+      "surface", "surfaces, meshes and render volumes for the particle cache of a run directory");
+  surface.add_option("DIR", a.surface.dir, "a lodestone run output directory with particles_NNNN.vdb")
+      ->required()
+      ->type_name("");
+  surface.add_option("--outputs", a.surface.outputs, "of surface, mesh, volume, comma-separated")
+      ->type_name("LIST")
+      ->capture_default_str()
+      ->check(cli::rule("", [](const std::string& list) { return OutputSelection::check(list); }));
+  surface
+      .add_option_function<std::string>(
+          "--frames",
+          [&](const std::string& f) { readFrameRange(f, a.surface.first, a.surface.last); },
+          "only frames A..B (inclusive); default every frame of the cache")
+      ->type_name("A:B")
+      ->check(cli::rule("", [](const std::string& f) {
+        int first = 0, last = 0;
+        return readFrameRange(f, first, last);
+      }));
+  surface.add_option("--method", a.surface.method, "density or splat (default the scene's output.surface.method)")
+      ->type_name("M")
+      ->check(CLI::IsMember({"density", "splat"}));
+  cli::addNumber(surface, "--voxel-size", a.surface.voxelSize,
+                 "voxel size, m; 0 = the particle spacing (default the scene's output.surface.voxel_size)")
+      ->type_name("M")
+      ->check(cli::numberIn(0, 10));
+  cli::addNumber(surface, "--threads", a.surface.threads, "worker threads (0 = all cores)")
+      ->type_name("N")
+      ->check(cli::wholeNumber(0, 1024));
+  surface.footer(
+      "Reads DIR/particles_NNNN.vdb (the particle cache: output.vdb_points, or run --outputs\n"
+      "points) and writes, frames in parallel, surface_NNNN.vdb, mesh_NNNN.ply and .obj and\n"
+      "volume_NNNN.vdb as lodestone run --outputs surface,mesh,volume does, with the run's scene's\n"
+      "output.surface settings and material names; magnetization from fields_NNNN.vdb when there.\n"
+      "Exit codes: 0 done; 1 error (a frame that failed is named).");
 
   CLI::App& nodes = *app.add_subcommand("nodes", "list the node library");
   nodes.add_flag("--markdown", a.markdown, "as Markdown (docs/nodes.md is this output)");
@@ -490,12 +537,32 @@ std::unique_ptr<MagneticForceStage> solveFieldsNow(const Scene& scene, const Mpm
   return stage;
 }
 
-void writeFrameFiles(const Args& a, const Scene& scene, const MpmSolver& solver, int frame,
-                     ContactSheetCollector& sheet) {
+/// Seconds spent on each output (outputKinds() names).
+using OutputCosts = std::vector<std::pair<std::string, double>>;
+
+void addCost(OutputCosts& costs, const std::string& name, double seconds) {
+  for (auto& [n, s] : costs)
+    if (n == name) {
+      s += seconds;
+      return;
+    }
+  costs.emplace_back(name, seconds);
+}
+
+OutputCosts writeFrameFiles(const Args& a, const OutputSelection& outputs, const Scene& scene,
+                            const MpmSolver& solver, int frame,
+                            ContactSheetCollector& sheet) {
   const std::string number = frameNumber(frame);
   std::string name;
   const MpmParticles& p = solver.particles();
-  if (a.ply && scene.output.ply) {
+  OutputCosts costs;
+  auto t0 = std::chrono::steady_clock::now();
+  const auto lap = [&](const char* output) {
+    const auto now = std::chrono::steady_clock::now();
+    addCost(costs, output, std::chrono::duration<double>(now - t0).count());
+    t0 = now;
+  };
+  if (outputs.has("particles")) {
     name = "frame_" + number + ".ply";
     PlyPointCloud cloud(p.x);
     cloud.addVec3("vx", "vy", "vz", p.v);
@@ -506,8 +573,14 @@ void writeFrameFiles(const Args& a, const Scene& scene, const MpmSolver& solver,
     cloud.addComment(concat("lodestone ", LODESTONE_VERSION_STRING, " scene ", scene.name, " frame ", frame,
                             " time ", solver.time(), " s; units m, m/s"));
     cloud.write((std::filesystem::path(a.out) / name).string());
+    lap("particles");
   }
-  if (!scene.output.vdbFields.empty() && (solver.magneticStage() || magneticLaw(solver))) {
+  if (outputs.has("points")) {
+    name = "particles_" + number + ".vdb";
+    writeParticles((std::filesystem::path(a.out) / name).string(), solver, frame);
+    lap("points");
+  }
+  if (outputs.has("fields") && (solver.magneticStage() || magneticLaw(solver))) {
     name = "fields_" + number + ".vdb";
     const std::string path = (std::filesystem::path(a.out) / name).string();
     if (solver.magneticStage()) {
@@ -518,22 +591,35 @@ void writeFrameFiles(const Args& a, const Scene& scene, const MpmSolver& solver,
       const std::unique_ptr<MagneticForceStage> stage = solveFieldsNow(scene, solver, report);
       writeFields(path, scene, *stage, frame, solver.time(), &solver, true);
     }
+    lap("fields");
   }
-  if (scene.output.vdbPoints) {
-    name = "particles_" + number + ".vdb";
-    writeParticles((std::filesystem::path(a.out) / name).string(), solver, frame);
+  TriangleMesh surfaceMesh;  // filled when the mesh is written: the preview shades it
+  if (outputs.rendersSurface()) {
+    MagnetizationInput magnetization;
+    if (solver.magneticStage()) magnetization.grid = solver.magneticStage()->magnetization();
+    const RenderOutputCost c = writeRenderOutputs(renderOutputPaths(outputs, a.out, number), p,
+                                                  scene.materialNames, scene.output.surface, frame, solver.time(),
+                                                  magnetization, &surfaceMesh);
+    if (outputs.has("surface")) addCost(costs, "surface", c.surface);
+    if (outputs.has("mesh")) addCost(costs, "mesh", c.mesh);
+    if (outputs.has("volume")) addCost(costs, "volume", c.volume);
+    t0 = std::chrono::steady_clock::now();
   }
   std::vector<FieldLine> lines;
-  if (a.fieldLines) {
+  if (outputs.has("field_lines")) {
     lines = solverFieldLines(scene, solver);
     writeFieldLineFiles(a.out, number, lines, scene, frame, solver.time());
+    lap("field_lines");
   }
-  if (a.png && scene.output.png) {
+  if (outputs.has("png")) {
     name = "frame_" + number + ".png";
-    const RgbImage img = renderPreview(scene, solver, lines);
+    const RgbImage img = surfaceMesh.triangles.empty() ? renderPreview(scene, solver, lines)
+                                                       : renderMeshPreview(scene, solver, surfaceMesh, lines);
     writePng((std::filesystem::path(a.out) / name).string(), img.width, img.height, img.rgb.data());
     sheet.add(frame, img);
+    lap("png");
   }
+  return costs;
 }
 
 // Ctrl-C / SIGTERM: the first asks the run to stop after the current
@@ -626,6 +712,17 @@ int run(const Args& a) {
   printPlan(scene, *solver, stdout);
   checkSubsteps(a, scene, *solver);
   std::string planShown;
+  OutputSelection outputs =
+      a.outputs.empty() ? OutputSelection::sceneDefault(scene.output) : OutputSelection::parse(a.outputs);
+  if (!a.png) outputs.remove("png");
+  if (!a.ply) outputs.remove("particles");
+  std::printf("writes per frame: %s\n", outputs.describe().c_str());
+  OutputCosts outputCosts;  // summed over the frames written
+  int framesWritten = 0;
+  const auto addCosts = [&](const OutputCosts& c) {
+    for (const auto& [n, s] : c) addCost(outputCosts, n, s);
+    ++framesWritten;
+  };
   const int checkpointEvery = a.checkpointEvery >= 0 ? a.checkpointEvery : scene.output.checkpointEvery;
   const CheckpointOrigin origin{runIdentity(scene), first, last};
   const RunDirectory directory(a.out, origin.identity, a.clean);
@@ -690,7 +787,7 @@ int run(const Args& a) {
   int frame = startFrame;
   try {
     if (first == scene.startFrame && startFrame == initialFrame)
-      writeFrameFiles(a, scene, *solver, initialFrame, sheet);  // the initial state
+      addCosts(writeFrameFiles(a, outputs, scene, *solver, initialFrame, sheet));  // the initial state
     for (frame = startFrame + 1; frame <= last; ++frame) {
       const MpmFrameReport r = solver->advanceFrame(scene.frameDuration(), keepGoing);
       if (r.cancelled) {
@@ -698,9 +795,16 @@ int run(const Args& a) {
         return stopMessage(frame, solver->time(), true);
       }
       const auto tio = std::chrono::steady_clock::now();
-      if (frame >= first) writeFrameFiles(a, scene, *solver, frame, sheet);
+      OutputCosts frameCosts;
+      if (frame >= first) {
+        frameCosts = writeFrameFiles(a, outputs, scene, *solver, frame, sheet);
+        addCosts(frameCosts);
+      }
       const double io = std::chrono::duration<double>(std::chrono::steady_clock::now() - tio).count();
       stats["frames"].push_back(frameJson(frame, r, solver->particles().size(), io));
+      nlohmann::json outputSeconds = nlohmann::json::object();
+      for (const auto& [n, sec] : frameCosts) putQuantity(outputSeconds, n, sec, "s");
+      stats["frames"].back()["outputs"] = outputSeconds;
       lost += std::int64_t(r.nonFinite);
       if (scene.settings.planner.enabled) {
         // Every decision in stats.json; a line when one changes.
@@ -767,6 +871,15 @@ int run(const Args& a) {
                 static_cast<long long>(lost), initialParticles, 100.0 * double(lost) / double(initialParticles),
                 a.maxLost);
   std::printf("wrote frames %d..%d to %s (stats.json has the per-frame details)\n", first, last, a.out.c_str());
+  if (framesWritten > 0) {
+    std::string line;
+    char cost[64];
+    for (const auto& [n, s] : outputCosts) {
+      std::snprintf(cost, sizeof cost, "%.3g s", s / framesWritten);
+      line += concat(line.empty() ? "" : ", ", n, " ", cost);
+    }
+    std::printf("output cost per frame: %s\n", line.empty() ? "nothing written" : line.c_str());
+  }
   if (stdoutBroken()) {
     std::fprintf(stderr, "lodestone: standard output was closed (broken pipe); the run completed: frames %d..%d are in %s\n",
                  first, last, a.out.c_str());
@@ -866,6 +979,13 @@ int main(int argc, char** argv) {
     if (a.command == "plan") return plan(a);
     if (a.command == "export-fields") return exportFields(a);
     if (const std::optional<int> code = runFarmCommand(a.command, a.farm)) return *code;
+    if (a.command == "surface") {
+#if LODESTONE_HAVE_VDB
+      return surfaceCommand(a.surface);
+#else
+      throw Error("lodestone surface needs OpenVDB: this lodestone was built without it");
+#endif
+    }
     usageError(concat("unknown command '", a.command, "'"));
   } catch (const std::exception& e) {
     std::fprintf(stderr, "lodestone: %s\n", e.what());

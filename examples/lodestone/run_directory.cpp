@@ -171,7 +171,7 @@ std::string commandLine(const std::vector<std::string>& args) {
 
 bool isRunOutput(const std::string& name) {
   static const std::regex pattern(
-      R"(((frame_[0-9]{4,}\.(ply|png))|(fields_[0-9]{4,}\.vdb)|(particles_[0-9]{4,}\.vdb)|(field_lines_[0-9]{4,}\.(ply|obj))|)"
+      R"(((frame_[0-9]{4,}\.(ply|png))|((fields|particles|surface|volume)_[0-9]{4,}\.vdb)|((mesh|field_lines)_[0-9]{4,}\.(ply|obj))|)"
       R"((checkpoint_[0-9]{4,}\.lsck)|stats\.json|contact_sheet\.png|lodestone_run\.json))");
   if (std::regex_match(name, pattern)) return true;
   // The hidden temporaries of atomic writes (".frame_0001.ply.tmp-XXXXXX").

@@ -107,6 +107,7 @@ class RunDirectory {
 
 /// True for the names of the files `lodestone run` writes in its output
 /// directory (frame_NNNN.ply/.png, fields_NNNN.vdb, particles_NNNN.vdb,
+/// surface_NNNN.vdb, volume_NNNN.vdb, mesh_NNNN.ply/.obj,
 /// field_lines_NNNN.ply/.obj, checkpoint_NNNN.lsck, stats.json,
 /// contact_sheet.png, the manifest).
 bool isRunOutput(const std::string& fileName);

@@ -1,6 +1,7 @@
 #include "lodestone/plugin/node_builders.h"
 
 #include <algorithm>
+#include <chrono>
 #include <cstdio>
 #include <cmath>
 #include <cstdlib>
@@ -24,6 +25,8 @@
 #if LODESTONE_PLUGIN_HAVE_VDB
 #include "lodestone/vdb_io/field_file.h"
 #include "lodestone/vdb_io/level_set_file.h"
+#include "lodestone/vdb_io/render_frame.h"
+#include "lodestone/plugin/output/mesh_files.h"
 #endif
 
 namespace lodestone::plugin {
@@ -407,6 +410,103 @@ void writeStageVdb(const std::string& path, const MagneticForceStage& stage, con
   (void)solverSummary;
   (void)doublePrecision;
   throw NotBuilt(concat("cannot write '", path, "': VDB support is not built into this library (no OpenVDB)"));
+#endif
+}
+
+void addSurfaceParams(std::vector<ParamDecl>& q) {
+  q.push_back(choiceParam("method", "Method", {"density", "splat"}, "density",
+                          "density: the 1/2 contour of the particles' smoothed volume fraction (smooth in time); "
+                          "splat: spheres of the particles' radius (OpenVDB ParticlesToLevelSet) closed and "
+                          "smoothed with LevelSetFilter."));
+  q.push_back(range(floatParam("voxel_size", "Voxel size", 0.0, "m",
+                               "Voxel size of the surface and volumes; 0: the particle spacing (cube root of the "
+                               "mean particle volume, half the MPM dx at 8 particles per cell)."),
+                    0, 10));
+  q.push_back(when(range(floatParam("kernel_width", "Kernel width", 1.5, "",
+                                    "Width of the quadratic B-spline that spreads each particle's volume, in "
+                                    "particle spacings (the cube root of its volume): the density method's "
+                                    "smoothing."),
+                         1, 4),
+                   "method", {"density"}));
+  q.push_back(when(range(floatParam("radius_scale", "Radius scale", 1.0, "",
+                                    "Sphere radius over the particle's radius (of a sphere of its volume)."),
+                         0.5, 4),
+                   "method", {"splat"}));
+  q.push_back(when(intParam("smoothing", "Smoothing", 1, 0, 4,
+                            "Width of the Gaussian filter of the spheres' level set, voxels; 0: none."),
+                   "method", {"splat"}));
+  q.push_back(when(intParam("closing", "Closing", 1, 0, 4,
+                            "Dilation, then erosion, of the spheres' level set, voxels: closes gaps between "
+                            "particles."),
+                   "method", {"splat"}));
+}
+
+SurfaceSettings surfaceSettingsFrom(const ParamSet& p) {
+  SurfaceSettings s;
+  s.method = p.getString("method");
+  s.voxelSize = p.getFloat("voxel_size");
+  if (s.method == "splat") {
+    s.radiusScale = p.getFloat("radius_scale");
+    s.smoothing = int(p.getInt("smoothing"));
+    s.closing = int(p.getInt("closing"));
+  } else {
+    s.kernelWidth = p.getFloat("kernel_width");
+  }
+  return s;
+}
+
+RenderOutputCost writeRenderOutputs(const RenderOutputPaths& paths, const MpmParticles& particles,
+                                    const std::vector<std::string>& materialNames, const SurfaceSettings& settings,
+                                    int frame, double time, const MagnetizationInput& magnetization,
+                                    TriangleMesh* meshOut) {
+#if LODESTONE_PLUGIN_HAVE_VDB
+  using Clock = std::chrono::steady_clock;
+  const auto since = [](Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); };
+  SurfaceParticles p = surfaceParticles(particles);
+  SurfaceOptions o;
+  o.method = surfaceMethodFromName(settings.method);
+  o.voxelSize = settings.voxelSize > 0 ? settings.voxelSize : particleSpacing(p);
+  o.radiusScale = settings.radiusScale;
+  o.kernelWidth = settings.kernelWidth;
+  o.smoothing = settings.smoothing;
+  o.closing = settings.closing;
+  RenderOutputCost cost;
+  cost.voxelSize = o.voxelSize;
+  if (p.size() == 0) return cost;
+  RenderFrame render(std::move(p), o, materialNames);
+  VdbFrameMetadata meta;
+  meta.frame = frame;
+  meta.time = time;
+  if (!paths.surface.empty()) {
+    const auto t0 = Clock::now();
+    render.writeSurfaceVdb(paths.surface, meta);
+    cost.surface = since(t0);
+  }
+  if (!paths.meshPly.empty() || !paths.meshObj.empty()) {
+    const auto t0 = Clock::now();
+    const TriangleMesh& mesh = render.mesh();
+    const std::string comment = concat("lodestone ", LODESTONE_VERSION_STRING, " frame ", frame, " time ", time,
+                                       " s; units m, m/s");
+    if (!paths.meshPly.empty()) output::writeMeshPly(paths.meshPly, mesh, comment);
+    if (!paths.meshObj.empty()) output::writeMeshObj(paths.meshObj, mesh, comment);
+    cost.mesh = since(t0);
+    cost.triangles = mesh.triangles.size();
+    if (meshOut) *meshOut = mesh;
+  }
+  if (!paths.volume.empty()) {
+    const auto t0 = Clock::now();
+    if (magnetization.grid.data)
+      render.setMagnetization(magnetization.grid);
+    else if (!magnetization.file.empty())
+      render.setMagnetizationFromFile(magnetization.file);
+    render.writeVolumeVdb(paths.volume, meta);
+    cost.volume = since(t0);
+  }
+  return cost;
+#else
+  (void)particles, (void)materialNames, (void)settings, (void)frame, (void)time, (void)magnetization, (void)meshOut;
+  throw NotBuilt(concat("cannot write '", paths.surface + paths.volume + paths.meshPly + paths.meshObj,
+                        "': VDB support is not built into this library (no OpenVDB)"));
 #endif
 }
 

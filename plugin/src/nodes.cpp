@@ -1,6 +1,7 @@
 // The node library: declarations and cooks. Each cook reads its parameters
 // and inputs and calls core (or vdb_io) functions that know nothing of nodes.
 #include <algorithm>
+#include <functional>
 #include <cmath>
 #include <limits>
 
@@ -808,13 +809,67 @@ NodeDecl fieldLinesNode() {
   return d;
 }
 
+// ---- Render outputs --------------------------------------------------------------------
+/// A node that writes render outputs of a simulation's current particles:
+/// `fileParams`, then the surfacing parameters; `paths` picks the files.
+NodeDecl renderOutputNode(std::string type, std::string label, std::string help, std::vector<ParamDecl> fileParams,
+                          std::function<RenderOutputPaths(const ParamSet&)> paths) {
+  NodeDecl d;
+  d.type = std::move(type);
+  d.label = std::move(label);
+  d.category = "io";
+  d.help = std::move(help);
+  d.params = std::move(fileParams);
+  addSurfaceParams(d.params);
+  d.inputs = {{"simulation", PortType::Simulation, "A simulation; its current particles are surfaced."}};
+  d.outputs = {{"simulation", PortType::Simulation, "The input, unchanged (after the files are written)."}};
+  d.cook = [paths](const CookContext& c) {
+    const auto sim = c.input<SimulationData>("simulation");
+    writeRenderOutputs(paths(c.params()), sim->solver->particles(), {}, surfaceSettingsFrom(c.params()),
+                       sim->startFrame + sim->frames - 1, sim->time);
+    return CookOutputs{{"simulation", NodeValue(sim)}};
+  };
+  return d;
+}
+
+NodeDecl surfaceNode() {
+  return renderOutputNode(
+      "surface", "Surface",
+      "Writes the level sets of the simulation's particles (surface for all material, surface_<material> per "
+      "material) and, optionally, the render volumes (density as volume fraction, vel) to .vdb files "
+      "(docs/vdb.md); needs OpenVDB.",
+      {required(stringParam("path", "Path", "surface.vdb", "Level-set file to write (atomically).")),
+       stringParam("volume_path", "Volume path", "",
+                   "Also write density (volume fraction 0..1) and vel (m/s) to this .vdb file; empty: no.")},
+      [](const ParamSet& p) {
+        RenderOutputPaths paths;
+        paths.surface = p.getString("path");
+        paths.volume = p.getString("volume_path");
+        return paths;
+      });
+}
+
+NodeDecl meshExportNode() {
+  return renderOutputNode(
+      "mesh_export", "Mesh Export",
+      "Writes the surface of the simulation's particles as a triangle mesh with per-vertex normals and "
+      "velocities: binary PLY, or OBJ (no velocities) when the path ends in .obj; needs OpenVDB.",
+      {required(stringParam("path", "Path", "mesh.ply", "Mesh file to write (.ply or .obj, atomically)."))},
+      [](const ParamSet& p) {
+        const std::string& path = p.getString("path");
+        RenderOutputPaths paths;
+        (path.size() >= 4 && path.compare(path.size() - 4, 4, ".obj") == 0 ? paths.meshObj : paths.meshPly) = path;
+        return paths;
+      });
+}
+
 }  // namespace
 
 std::vector<NodeDecl> buildRegistry() {
   return {particleSourceNode(), particleEmitterNode(), hostParticlesNode(), materialNode(),
           magnetNode(),         appliedFieldNode(),    transferNode(),      fieldSolveNode(),
           magneticForceNode(),  mpmSolverNode(),       colliderNode(),      vdbExportNode(),
-          fieldLinesNode()};
+          fieldLinesNode(),     surfaceNode(),        meshExportNode()};
 }
 
 }  // namespace lodestone::plugin

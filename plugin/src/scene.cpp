@@ -284,6 +284,11 @@ Scene sceneFromJson(const nlohmann::json& doc, const std::string& sourceName, co
     scene.output.vdbPoints = o.boolean("vdb_points", false);
     scene.output.vdbAliases = o.boolean("vdb_aliases", false);
     scene.output.checkpointEvery = o.integer("checkpoint_every", 0, 1000000, 0);
+    if (o.has("surface")) {
+      JsonReader surface = o.object("surface");
+      scene.output.surface = surfaceSettingsFrom(readNodeEntry(surface, "surface", {"path", "volume_path"}));
+      surface.finish();
+    }
     if (o.has("camera")) {
       JsonReader cam = o.object("camera");
       scene.output.autoCamera = false;

@@ -34,7 +34,8 @@ void addWithProviders(Network& net, const std::string& type, const std::string& 
                                                            {PortType::Sources, "magnet"},
                                                            {PortType::Colliders, "collider"},
                                                            {PortType::Density, "magnetization_transfer"},
-                                                           {PortType::Field, "field_solve"}};
+                                                           {PortType::Field, "field_solve"},
+                                                           {PortType::Simulation, "mpm_solver"}};
   net.addNode(type, name);
   for (const PortDecl& in : requireNode(type).inputs) {
     if (in.optional) continue;
@@ -65,7 +66,9 @@ TEST(PluginNodes, EveryNodeCooksWithItsDefaults) {
   for (const NodeDecl& d : nodeRegistry()) {
     Network net;
     addWithProviders(net, d.type, "node");
-    if (d.type == "vdb_export") net.setParam("node", "path", ::testing::TempDir() + "defaults.vdb");
+    const bool writesVdb = d.type == "vdb_export" || d.type == "surface" || d.type == "mesh_export";
+    if (writesVdb) net.setParam("node", "path", ::testing::TempDir() + "defaults_" + d.type + ".vdb");
+    if (d.type == "mesh_export") net.setParam("node", "path", ::testing::TempDir() + "defaults_mesh.ply");
     if (d.type == "field_lines") {
       // Traced through the default solve's field and sources.
       net.setParam("node", "path", ::testing::TempDir() + "defaults_lines.obj");
@@ -73,10 +76,10 @@ TEST(PluginNodes, EveryNodeCooksWithItsDefaults) {
       net.connect("m", "sources", "node_field", "sources");
       net.connect("m", "sources", "node", "sources");
     }
-    if (d.type == "vdb_export" && !vdbBuilt()) {
+    if (writesVdb && !vdbBuilt()) {
       try {
         net.cook("node");
-        ADD_FAILURE() << "vdb_export cooked without OpenVDB";
+        ADD_FAILURE() << d.type << " cooked without OpenVDB";
       } catch (const CookFailed& e) {
         EXPECT_TRUE(e.notBuilt()) << e.what();
       }

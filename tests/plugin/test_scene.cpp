@@ -118,6 +118,28 @@ TEST(Scene, VdbPointsOutputDefaultsToFalse) {
   EXPECT_TRUE(on.output.vdbPoints);
 }
 
+// output.surface: the surface node's parameters, checked by its declarations.
+TEST(Scene, OutputSurfaceReadsTheSurfaceNodesParameters) {
+  const Scene plain = parseScene(kMinimal, "test.json");
+  EXPECT_EQ(plain.output.surface.method, "density");
+  EXPECT_DOUBLE_EQ(plain.output.surface.kernelWidth, 1.5);
+  const Scene splat = parseScene(
+      replaced(kMinimal, "\"bodies\"",
+               "\"output\": { \"surface\": { \"method\": \"splat\", \"voxel_size\": 0.004, \"radius_scale\": 1.2, "
+               "\"closing\": 2 } }, \"bodies\""),
+      "test.json");
+  EXPECT_EQ(splat.output.surface.method, "splat");
+  EXPECT_DOUBLE_EQ(splat.output.surface.voxelSize, 0.004);
+  EXPECT_DOUBLE_EQ(splat.output.surface.radiusScale, 1.2);
+  EXPECT_EQ(splat.output.surface.closing, 2);
+  const std::string bad = errorOf(
+      replaced(kMinimal, "\"bodies\"", "\"output\": { \"surface\": { \"kernel_width\": 9 } }, \"bodies\""));
+  EXPECT_NE(bad.find("output.surface.kernel_width"), std::string::npos) << bad;
+  const std::string unknown = errorOf(
+      replaced(kMinimal, "\"bodies\"", "\"output\": { \"surface\": { \"metod\": \"splat\" } }, \"bodies\""));
+  EXPECT_NE(unknown.find("did you mean 'method'"), std::string::npos) << unknown;
+}
+
 TEST(Scene, MissingFileIsNamed) {
   try {
     loadScene("/nonexistent/scene.json");

@@ -140,6 +140,7 @@ ParticleVdbData readParticlesVdb(const std::string& path) {
   requireAttribute<openvdb::Int32>(d, path, "material");
   requireAttribute<float>(d, path, "J");
   requireAttribute<openvdb::Int64>(d, path, "id");
+  requireAttribute<float>(d, path, "pscale");
   const bool hasF = d.find("F") != vp::AttributeSet::INVALID_POS;
   if (hasF) requireAttribute<openvdb::math::Mat3s>(d, path, "F");
 
@@ -154,12 +155,13 @@ ParticleVdbData readParticlesVdb(const std::string& path) {
     out.J.reserve(n);
     out.material.reserve(n);
     out.id.reserve(n);
+    out.pscale.reserve(n);
     if (hasF) out.F.reserve(n);
     for (auto it = grid->tree().cbeginLeaf(); it; ++it) {
       // Every attribute array must hold the leaf's points (its index offsets
       // come from the file as well).
       const openvdb::Index last = it->getLastValue();
-      for (const char* name : {"P", "v", "n_p", "material", "J", "id"})
+      for (const char* name : {"P", "v", "n_p", "material", "J", "id", "pscale"})
         if (it->constAttributeArray(name).size() < last)
           throw InvalidArgument(concat("VDB file '", path, "': attribute '", name, "' of a leaf holds ",
                                        it->constAttributeArray(name).size(), " values for ", last, " points"));
@@ -171,6 +173,7 @@ ParticleVdbData readParticlesVdb(const std::string& path) {
       const vp::AttributeHandle<openvdb::Int32> M(it->constAttributeArray("material"));
       const vp::AttributeHandle<float> Jh(it->constAttributeArray("J"));
       const vp::AttributeHandle<openvdb::Int64> I(it->constAttributeArray("id"));
+      const vp::AttributeHandle<float> R(it->constAttributeArray("pscale"));
       std::unique_ptr<vp::AttributeHandle<openvdb::math::Mat3s>> Fh;
       if (hasF) Fh = std::make_unique<vp::AttributeHandle<openvdb::math::Mat3s>>(it->constAttributeArray("F"));
       for (auto idx = it->beginIndexOn(); idx; ++idx) {
@@ -182,6 +185,7 @@ ParticleVdbData readParticlesVdb(const std::string& path) {
         out.material.push_back(std::uint32_t(M.get(*idx)));
         out.J.push_back(double(Jh.get(*idx)));
         out.id.push_back(std::uint64_t(I.get(*idx)));
+        out.pscale.push_back(double(R.get(*idx)));
         if (Fh) {
           const openvdb::math::Mat3s f = Fh->get(*idx);
           Mat3d m;

@@ -155,6 +155,7 @@ std::string PlyPointCloud::header() const {
   for (const std::string& c : comments_) h += "comment " + c + "\n";
   h += concat("element vertex ", count_, "\n");
   for (const Column& c : columns_) h += concat("property ", plyTypeName(c.type), " ", c.name, "\n");
+  if (hasFaces_) h += concat("element face ", faces_.size(), "\nproperty list uchar int vertex_indices\n");
   if (!edges_.empty()) h += concat("element edge ", edges_.size(), "\nproperty int vertex1\nproperty int vertex2\n");
   h += "end_header\n";
   return h;
@@ -164,7 +165,7 @@ std::vector<std::uint8_t> PlyPointCloud::encode() const {
   const std::string h = header();
   std::size_t record = 0;
   for (const Column& c : columns_) record += plyTypeSize(c.type);
-  std::vector<std::uint8_t> out(h.size() + record * count_ + 8 * edges_.size());
+  std::vector<std::uint8_t> out(h.size() + record * count_ + 13 * faces_.size() + 8 * edges_.size());
   std::memcpy(out.data(), h.data(), h.size());
   // Interleave the columns into records, one column at a time (sequential reads).
   std::size_t offset = 0;
@@ -179,13 +180,31 @@ std::vector<std::uint8_t> PlyPointCloud::encode() const {
     }
     offset += s;
   }
-  std::uint8_t* e = out.data() + h.size() + record * count_;
+  // Faces: a count byte (3), then three little-endian int32 indices; then
+  // edges: two little-endian int32 indices each.
+  std::uint8_t* dst = out.data() + h.size() + record * count_;
+  for (const auto& t : faces_) {
+    *dst++ = 3;
+    for (const std::uint32_t v : t) {
+      putLe32(dst, v);
+      dst += 4;
+    }
+  }
   for (const auto& edge : edges_) {
-    putLe32(e, edge[0]);
-    putLe32(e + 4, edge[1]);
-    e += 8;
+    putLe32(dst, edge[0]);
+    putLe32(dst + 4, edge[1]);
+    dst += 8;
   }
   return out;
+}
+
+void PlyPointCloud::setTriangles(const std::vector<std::array<std::uint32_t, 3>>& triangles) {
+  for (const auto& t : triangles)
+    for (const std::uint32_t v : t)
+      if (v >= count_ || v > std::uint32_t(INT32_MAX))
+        throw InvalidArgument(concat("PLY triangle vertex index ", v, " out of range (", count_, " vertices)"));
+  faces_ = triangles;
+  hasFaces_ = true;
 }
 
 void PlyPointCloud::write(const std::string& path) const { writeFileAtomically(path, encode()); }

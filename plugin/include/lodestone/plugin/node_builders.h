@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "lodestone/core/base/pose.h"
+#include "lodestone/core/base/triangle_mesh.h"
 #include "lodestone/core/mpm/collider.h"
 #include "lodestone/core/mpm/emitter.h"
 #include "lodestone/core/mpm/rate_emitter.h"
@@ -130,5 +131,37 @@ void addVdbField(FieldSourceSet& set, const std::string& path, const std::string
 /// throws NotBuilt without OpenVDB, InvalidArgument when it cannot be written.
 void writeStageVdb(const std::string& path, const MagneticForceStage& stage, const std::string& solverSummary,
                    bool doublePrecision = false);
+
+/// The surfacing parameters of the surface and mesh_export nodes (and of
+/// the scene's output.surface), declared once.
+void addSurfaceParams(std::vector<ParamDecl>& params);
+SurfaceSettings surfaceSettingsFrom(const ParamSet& params);
+
+/// What writeRenderOutputs writes: empty paths are skipped.
+struct RenderOutputPaths {
+  std::string surface;  ///< level sets surface, surface_<material> (.vdb)
+  std::string volume;   ///< density, vel (.vdb)
+  std::string meshPly;  ///< the surface's mesh, binary PLY
+  std::string meshObj;  ///< the surface's mesh, OBJ
+};
+/// Where the volume file's `magnetization` comes from (none when both are empty).
+struct MagnetizationInput {
+  GridView<const Vec3d> grid;  ///< M, A/m, on its own node grid (null data: none)
+  std::string file;            ///< or the `M` grid of this field file
+};
+/// What each output cost, s, and the mesh's size.
+struct RenderOutputCost {
+  double surface = 0, volume = 0, mesh = 0;
+  std::size_t triangles = 0;
+  double voxelSize = 0;  ///< m, the one used
+};
+/// Surfaces, volumes and meshes of the particles (vdb_io). `materialNames`
+/// names the materials in grid names. When a mesh file is written and
+/// `meshOut` is given, the mesh is copied there too (for a preview).
+/// Throws NotBuilt without OpenVDB.
+RenderOutputCost writeRenderOutputs(const RenderOutputPaths& paths, const MpmParticles& particles,
+                                    const std::vector<std::string>& materialNames, const SurfaceSettings& settings,
+                                    int frame, double time, const MagnetizationInput& magnetization = {},
+                                    TriangleMesh* meshOut = nullptr);
 
 }  // namespace lodestone::plugin

@@ -28,6 +28,17 @@ namespace lodestone::plugin {
 enum class PortType : int { Particles, Material, Sources, Colliders, Density, Field, Forces, Simulation };
 const char* toString(PortType type);
 
+/// How the surface and mesh_export nodes (and the scene's output.surface)
+/// turn particles into a surface (vdb_io/particle_surface.h).
+struct SurfaceSettings {
+  std::string method = "density";  ///< "density" (smoothed volume fraction) or "splat" (union of spheres)
+  double voxelSize = 0;            ///< m; 0: the particle spacing (cube root of the mean particle volume)
+  double kernelWidth = 1.5;        ///< density: kernel width over the particle spacing
+  double radiusScale = 1;          ///< splat: sphere radius over the particle's radius
+  int smoothing = 1;               ///< splat: Gaussian filter width, voxels
+  int closing = 1;                 ///< splat: dilation then erosion, voxels
+};
+
 /// A named MPM material.
 struct MaterialData {
   std::string name;

@@ -50,6 +50,9 @@ struct SceneOutput {
   bool vdbAliases = false;        ///< also write `density` (= n) and `vel` (= velocity) for Blender and Houdini
   bool vdbPoints = false;         ///< per-frame particles_NNNN.vdb (OpenVDB PointDataGrid)
   int checkpointEvery = 0;        ///< frames between checkpoint files (checkpoint_NNNN.lsck); 0 = none
+  /// output.surface: how surface_NNNN.vdb, volume_NNNN.vdb and the mesh files
+  /// are built (the surface node's parameters)
+  SurfaceSettings surface;
   int width = 640, height = 480;  ///< preview size, pixels
   bool autoCamera = true;
   Vec3d cameraPosition, cameraLookAt;  ///< m (when not automatic)

@@ -33,6 +33,7 @@ struct ParticleVdbData {
   std::vector<double> J;                ///< [J] volume ratio
   std::vector<std::uint32_t> material;  ///< [material]
   std::vector<std::uint64_t> id;        ///< [id]
+  std::vector<double> pscale;           ///< [pscale] radius of the particle's volume J V0, m
   std::vector<Mat3d> F;                 ///< [F] empty when the file has no F
   double voxelSize = 0;                 ///< of the grid's transform, m
   std::int64_t frame = 0;

@@ -1,6 +1,6 @@
 #pragma once
-// Binary little-endian PLY point clouds, the per-frame particle output of the
-// `lodestone` program (readable by ParaView, CloudCompare, MeshLab, Houdini,
+// Binary little-endian PLY point clouds and triangle meshes: the per-frame
+// particle output of the `lodestone` program and its surface meshes (readable by ParaView, CloudCompare, MeshLab, Houdini,
 // Blender importers and numpy in a few lines). One `vertex` element with
 // float x, y, z (m) and any number of further per-point properties: float
 // (velocity vx, vy, vz in m/s, n_p...), int (material id...) or uchar
@@ -17,11 +17,14 @@
 //   property float y
 //   property float z
 //   property <float|int|uchar> <name>   (in the order added)
-//   element edge <E>                    (only when edges were added)
+//   element face <T>                     (only with setTriangles)
+//   property list uchar int vertex_indices
+//   element edge <E>                     (only when edges were added)
 //   property int vertex1
 //   property int vertex2
 //   end_header
-// followed by N records of the properties in that order, packed, little-endian,
+// followed by N records of the properties in that order, packed,
+// little-endian, then T faces (the byte 3 and three int32 vertex indices),
 // then E records of two int vertex indices (polylines: field lines).
 #include <array>
 #include <cstddef>
@@ -69,6 +72,9 @@ class PlyPointCloud {
   /// written as the standard `edge` element (vertex1, vertex2).
   void addEdges(const std::vector<std::array<std::uint32_t, 2>>& edges);
   std::size_t edgeCount() const { return edges_.size(); }
+  /// Makes the file a triangle mesh: one face per triangle (0-based vertex
+  /// indices, each < size(), else InvalidArgument naming it).
+  void setTriangles(const std::vector<std::array<std::uint32_t, 3>>& triangles);
   /// A header comment (one line: no '\n' or '\r'), e.g. "units: m, m/s".
   void addComment(const std::string& text);
 
@@ -94,6 +100,8 @@ class PlyPointCloud {
   std::vector<std::string> comments_;
   std::vector<Column> columns_;
   std::vector<std::array<std::uint32_t, 2>> edges_;
+  std::vector<std::array<std::uint32_t, 3>> faces_;
+  bool hasFaces_ = false;
 };
 
 }  // namespace lodestone::output
