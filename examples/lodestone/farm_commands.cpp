@@ -7,7 +7,6 @@
 #include <fstream>
 #include <functional>
 #include <iterator>
-#include <regex>
 #include <sstream>
 
 #include "lodestone/cli/command_line.h"
@@ -48,20 +47,6 @@ nlohmann::json readJson(const fs::path& path) {
 }
 
 std::string valueText(const nlohmann::json& v) { return v.is_string() ? v.get<std::string>() : v.dump(); }
-
-// The frame numbers of files PREFIXNNNN.EXT in `dir`, ascending.
-std::vector<int> framesOf(const fs::path& dir, const std::string& prefix, const std::string& ext) {
-  std::vector<int> frames;
-  if (!fs::is_directory(dir)) return frames;
-  const std::regex pattern(prefix + "([0-9]{4,})\\." + ext);
-  for (const fs::directory_entry& e : fs::directory_iterator(dir)) {
-    std::smatch m;
-    const std::string name = e.path().filename().string();
-    if (std::regex_match(name, m, pattern)) frames.push_back(std::stoi(m[1].str()));
-  }
-  std::sort(frames.begin(), frames.end());
-  return frames;
-}
 
 // The shell line of one task that continues from its own checkpoints: with
 // --resume when `out` holds a checkpoint (a requeued or re-run task), else
@@ -161,7 +146,7 @@ WedgeStats wedgeStats(const fs::path& out) {
         s.maxNewton = std::max(s.maxNewton, solve.value("newton_iterations", 0));
     }
   }
-  const std::vector<int> pngs = framesOf(out, "frame_", "png");
+  const std::vector<int> pngs = frameFiles(out.string(), "frame_", "png");
   if (!pngs.empty()) s.preview = (out / ("frame_" + frameNumber(pngs.back()) + ".png")).string();
   return s;
 }
@@ -392,7 +377,7 @@ int farmPost(FarmArgs& a) {
   c.dx = std::stod(dx);
   c.out = dir / "post" / task.name;
   std::vector<int> frames;
-  for (const int f : framesOf(dir, task.inputPrefix, task.inputExt))
+  for (const int f : frameFiles(dir.string(), task.inputPrefix, task.inputExt))
     if (!a.framesGiven || (f >= a.first && f <= a.last)) frames.push_back(f);
   if (frames.empty())
     throw InvalidArgument(concat(dir.string(), " has no ", task.inputPrefix, "NNNN.", task.inputExt, " files",

@@ -120,6 +120,19 @@ std::string frameNumber(int frame) {
   return digits;
 }
 
+std::vector<int> frameFiles(const std::string& dir, const std::string& prefix, const std::string& ext) {
+  std::vector<int> frames;
+  if (!std::filesystem::is_directory(dir)) return frames;
+  const std::regex pattern(prefix + "([0-9]{4,})\\." + ext);
+  for (const std::filesystem::directory_entry& e : std::filesystem::directory_iterator(dir)) {
+    std::smatch m;
+    const std::string name = e.path().filename().string();
+    if (std::regex_match(name, m, pattern)) frames.push_back(std::stoi(m[1].str()));
+  }
+  std::sort(frames.begin(), frames.end());
+  return frames;
+}
+
 std::string checkpointName(int frame) { return "checkpoint_" + frameNumber(frame) + ".lsck"; }
 
 std::vector<int> checkpointFrames(const std::string& dir) {

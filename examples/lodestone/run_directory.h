@@ -62,6 +62,10 @@ CheckpointOrigin checkpointOrigin(const std::string& tag);
 std::string frameNumber(int frame);
 /// checkpoint_NNNN.lsck (NNNN: frameNumber)
 std::string checkpointName(int frame);
+
+/// The frame numbers of the files PREFIXNNNN.EXT (four or more digits) in
+/// `dir`, ascending; none when `dir` is not a directory.
+std::vector<int> frameFiles(const std::string& dir, const std::string& prefix, const std::string& ext);
 /// The frames of the checkpoint_NNNN.lsck files in `dir`, newest first.
 std::vector<int> checkpointFrames(const std::string& dir);
 

@@ -9,7 +9,6 @@
 #include <iostream>
 #include <memory>
 #include <mutex>
-#include <regex>
 
 #include <tbb/global_control.h>
 #include <tbb/parallel_for.h>
@@ -38,19 +37,6 @@ MpmParticles cacheParticles(const ParticleVdbData& data) {
     p.add(data.x[i], data.v[i], volume, volume, data.count[i], data.material[i]);
   }
   return p;
-}
-
-/// The frames of the particles_NNNN.vdb files in `dir`, ascending.
-std::vector<int> cacheFrames(const std::string& dir) {
-  static const std::regex pattern(R"(particles_([0-9]{4,})\.vdb)");
-  std::vector<int> frames;
-  for (const fs::directory_entry& e : fs::directory_iterator(dir)) {
-    std::smatch m;
-    const std::string name = e.path().filename().string();
-    if (std::regex_match(name, m, pattern)) frames.push_back(std::stoi(m[1].str()));
-  }
-  std::sort(frames.begin(), frames.end());
-  return frames;
 }
 
 }  // namespace
@@ -94,7 +80,7 @@ int surfaceCommand(const SurfaceCommandArgs& a) {
   const RunDirectory directory(a.dir, identity, false);
 
   std::vector<int> frames;
-  for (const int f : cacheFrames(a.dir))
+  for (const int f : frameFiles(a.dir, "particles_", "vdb"))
     if (a.last == 0 || (f >= a.first && f <= a.last)) frames.push_back(f);
   if (frames.empty())
     throw Error(concat("no particles_NNNN.vdb", a.last ? concat(" of frames ", a.first, "..", a.last) : "", " in '",
