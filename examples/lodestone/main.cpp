@@ -698,6 +698,7 @@ int run(const Args& a) {
   if (a.threads > 0)
     threads = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, std::size_t(a.threads));
   Scene scene = loadScene(a.scene, a.options);
+  const double loadedBytes = residentBytes();  // the program, its libraries and the scene's files
   if (a.checkFinite) scene.settings.checkFinite = true;
   // The frames written, first..last, in scene frame numbers (time.start_frame on).
   const int initialFrame = scene.initialFrame();
@@ -710,12 +711,14 @@ int run(const Args& a) {
   auto solver = buildSolver(scene);
   printSceneSummary(scene, *solver);
   printPlan(scene, *solver, stdout);
-  checkSubsteps(a, scene, *solver);
-  std::string planShown;
   OutputSelection outputs =
       a.outputs.empty() ? OutputSelection::sceneDefault(scene.output) : OutputSelection::parse(a.outputs);
   if (!a.png) outputs.remove("png");
   if (!a.ply) outputs.remove("particles");
+  const MemoryEstimate memory = printMemoryEstimate(scene, *solver, loadedBytes, outputs, stdout);
+  requireFitsInMemory(concat("scene '", scene.name, "'"), memory);
+  checkSubsteps(a, scene, *solver);
+  std::string planShown;
   std::printf("writes per frame: %s\n", outputs.describe().c_str());
   OutputCosts outputCosts;  // summed over the frames written
   int framesWritten = 0;
@@ -744,6 +747,15 @@ int run(const Args& a) {
   stats["grid"] = {{"dims", {scene.settings.grid.dims.i, scene.settings.grid.dims.j, scene.settings.grid.dims.k}},
                    {"dx_m", scene.settings.grid.dx}};
   stats["frames"] = nlohmann::json::array();
+  // The estimate before the run and the peak resident memory so far
+  // (rewritten with every frame).
+  stats["memory"] = {{"estimated_peak_bytes", memory.total()},
+                     {"estimated_mpm_grid_bytes", memory.mpmGrid},
+                     {"estimated_field_solve_bytes", memory.fieldGrid},
+                     {"estimated_particles_bytes", memory.particles},
+                     {"process_before_bytes", memory.process},
+                     {"limit_bytes", memoryLimitBytes()},
+                     {"peak_resident_bytes", peakResidentBytes()}};
   const std::filesystem::path statsPath = std::filesystem::path(a.out) / "stats.json";
   std::int64_t lost = 0;  // particles lost as non-finite since the initial frame
   if (startFrame > initialFrame && std::filesystem::exists(statsPath)) {
@@ -818,6 +830,7 @@ int run(const Args& a) {
           planShown = sig;
         }
       }
+      stats["memory"]["peak_resident_bytes"] = peakResidentBytes();
       writeJsonFile(statsPath.string(), stats);
       if (checkpointEvery > 0 && (frame - initialFrame) % checkpointEvery == 0) {
         writeFileAtomically((std::filesystem::path(a.out) / checkpointName(frame)).string(),
@@ -871,6 +884,8 @@ int run(const Args& a) {
                 static_cast<long long>(lost), initialParticles, 100.0 * double(lost) / double(initialParticles),
                 a.maxLost);
   std::printf("wrote frames %d..%d to %s (stats.json has the per-frame details)\n", first, last, a.out.c_str());
+  std::printf("peak memory %.3g GiB (estimated %.3g GiB)\n", peakResidentBytes() / double(1 << 30),
+              memory.total() / double(1 << 30));
   if (framesWritten > 0) {
     std::string line;
     char cost[64];
@@ -946,16 +961,21 @@ int exportFields(const Args& a) {
 
 int plan(const Args& a) {
   const Scene scene = loadScene(a.scene, a.options);
+  const double loadedBytes = residentBytes();
   auto solver = buildSolver(scene);
   printSceneSummary(scene, *solver);
   printPlan(scene, *solver, stdout);
+  printMemoryEstimate(scene, *solver, loadedBytes, OutputSelection::sceneDefault(scene.output), stdout);
   return 0;
 }
 
 int validate(const Args& a) {
   const Scene scene = loadScene(a.scene, a.options);
+  const double loadedBytes = residentBytes();
   auto solver = buildSolver(scene);
   printSceneSummary(scene, *solver);
+  requireFitsInMemory(concat("scene '", scene.name, "'"),
+                      printMemoryEstimate(scene, *solver, loadedBytes, OutputSelection::sceneDefault(scene.output), stdout));
   if (substepsPerFrame(scene, *solver) > double(a.maxSubsteps))
     std::printf("warning: more than %lld substeps per frame: lodestone run refuses it without --max-substeps\n",
                 a.maxSubsteps);

@@ -169,6 +169,20 @@ std::vector<std::string> fluidCompressionWarnings(const plugin::Scene& scene, co
   return out;
 }
 
+plugin::MemoryEstimate printMemoryEstimate(const plugin::Scene& scene, const MpmSolver& solver, double processBytes,
+                                           const OutputSelection& outputs, std::FILE* out) {
+  plugin::MemoryCounts c = plugin::sceneMemory(scene, solver);
+  if (!outputs.has("png")) c.previewPixels = 0;
+  if (outputs.has("fields")) c.fieldFileNodes = c.fieldNodes;
+  if (outputs.rendersSurface()) c.surfaceParticles = c.particles;
+  const plugin::MemoryEstimate e = plugin::estimateMemory(c, processBytes);
+  std::fprintf(out, "  estimated peak memory: %s for %.4g MPM nodes, %.4g field-solve nodes, %.0f particles%s; limit %s\n",
+               e.describe().c_str(), c.mpmNodes, c.fieldNodes, c.particles,
+               solver.emitterCount() > 0 ? " (at the end, with the emitted ones)" : "",
+               plugin::memoryLimitText().c_str());
+  return e;
+}
+
 void printPlan(const plugin::Scene& scene, const MpmSolver& solver, std::FILE* out) {
   const PlannerSettings& ps = scene.settings.planner;
   std::fprintf(out, "plan (%s):\n",
@@ -260,12 +274,11 @@ void printPlan(const plugin::Scene& scene, const MpmSolver& solver, std::FILE* o
   // Emitters: when each is on, and the particles it adds (before any is
   // blocked by material already there).
   const double end = solver.time() + scene.frames * scene.frameDuration();
-  double emittedByEnd = 0, emittedMean = 0;  // particles; the mean over the frames
+  double emittedMean = 0;  // particles, the mean over the frames
   for (std::size_t e = 0; e < solver.emitterCount(); ++e) {
     const RateEmitter& emitter = solver.emitter(e);
     // Chunks born before the start time are never emitted.
     const double before = emitter.particlesBy(solver.time());
-    emittedByEnd += emitter.particlesBy(end) - before;
     for (int f = 1; f <= scene.frames; ++f)
       emittedMean += (emitter.particlesBy(solver.time() + f * scene.frameDuration()) - before) / scene.frames;
     std::fprintf(out, "  emitter '%s': %s; up to %.0f particles by t = %.4g s (%s)\n", scene.emitters[e].name.c_str(),
@@ -292,15 +305,6 @@ void printPlan(const plugin::Scene& scene, const MpmSolver& solver, std::FILE* o
     std::fprintf(out, "  estimated run time: %.3g to %.3g s for %d frames (2 cores)\n", low, high, scene.frames);
   else
     std::fprintf(out, "  estimated run time: about %.3g s for %d frames (2 cores)\n", low, scene.frames);
-
-  // Memory: the estimate the scene was checked against before building.
-  const double nodes = double(scene.settings.grid.nodeCount()) + (mg == scene.settings.grid ? 0.0 : double(mg.nodeCount()));
-  const double gib = double(std::size_t(1) << 30);
-  const double particles = double(solver.particles().size()) + emittedByEnd;
-  std::fprintf(out, "  estimated memory: %.3g GiB (%.4g grid nodes, %.0f particles%s) of %.3g GiB\n",
-               plugin::estimatedMemoryBytes(nodes, particles) / gib, nodes, particles,
-               solver.emitterCount() > 0 ? concat(" at the end, ", emittedByEnd, " of them emitted").c_str() : "",
-               plugin::memoryLimitBytes() / gib);
 
   // Warnings: resolution, and settings that will blow up or lag.
   const double halfWidth = magneticHalfWidth(solver);

@@ -10,6 +10,7 @@
 
 #include "lodestone/core/planner/effects_planner.h"
 #include "lodestone/plugin/scene.h"
+#include "outputs.h"
 
 namespace lodestone::examples {
 
@@ -38,10 +39,19 @@ inline constexpr double kFluidCompressionTarget = 0.05;
 std::vector<std::string> fluidCompressionWarnings(const plugin::Scene& scene, const MpmSolver& solver,
                                                   double peakField);
 
+/// Prints the estimated peak memory of a run of the scene (plugin::sceneMemory,
+/// with `processBytes` what the process held besides: residentBytes() after
+/// loadScene, which counts the scene's loaded meshes) writing `outputs`, by
+/// part, against the limit:
+/// "  estimated peak memory: 1.19 GiB: MPM grid 0.13, ... (GiB) of 23.5 GiB
+/// (this machine's memory, ...)"; returns the estimate.
+plugin::MemoryEstimate printMemoryEstimate(const plugin::Scene& scene, const MpmSolver& solver, double processBytes,
+                                           const OutputSelection& outputs, std::FILE* out);
+
 /// Prints the plan of `solver` over the scene's whole time line (the
 /// sources sampled at up to 16 frames, the material where it is now): every
 /// stage, on or off, the reason, the predicted error; substeps and field
-/// solves per frame, the estimated run time and memory, and warnings (resolution, a
+/// solves per frame, the estimated run time, and warnings (resolution, a
 /// time step above the stable one, a field solved once per many substeps, a
 /// fluid too soft for its pressure).
 void printPlan(const plugin::Scene& scene, const MpmSolver& solver, std::FILE* out);

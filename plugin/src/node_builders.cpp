@@ -253,45 +253,12 @@ MagneticStageSettings solveSettingsFrom(const ParamSet& p, const std::string& pr
 }
 
 namespace {
-// Memory a simulation needs per grid node, bytes: the MPM grid (mass,
-// momentum, velocity, binning) and the magnetic stage's padded grid (n, phi,
-// H_ext, H, M, B, t, f, the solver's vectors and multigrid hierarchy), about
-// 600 B together. Per material point: position, velocity, F, C, J, mass,
-// volume, count and material (about 200 B), the sorted copy and the stage's
-// transfer weights, about 400 B together.
-constexpr double kBytesPerNode = 600;
-constexpr double kBytesPerParticle = 400;
 constexpr double kMaxNodesPerAxis = 1 << 20;
 constexpr double kGiB = 1024.0 * 1024.0 * 1024.0;
-constexpr const char* kLimitVariable = "LODESTONE_MEMORY_LIMIT_GIB";
 
 /// A count as a whole number while doubles hold it exactly (2.14748e+09 says too little).
 std::string countText(double n) { return n < 9e15 ? std::to_string(std::int64_t(n)) : concat(n); }
-
-/// A positive number of GiB in the environment variable, or 0.
-double limitOverrideGiB() {
-  const char* text = std::getenv(kLimitVariable);
-  if (!text || !*text) return 0;
-  char* end = nullptr;
-  const double gib = std::strtod(text, &end);
-  require(end && *end == '\0' && std::isfinite(gib) && gib > 0, kLimitVariable,
-          " must be a positive number of GiB, got '", text, "'");
-  return gib;
-}
 }  // namespace
-
-double estimatedMemoryBytes(double nodes, double particles) {
-  return nodes * kBytesPerNode + particles * kBytesPerParticle;
-}
-
-double memoryLimitBytes() {
-  if (const double gib = limitOverrideGiB(); gib > 0) return gib * kGiB;
-#if defined(_SC_PHYS_PAGES) && defined(_SC_PAGE_SIZE)
-  const long pages = sysconf(_SC_PHYS_PAGES), pageSize = sysconf(_SC_PAGE_SIZE);
-  if (pages > 0 && pageSize > 0) return double(pages) * double(pageSize);
-#endif
-  return 16 * kGiB;  // unknown: a modest machine
-}
 
 void requireFitsInMemory(const std::string& what, const double nodes[3], double dx, double particles) {
   const double nodeCount = nodes[0] * nodes[1] * nodes[2];
@@ -303,14 +270,18 @@ void requireFitsInMemory(const std::string& what, const double nodes[3], double 
     subject = concat("a grid of ", countText(nodes[0]), " x ", countText(nodes[1]), " x ", countText(nodes[2]),
                      " nodes at dx = ", dx, " m");
   if (particles > 0) subject += concat(subject.empty() ? "" : " and ", countText(particles), " particles");
-  const std::string limitText = limitOverrideGiB() > 0 ? concat(kLimitVariable, " = ", limit / kGiB, " GiB")
-                                                       : concat("this machine's memory, ", limit / kGiB, " GiB");
   if (axisTooLong)
     throw TooLarge(concat(what, ": ", subject, " is too large (more than ", kMaxNodesPerAxis,
                           " nodes on an axis; needs about ", need / kGiB, " GiB)"));
   throw TooLarge(concat(what, ": ", subject, nodeCount > 0 ? " is too large" : " are too many", " (needs about ",
-                        need / kGiB, " GiB at ", kBytesPerNode, " B a node and ", kBytesPerParticle,
-                        " B a particle; limit ", limitText, ")"));
+                        need / kGiB, " GiB at ", kMpmNodeBytes + kFieldNodeBytes, " B a node and ",
+                        kParticleBytes + kMagneticParticleBytes, " B a particle; limit ", memoryLimitText(), ")"));
+}
+
+void requireFitsInMemory(const std::string& what, const MemoryEstimate& estimate) {
+  if (estimate.total() <= memoryLimitBytes()) return;
+  throw TooLarge(concat(what, " needs about ", estimate.describe(), ", more than ", memoryLimitText(),
+                        " (docs/benchmarks.md, \"Memory\")"));
 }
 
 double estimatedParticles(double volume, double cellSize, int particlesPerCell) {

@@ -364,4 +364,38 @@ std::unique_ptr<MpmSolver> buildSolver(const Scene& scene) {
   return solver;
 }
 
+MemoryCounts sceneMemory(const Scene& scene, const MpmSolver& solver) {
+  const std::vector<MpmMaterial>& materials = solver.materials();
+  MemoryCounts c;
+  c.mpmNodes = double(scene.settings.grid.nodeCount());
+  c.previewPixels = double(scene.output.width) * double(scene.output.height);
+  bool magnetic = false;
+  const MpmParticles& p = solver.particles();
+  for (std::size_t i = 0; i < p.size(); ++i) {
+    const MpmMaterial& m = materials[p.material[i]];
+    magnetic = magnetic || m.isMagnetic();
+    c.magneticParticles += m.isMagnetic() ? 1 : 0;
+    c.capillaryParticles += m.hasSurfaceTension() ? 1 : 0;
+  }
+  c.particles = double(p.size());
+  const double end = solver.time() + scene.frames * scene.frameDuration();
+  for (std::size_t e = 0; e < solver.emitterCount(); ++e) {
+    const RateEmitter& emitter = solver.emitter(e);
+    const double added = emitter.particlesBy(end) - emitter.particlesBy(solver.time());
+    const MpmMaterial& m = materials[emitter.materialIndex()];
+    magnetic = magnetic || (m.isMagnetic() && added > 0);
+    c.particles += added;
+    c.magneticParticles += m.isMagnetic() ? added : 0;
+    c.capillaryParticles += m.hasSurfaceTension() ? added : 0;
+  }
+  const bool sources = !scene.fields.empty() || solver.magnetCount() > 0;
+  if (magnetic && sources) {
+    const GridSpec& mg = scene.settings.magneticGrid ? *scene.settings.magneticGrid : scene.settings.grid;
+    c.fieldNodes = double(mg.nodeCount());
+  } else {
+    c.magneticParticles = 0;  // no stage runs: no transfer weights
+  }
+  return c;
+}
+
 }  // namespace lodestone::plugin

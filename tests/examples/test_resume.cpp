@@ -25,18 +25,15 @@
 #include <openvdb/openvdb.h>
 #endif
 
+#include "lodestone_test/scratch_dir.h"
+
 namespace fs = std::filesystem;
 
 namespace {
 
 const int kFrames = 10;
 
-fs::path scratch(const std::string& name) {
-  const fs::path dir = fs::temp_directory_path() / ("lodestone_resume_" + std::to_string(::getpid())) / name;
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  return dir;
-}
+fs::path scratch(const std::string& name) { return lodestone::test::scratchDir("resume", name); }
 
 std::string spike() { return std::string(LODESTONE_SCENES_DIR) + "/spike.json"; }
 

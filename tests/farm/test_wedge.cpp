@@ -14,6 +14,8 @@
 #include "lodestone/core/base/error.h"
 #include "wedge.h"
 
+#include "lodestone_test/scratch_dir.h"
+
 namespace fs = std::filesystem;
 using namespace lodestone;
 using namespace lodestone::examples;
@@ -171,12 +173,7 @@ TEST(WedgeManifest, ListsEachWedgeInJsonAndCsv) {
   EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 5);
 }
 
-fs::path scratch(const std::string& name) {
-  const fs::path dir = fs::temp_directory_path() / ("lodestone_farm_" + std::to_string(::getpid())) / name;
-  fs::remove_all(dir);
-  fs::create_directories(dir);
-  return dir;
-}
+fs::path scratch(const std::string& name) { return lodestone::test::scratchDir("farm", name); }
 
 std::string readFile(const fs::path& p) {
   std::ifstream in(p);

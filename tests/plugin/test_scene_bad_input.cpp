@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "lodestone/core/base/error.h"
+#include "lodestone/plugin/errors.h"
 #include "lodestone/plugin/node_builders.h"
 #include "lodestone/plugin/scene.h"
 
@@ -122,31 +123,70 @@ TEST(SceneBadInput, EachIsRefusedWithWhereAndWhat) {
 }
 
 TEST(SceneBadInput, GridEstimateIsInGibibytesAndAcceptsTheLargestThatFits) {
-  // Against a limit of 25 GiB (the machine's memory otherwise).
+  // Against a limit of 25 GiB (the machine's memory otherwise), at the
+  // guard's conservative 456 B a node (MPM grid and field solve).
   ASSERT_EQ(setenv("LODESTONE_MEMORY_LIMIT_GIB", "25", 1), 0);
-  // 257^3 nodes x 600 B = 9.48 GiB: accepted (nothing is allocated by parsing).
+  // 257^3 nodes x 456 B = 7.21 GiB: accepted (nothing is allocated by parsing).
   EXPECT_EQ(errorOf(replaced(kScene, "\"dx\": 0.02", "\"dx\": 0.00078125")), "");
-  // 401^3 x 600 B = 36.03 GiB: refused, naming the estimate and the limit.
+  // 401^3 x 456 B = 27.38 GiB: refused, naming the estimate and the limit.
   const std::string err = errorOf(replaced(kScene, "\"dx\": 0.02", "\"dx\": 0.0005"));
   EXPECT_NE(err.find("401 x 401 x 401 nodes"), std::string::npos) << err;
-  EXPECT_NE(err.find("36.03"), std::string::npos) << err;
+  EXPECT_NE(err.find("27.38"), std::string::npos) << err;
   EXPECT_NE(err.find("LODESTONE_MEMORY_LIMIT_GIB = 25 GiB"), std::string::npos) << err;
   // A body of too many points is refused too, before it is emitted: the grid
-  // fits (201^3 nodes, 4.5 GiB), its 1.1e8 points (42 GiB) do not.
+  // fits (201^3 nodes, 3.5 GiB), its 1.1e8 points (70 GiB) do not.
   const std::string dense = errorOf(replaced(replaced(kScene, "\"dx\": 0.02", "\"dx\": 0.001"),
                                              "\"radius\": 0.03", "\"radius\": 0.03, \"particles_per_cell\": 1000"));
   EXPECT_NE(dense.find("particles is too large"), std::string::npos) << dense;
   ASSERT_EQ(unsetenv("LODESTONE_MEMORY_LIMIT_GIB"), 0);
 }
 
-// Without an override the limit is this machine's physical memory.
-TEST(SceneBadInput, MemoryLimitIsThePhysicalMemory) {
+// Without an override the limit is this machine's physical memory, or less
+// where the process's control group has a lower limit.
+TEST(SceneBadInput, MemoryLimitIsAtMostThePhysicalMemory) {
   const double bytes = double(sysconf(_SC_PHYS_PAGES)) * double(sysconf(_SC_PAGE_SIZE));
-  EXPECT_EQ(memoryLimitBytes(), bytes);
+  EXPECT_LE(memoryLimitBytes(), bytes);
+  EXPECT_GT(memoryLimitBytes(), 64.0 * 1024 * 1024);
   ASSERT_EQ(setenv("LODESTONE_MEMORY_LIMIT_GIB", "0.5", 1), 0);
   EXPECT_EQ(memoryLimitBytes(), 0.5 * 1024 * 1024 * 1024);
+  EXPECT_EQ(memoryLimitText(), "LODESTONE_MEMORY_LIMIT_GIB = 0.5 GiB");
   ASSERT_EQ(setenv("LODESTONE_MEMORY_LIMIT_GIB", "lots", 1), 0);
   EXPECT_THROW(memoryLimitBytes(), InvalidArgument);
+  ASSERT_EQ(unsetenv("LODESTONE_MEMORY_LIMIT_GIB"), 0);
+}
+
+// The estimate by part: each count times its documented figure.
+TEST(SceneBadInput, MemoryEstimateAddsItsParts) {
+  MemoryCounts c;
+  c.mpmNodes = 1e6;
+  c.fieldNodes = 2e6;
+  c.particles = 3e5;
+  c.magneticParticles = 1e5;
+  c.capillaryParticles = 0;
+  c.previewPixels = 640 * 480;
+  const MemoryEstimate e = estimateMemory(c, 5e7);
+  EXPECT_DOUBLE_EQ(e.mpmGrid, 1e6 * kMpmNodeBytes);
+  EXPECT_DOUBLE_EQ(e.fieldGrid, 2e6 * kFieldNodeBytes);
+  EXPECT_DOUBLE_EQ(e.particles, 3e5 * kParticleBytes + 1e5 * kMagneticParticleBytes);
+  EXPECT_DOUBLE_EQ(e.outputs, 640 * 480 * kPreviewPixelBytes);
+  EXPECT_DOUBLE_EQ(e.total(), e.mpmGrid + e.fieldGrid + e.particles + e.outputs + 5e7);
+  // Surface tension adds the colour field per node and the stress per particle.
+  c.capillaryParticles = 1e5;
+  const MemoryEstimate s = estimateMemory(c);
+  EXPECT_DOUBLE_EQ(s.mpmGrid, 1e6 * (kMpmNodeBytes + kSurfaceTensionNodeBytes));
+  EXPECT_DOUBLE_EQ(s.particles - e.particles, 1e5 * kSurfaceTensionParticleBytes);
+  EXPECT_NE(e.describe().find("field solve 0.73"), std::string::npos) << e.describe();
+  // A scene over the limit is refused naming its parts and the limit.
+  ASSERT_EQ(setenv("LODESTONE_MEMORY_LIMIT_GIB", "0.5", 1), 0);
+  try {
+    requireFitsInMemory("scene 'big'", e);
+    ADD_FAILURE() << "accepted";
+  } catch (const TooLarge& error) {
+    const std::string what = error.what();
+    EXPECT_NE(what.find("scene 'big' needs about 0.976 GiB: MPM grid 0.0596, field solve 0.73"), std::string::npos)
+        << what;
+    EXPECT_NE(what.find("more than LODESTONE_MEMORY_LIMIT_GIB = 0.5 GiB"), std::string::npos) << what;
+  }
   ASSERT_EQ(unsetenv("LODESTONE_MEMORY_LIMIT_GIB"), 0);
 }
 

@@ -13,6 +13,7 @@
 #include "lodestone/core/mpm/rate_emitter.h"
 #include "lodestone/core/mpm/sampled_sdf.h"
 #include "lodestone/core/mpm/solver.h"
+#include "lodestone/plugin/memory_estimate.h"
 #include "lodestone/core/sources/field_source.h"
 #include "lodestone/core/sources/magnet_source.h"
 #include "lodestone/plugin/node_data.h"
@@ -88,23 +89,19 @@ std::optional<RigidBodySettings> rigidBodyFrom(const ParamSet& params);
 /// goes to `restPose` when given.
 SourcesData::Magnet magnetFrom(const ParamSet& params, Pose* restPose = nullptr);
 
-/// Memory a simulation (or a magnetic stage) needs, bytes, estimated before
-/// anything is allocated: about 600 per grid node (the MPM grid and the
-/// field solve's padded grid with the solver's vectors and multigrid levels)
-/// and 400 per material point.
-double estimatedMemoryBytes(double nodes, double particles);
-
-/// What the estimate is compared with, bytes: the machine's physical memory,
-/// or the environment variable LODESTONE_MEMORY_LIMIT_GIB when it is set (a
-/// positive number of GiB; anything else throws InvalidArgument).
-double memoryLimitBytes();
-
 /// Throws TooLarge "<what>: a grid of a x b x c nodes at dx = h m [and N
 /// particles] is too large (needs about G GiB ...; limit ...)" when the
-/// estimate exceeds memoryLimitBytes() or an axis has more than 2^20 nodes.
+/// conservative estimatedMemoryBytes (memory_estimate.h: each node counted
+/// as an MPM and a field-solve node, each particle as magnetic) exceeds
+/// memoryLimitBytes() or an axis has more than 2^20 nodes: the guard before
+/// anything is allocated.
 /// Node counts are doubles, so a tiny dx or a huge count is named rather
 /// than overflowing; a zero count leaves the grid out of the message.
 void requireFitsInMemory(const std::string& what, const double nodes[3], double dx, double particles);
+
+/// Throws TooLarge "<what> needs about G GiB: MPM grid ..., more than <limit>"
+/// when the estimate exceeds memoryLimitBytes().
+void requireFitsInMemory(const std::string& what, const MemoryEstimate& estimate);
 
 /// The material points a body of `volume` (m^3) gets at `particlesPerCell`
 /// in cells of `cellSize` (m): the estimate before emission.

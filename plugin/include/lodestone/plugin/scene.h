@@ -21,6 +21,7 @@
 
 #include "lodestone/core/mpm/sampled_sdf.h"
 #include "lodestone/core/mpm/solver.h"
+#include "lodestone/plugin/memory_estimate.h"
 #include "lodestone/core/planner/accuracy_preset.h"
 #include "lodestone/core/sources/field_source_set.h"
 #include "lodestone/core/sources/magnet_source.h"
@@ -130,5 +131,13 @@ Scene parseScene(const std::string& text, const std::string& sourceName, const S
 /// InvalidArgument for a body wholly outside the domain, or an emitter whose
 /// centre is outside it when it first switches on.
 std::unique_ptr<MpmSolver> buildSolver(const Scene& scene);
+
+/// What a run of `scene` from `solver`'s state (as buildSolver made it) holds
+/// at its largest: the MPM grid; the field solve's grid when some material
+/// is magnetic and the scene has a magnet or an applied field; the particles
+/// now plus all the emitters add by the scene's last frame (an upper bound:
+/// blocked or removed particles are not subtracted); the preview's pixels
+/// (no other frame file: the caller adds those it writes).
+MemoryCounts sceneMemory(const Scene& scene, const MpmSolver& solver);
 
 }  // namespace lodestone::plugin

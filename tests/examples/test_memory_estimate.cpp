@@ -1,0 +1,126 @@
+// The memory estimate of `lodestone run` (plugin/memory_estimate.h) against
+// the peak resident memory the run measures, both from its stats.json: within
+// 20% for scenes where one part dominates in turn (the MPM grid, the field
+// solve, the particles, magnetic particles, the surface outputs), so a wrong
+// figure for that part shows. The command's path comes from LODESTONE_CLI,
+// the example scenes from LODESTONE_SCENES_DIR.
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include "lodestone_test/scratch_dir.h"
+
+namespace fs = std::filesystem;
+
+namespace {
+
+fs::path scratch(const std::string& name) { return lodestone::test::scratchDir("memory", name); }
+
+nlohmann::json readJson(const fs::path& path) {
+  std::ifstream in(path);
+  return nlohmann::json::parse(in);
+}
+
+/// The cube scene without magnetism or with, its body of half-size `half` (m)
+/// and the grid at `dx` (m), written into `dir`.
+fs::path cubeScene(const fs::path& dir, double dx, double half, bool magnetic) {
+  nlohmann::json s = readJson(fs::path(LODESTONE_SCENES_DIR) / "cube_langevin.json");
+  s["domain"]["dx"] = dx;
+  s["bodies"][0]["half_size"] = {half, half, 0.6 * half};
+  s["bodies"][0]["center"] = {0, 0, 0.4 + 0.6 * half};
+  if (!magnetic) {
+    s["materials"][0].erase("magnetic");
+    s["magnets"] = nlohmann::json::array();
+    s.erase("magnetic");
+  }
+  const fs::path path = dir / "scene.json";
+  std::ofstream(path) << s.dump(1);
+  return path;
+}
+
+struct Memory {
+  double estimated = 0, peak = 0, mpmGrid = 0, fieldSolve = 0, particles = 0;
+};
+
+/// Runs frame 1 of `scene` with `args` into `dir`; the memory of its stats.json.
+Memory run(const fs::path& scene, const fs::path& dir, const std::string& args) {
+  const std::string command = std::string(LODESTONE_CLI) + " run '" + scene.string() + "' --out '" +
+                              (dir / "out").string() + "' --frames 1:1 --threads 2 " + args + " > '" +
+                              (dir / "log.txt").string() + "' 2>&1";
+  const int status = std::system(command.c_str());
+  if (status != 0) {
+    std::ifstream log(dir / "log.txt");
+    const std::string text((std::istreambuf_iterator<char>(log)), std::istreambuf_iterator<char>());
+    ADD_FAILURE() << command << " exited with status " << status << ":\n" << text;
+  }
+  const nlohmann::json m = readJson(dir / "out" / "stats.json").at("memory");
+  Memory r;
+  r.estimated = m.at("estimated_peak_bytes").get<double>();
+  r.peak = m.at("peak_resident_bytes").get<double>();
+  r.mpmGrid = m.at("estimated_mpm_grid_bytes").get<double>();
+  r.fieldSolve = m.at("estimated_field_solve_bytes").get<double>();
+  r.particles = m.at("estimated_particles_bytes").get<double>();
+  return r;
+}
+
+/// The estimate within 20% of the peak, and `part` (bytes) at least
+/// `share` of it, so that the part's own figure is what is checked.
+void expectClose(const Memory& m, double part, double share) {
+  std::printf("estimated %.1f MB, peak %.1f MB (ratio %.3f), the part checked %.0f%% of the estimate\n",
+              m.estimated / 1e6, m.peak / 1e6, m.peak / m.estimated, 100 * part / m.estimated);
+  EXPECT_GT(m.peak, 0);
+  EXPECT_NEAR(m.estimated / m.peak, 1.0, 0.2) << "estimated " << m.estimated / 1e6 << " MB, peak " << m.peak / 1e6
+                                              << " MB";
+  EXPECT_GE(part, share * m.estimated) << "the case does not exercise its part";
+}
+
+/// One case of the cube scene: its body of half-size `half` (m) at `dx` (m),
+/// magnetic or not, run with `args`; the estimate's part `part` of it must
+/// be at least `share` of the total and the estimate within 20%.
+Memory cubeCase(const std::string& name, double dx, double half, bool magnetic, const std::string& args,
+                double Memory::*part, double share) {
+  const fs::path dir = scratch(name);
+  const Memory m = run(cubeScene(dir, dx, half, magnetic), dir, args);
+  expectClose(m, m.*part, share);
+  return m;
+}
+
+TEST(MemoryEstimate, MpmGridOfAnEmptyBox) {
+  // 129^3 nodes (2.1M) at dx = 7.8 mm around a 6 cm cube: the MPM grid is
+  // most of the memory.
+  const Memory m = cubeCase("mpm_grid", 0.0078, 0.03, false, "--no-png --no-ply", &Memory::mpmGrid, 0.6);
+  EXPECT_EQ(m.fieldSolve, 0) << "nothing magnetic: no field solve";
+}
+
+TEST(MemoryEstimate, FieldSolveOfASmallBodyInALargeGrid) {
+  // The field solve's 105^3 grid (1.16M nodes) dominates.
+  cubeCase("field", 0.0104, 0.03, true, "--no-ply", &Memory::fieldSolve, 0.6);
+}
+
+TEST(MemoryEstimate, ManyParticles) {
+  // 0.5M particles of a non-magnetic solid on a 65^3 grid.
+  cubeCase("particles", 0.0156, 0.36, false, "--no-png --no-ply", &Memory::particles, 0.6);
+}
+
+TEST(MemoryEstimate, ManyMagneticParticles) {
+  // The same particles, magnetic: the stage's per-particle data on top.
+  cubeCase("magnetic_particles", 0.0156, 0.36, true, "--no-png --no-ply", &Memory::particles, 0.5);
+}
+
+TEST(MemoryEstimate, SurfaceOutputs) {
+  // A ferrofluid layer (1.4e5 particles) meshed and written as render volumes.
+  const fs::path dir = scratch("surface");
+  const Memory m =
+      run(fs::path(LODESTONE_SCENES_DIR) / "ferrofluid_3d.json", dir, "--full --outputs surface,mesh,volume");
+  expectClose(m, m.estimated - m.mpmGrid - m.fieldSolve - m.particles, 0.25);
+}
+
+}  // namespace
