@@ -184,8 +184,9 @@ std::optional<int> parseArgs(int argc, char** argv, Args& a) {
       "                      frames, status (a run of anything else into DIR is refused)\n"
       "  lodestone_run.lock  held while a run writes DIR (a second run is refused)\n"
       "\n"
-      "Ctrl-C (or SIGTERM) stops after the current substep, keeps every complete frame and\n"
-      "says how to resume; a second one exits at once.\n"
+      "Ctrl-C (or SIGTERM) stops after the current substep (a field solve in progress at its next\n"
+      "Newton iteration), keeps every complete frame and says how to resume; a second one exits\n"
+      "at once.\n"
       "Exit codes: 0 done; 1 error; 3 blown up (--max-lost); 130 Ctrl-C; 143 SIGTERM;\n"
       "141 standard output closed.");
 
@@ -791,6 +792,9 @@ int run(const Args& a) {
   std::signal(SIGINT, onStopSignal);
   std::signal(SIGTERM, onStopSignal);
   const MpmProgressCallback keepGoing = [](const MpmProgress&) { return gStopSignal == 0; };
+  // A field solve in progress stops at its next Newton iteration too; its
+  // substep ends with the field reached and the frame is dropped.
+  solver->setFieldSolveProgress([](const NewtonIterationRecord&) { return gStopSignal == 0; });
   const auto t0 = std::chrono::steady_clock::now();
   ProgressOptions progressOptions{isTerminal(stdout)};
   progressOptions.firstFrame = initialFrame;

@@ -9,12 +9,29 @@
 // returning False, asks the solver to stop. The exception is kept and raised
 // once the call has returned and the GIL is held again.
 #include <optional>
+#include <utility>
 
 #include <pybind11/pybind11.h>
+
+#include "lodestone/core/field/solve_report.h"
 
 namespace lodestone::python {
 
 namespace py = pybind11;
+
+/// Runs `clear` when it goes out of scope (also by an exception): takes a
+/// hook off the solver it was given to before the hook is destroyed.
+template <typename Clear>
+class Unhook {
+ public:
+  explicit Unhook(Clear clear) : clear_(std::move(clear)) {}
+  ~Unhook() { clear_(); }
+  Unhook(const Unhook&) = delete;
+  Unhook& operator=(const Unhook&) = delete;
+
+ private:
+  Clear clear_;
+};
 
 class Hook {
  public:
@@ -47,6 +64,12 @@ class Hook {
     }
     return !stop_;
   }
+
+  /// This hook as a field solve's progress (SolveProgress), called after each
+  /// Newton iteration: the report has stage "newton", iteration,
+  /// relative_residual, cg_iterations and seconds. The hook must outlive
+  /// every solve that calls it.
+  SolveProgress newtonProgress();
 
   /// With the GIL held: raises the kept exception, if any.
   void rethrow();

@@ -36,7 +36,8 @@ or solvers may run at once on different threads. One object (a stage, a
 solver, a network) must be used by one thread at a time, and the numpy arrays
 passed to a call must not be changed by another thread during it. Progress
 callables run on the calling thread with the GIL held, after each Newton
-iteration (stage) or substep (MPM, scenes); Ctrl-C (KeyboardInterrupt) is
+iteration of a field solve (stages, and the solves inside MPM substeps) and
+after each substep (MPM, scenes); Ctrl-C (KeyboardInterrupt) is
 noticed there, so a run stops within one iteration or substep. Lodestone
 parallelizes inside a call with oneTBB.)";
 

@@ -46,6 +46,24 @@ py::dict frameReportDict(const MpmFrameReport& r) {
   return d;
 }
 
+MpmFrameReport advanceFrameHooked(MpmSolver& solver, double duration, Hook& hook,
+                                  const std::function<void(const MpmProgress&, py::dict&)>& fill) {
+  solver.setFieldSolveProgress(hook.newtonProgress());
+  const Unhook unhook([&solver] { solver.setFieldSolveProgress({}); });
+  MpmFrameReport r;
+  {
+    py::gil_scoped_release release;
+    r = solver.advanceFrame(duration, [&](const MpmProgress& p) {
+      return hook.poll([&](py::dict& d) {
+        d["stage"] = "substep";
+        fill(p, d);
+      });
+    });
+  }
+  hook.rethrow();
+  return r;
+}
+
 void bindMpm(py::module_& m) {
   py::class_<MpmSettings>(m, "MpmSettings", "Settings of the MPM solver (validated by MpmSolver).")
       .def(py::init([](const GridSpec& grid) {
@@ -177,25 +195,18 @@ void bindMpm(py::module_& m) {
           "advance_frame",
           [](MpmSolver& s, double duration, const py::object& progress) {
             Hook hook(progress);
-            MpmFrameReport r;
-            {
-              py::gil_scoped_release release;
-              r = s.advanceFrame(duration, [&hook](const MpmProgress& p) {
-                return hook.poll([&](py::dict& d) {
-                  d["stage"] = "substep";
-                  d["substep"] = p.substep;
-                  d["time"] = p.time;
-                  d["fraction"] = p.fraction;
-                });
-              });
-            }
-            hook.rethrow();
-            return frameReportDict(r);
+            return frameReportDict(advanceFrameHooked(s, duration, hook, [](const MpmProgress& p, py::dict& d) {
+              d["substep"] = p.substep;
+              d["time"] = p.time;
+              d["fraction"] = p.fraction;
+            }));
           },
           py::arg("duration"), py::arg("progress") = py::none(),
           "Substeps to the end of a frame of `duration` (s). `progress(dict)` runs after each substep (keys: "
-          "stage, substep, time, fraction); returning False stops the frame (report 'cancelled': True); "
-          "Ctrl-C raises KeyboardInterrupt at the next substep. Returns the frame report as a dict.")
+          "stage 'substep', substep, time, fraction) and after each Newton iteration of a field solve (stage "
+          "'newton', iteration, relative_residual, cg_iterations, seconds); returning False stops the frame "
+          "(report 'cancelled': True; a field solve stopped that way leaves its substep with the field reached). "
+          "Ctrl-C raises KeyboardInterrupt at the next of these points. Returns the frame report as a dict.")
       .def_property_readonly("time", &MpmSolver::time, "Simulation time, s.")
       .def_property_readonly("particle_count", [](const MpmSolver& s) { return s.particles().size(); })
       .def_property_readonly("positions", [](const MpmSolver& s) { return copyToNumpy(s.particles().x); },

@@ -56,20 +56,13 @@ void bindScene(py::module_& m) {
             Hook hook(progress);
             for (int f = 0; f < count; ++f) {
               const int frame = scene.startFrame + f;
-              MpmFrameReport r;
-              {
-                py::gil_scoped_release release;
-                r = solver->advanceFrame(scene.frameDuration(), [&](const MpmProgress& p) {
-                  return hook.poll([&](py::dict& d) {
-                    d["stage"] = "substep";
+              const MpmFrameReport r =
+                  advanceFrameHooked(*solver, scene.frameDuration(), hook, [&](const MpmProgress& p, py::dict& d) {
                     d["frame"] = frame;
                     d["substep"] = p.substep;
                     d["time"] = p.time;
                     d["fraction"] = (f + p.fraction) / count;
                   });
-                });
-              }
-              hook.rethrow();
               py::dict d = frameReportDict(r);
               d["frame"] = frame;
               reports.append(d);
@@ -80,9 +73,11 @@ void bindScene(py::module_& m) {
           },
           py::arg("frames") = 0, py::arg("progress") = py::none(), py::arg("on_frame") = py::none(),
           "Builds the solver and simulates `frames` frames (0: the scene's count), releasing the GIL while it "
-          "steps. `progress(dict)` runs after each substep (keys: stage, frame, substep, time (s), fraction of "
-          "the run); returning False stops the run, and Ctrl-C raises KeyboardInterrupt there (the `lodestone "
-          "run` command stops at the same point). `on_frame(frame, solver)` runs after each frame, with the "
+          "steps. `progress(dict)` runs after each substep (keys: stage 'substep', frame, substep, time (s), "
+          "fraction of the run) and after each Newton iteration of a field solve (stage 'newton', iteration, "
+          "relative_residual, cg_iterations, seconds); returning False stops the run, and Ctrl-C raises "
+          "KeyboardInterrupt at the next of these points (a field solve stopped that way leaves its substep with "
+          "the field reached; the frame is not complete). `on_frame(frame, solver)` runs after each frame, with the "
           "GIL. Returns (solver, list of frame report dicts).");
 }
 

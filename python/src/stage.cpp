@@ -12,34 +12,18 @@ namespace lodestone::python {
 
 namespace {
 
-py::dict newtonRecord(const NewtonIterationRecord& r, py::dict d) {
-  d["iteration"] = r.iteration;
-  d["relative_residual"] = r.relativeResidual;
-  d["cg_iterations"] = r.cgIterations;
-  d["seconds"] = r.seconds;
-  return d;
-}
-
 // Runs `body` without the GIL with a Hook as the stage's progress; raises
 // what the hook caught.
 template <typename Body>
 MagneticStageReport runHooked(MagneticForceStage& stage, const py::object& progress, const Body& body) {
   Hook hook(progress);
-  stage.setProgress([&hook](const NewtonIterationRecord& r) {
-    return hook.poll([&](py::dict& d) {
-      d["stage"] = "newton";
-      newtonRecord(r, d);
-    });
-  });
+  stage.setProgress(hook.newtonProgress());
+  const Unhook unhook([&stage] { stage.setProgress({}); });
   MagneticStageReport report;
-  try {
+  {
     py::gil_scoped_release release;
     report = body();
-  } catch (...) {
-    stage.setProgress({});
-    throw;
   }
-  stage.setProgress({});
   hook.rethrow();
   return report;
 }

@@ -383,3 +383,34 @@ TEST(MpmMagnetic, MovingMagnetMovesItsFieldAndItsCollider) {
                                                      << "), impulse = (" << impulse.x << ", " << impulse.y << ", "
                                                      << impulse.z << ") N*s";
 }
+
+// The field-solve hook: called after each Newton iteration of the solves a
+// frame runs; returning false stops that solve (the report says Cancelled)
+// and the frame goes on; an empty hook changes nothing.
+TEST(MpmMagnetic, FieldSolveProgressSeesEachNewtonIterationAndCanStopTheSolve) {
+  const MagneticMaterial law = paperMaterial();
+  Scene full = makeScene(law, 0.08, false), stopped = makeScene(law, 0.08, false);
+  int iterations = 0;
+  full.solver->setFieldSolveProgress([&](const NewtonIterationRecord&) { return ++iterations > 0; });
+  const MpmFrameReport a = full.solver->advanceFrame(0.002);
+  ASSERT_EQ(a.magneticReports.size(), 1u);
+  EXPECT_TRUE(a.magneticReports[0].solve.converged());
+  EXPECT_EQ(iterations, a.magneticReports[0].solve.newtonIterations);
+  EXPECT_GE(iterations, 2);
+
+  int calls = 0;
+  stopped.solver->setFieldSolveProgress([&](const NewtonIterationRecord&) { return ++calls < 1; });
+  const MpmFrameReport b = stopped.solver->advanceFrame(0.002);
+  ASSERT_EQ(b.magneticReports.size(), 1u);
+  EXPECT_EQ(b.magneticReports[0].solve.status, SolveStatus::Cancelled);
+  EXPECT_EQ(calls, 1);
+  EXPECT_EQ(b.substeps, a.substeps);  // the frame itself ran to its end
+
+  // Without a hook the solve is that of a solver that never had one.
+  Scene plain = makeScene(law, 0.08, false);
+  stopped.solver->setFieldSolveProgress({});
+  full.solver->setFieldSolveProgress({});
+  const MpmFrameReport c = plain.solver->advanceFrame(0.002);
+  EXPECT_EQ(c.magneticReports[0].solve.newtonIterations, a.magneticReports[0].solve.newtonIterations);
+  EXPECT_EQ(c.magneticReports[0].totalForce.z, a.magneticReports[0].totalForce.z);
+}

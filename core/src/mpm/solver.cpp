@@ -513,6 +513,7 @@ void MpmSolver::solveMagnetic(MpmStepReport& rep) {
   reuse_.record(particles_.x, index, *scene_, time_);
   if (!stage_) stage_ = std::make_unique<MagneticForceStage>(magneticGrid_, *law, settings_.magnetic);
   const ParticleView view{positions.data(), counts.data(), positions.size()};
+  stage_->setProgress(fieldSolveProgress_);
   rep.magnetic = stage_->run(view, *scene_, time_);
   rep.magneticSolved = true;
   if (settings_.checkFinite) {

@@ -376,6 +376,13 @@ class MpmSolver {
   const MpmGrid& grid() const { return grid_; }
   /// The magnetic stage (null before the first field solve).
   const MagneticForceStage* magneticStage() const { return stage_.get(); }
+  /// Called after each Newton iteration of the field solves this solver
+  /// runs: a host's point of cancellation inside a substep (advanceFrame's
+  /// callback runs only between substeps). Returning false stops that solve:
+  /// the substep goes on with the field reached so far and its report says
+  /// so (MagneticStageReport::solve.status Cancelled); the caller then stops
+  /// the frame from its advanceFrame callback. Empty (the default): none.
+  void setFieldSolveProgress(SolveProgress progress) { fieldSolveProgress_ = std::move(progress); }
   /// The nodal magnetic force (N) applied on the MPM grid until the next
   /// solve (zero when the stage grid differs from the MPM grid).
   GridView<const Vec3d> magneticNodalForce() const { return magneticForce_.view(); }
@@ -462,6 +469,7 @@ class MpmSolver {
   std::unique_ptr<SceneField> scene_;
   MpmGrid grid_;
   std::unique_ptr<MagneticForceStage> stage_;
+  SolveProgress fieldSolveProgress_;  // setFieldSolveProgress
   DenseGrid<Vec3d> magneticForce_;  // on the MPM grid (same-grid coupling)
   Vec3d magneticDropped_;
   bool haveMagneticForce_ = false;
