@@ -1,5 +1,12 @@
 // MLS-MPM particle <-> grid transfers. The formulas and the determinism
 // argument are in mpm_grid.h.
+// Lanes4 (below) never crosses a call out of this file, so GCC's note that
+// passing it without AVX changes the ABI does not apply; it comes from
+// apic_gather.h's templates too, hence before the includes.
+#if defined(__GNUC__) && !defined(__clang__)
+#pragma GCC diagnostic ignored "-Wpsabi"
+#endif
+
 #include "lodestone/core/mpm/grid.h"
 
 #include "lodestone/core/mpm/apic_gather.h"
@@ -36,11 +43,7 @@ namespace {
 // momentum and mass, or a velocity and a zero lane. Each lane does exactly the
 // scalar arithmetic, in the same order, so the results are bitwise those of the
 // scalar formulas; the compiler uses the widest vector registers the target
-// has. (Lanes4 never crosses a non-inlined call of another translation unit,
-// so the ABI note about passing it without AVX does not apply.)
-#if defined(__GNUC__) && !defined(__clang__)
-#pragma GCC diagnostic ignored "-Wpsabi"
-#endif
+// has.
 typedef double Lanes4 __attribute__((vector_size(32)));
 
 inline Lanes4 load4(const double* p) {
@@ -51,12 +54,22 @@ inline Lanes4 load4(const double* p) {
 
 inline void store4(double* p, const Lanes4& v) { std::memcpy(p, &v, sizeof v); }
 
-inline Lanes4 lanes(const Vec3d& v) { return Lanes4{v.x, v.y, v.z, 0.0}; }
-
-inline Vec3d vec3(const Lanes4& v) { return {v[0], v[1], v[2]}; }
-
 static_assert(sizeof(MpmNode) == 4 * sizeof(double) && offsetof(MpmNode, mass) == 3 * sizeof(double),
               "MpmNode: momentum x, y, z then mass, packed");
+
+}  // namespace
+
+// The gather of G2P (apic_gather.h) in Lanes4: a velocity and a zero lane.
+template <>
+inline Lanes4 apicLanes<Lanes4>(const Vec3d& v) {
+  return Lanes4{v.x, v.y, v.z, 0.0};
+}
+template <>
+inline Vec3d apicVec3<Lanes4>(const Lanes4& lanes) {
+  return {lanes[0], lanes[1], lanes[2]};
+}
+
+namespace {
 
 using Clock = std::chrono::steady_clock;
 constexpr std::size_t kNone = std::numeric_limits<std::size_t>::max();
@@ -231,7 +244,7 @@ struct G2PKernel {
       const int b3[3] = {bi, bj, bk};
       Vec3d vp;
       Mat3d C;
-      gatherApic(vel, nx, ny, u, b3, cScale, vp, C);
+      gatherApic<Lanes4>(vel, nx, ny, u, b3, cScale, vp, C);
       // Step 6: MLS update of the deformation (F <- (I + dt C) F, or J alone for fluids);
       // the elastoplastic solid's trial F_E is returned to the yield surface.
       const MaterialParams& mp = params[mat[p]];
