@@ -318,6 +318,67 @@ struct BaseBox {
   }
 };
 
+/// What pass 1 of the binning reads and writes (MpmGrid::bin sets it up).
+struct BinKernel {
+  const Vec3d* X = nullptr;
+  const std::uint32_t* mat = nullptr;
+  std::size_t materialCount = 0;
+  Vec3d o;           // grid origin, m
+  double invDx = 0;  // 1/m
+  Index3 bd;         // stencil bases per axis
+  std::uint64_t* key = nullptr;
+  std::uint32_t* rank = nullptr;
+  std::atomic<std::uint32_t>* binSize = nullptr;
+  std::atomic<std::size_t>* firstBad = nullptr;
+
+  // Bases, bin slots and the box of bases of particles [begin, end). Inlined
+  // into each instruction-set variant below.
+  __attribute__((always_inline)) inline void range(std::size_t begin, std::size_t end, BaseBox& acc) const {
+    std::size_t runFlat = 0, runStart = 0, runLength = 0;
+    auto endRun = [&] {
+      if (runLength == 0) return;
+      const std::uint32_t first = binSize[runFlat].fetch_add(std::uint32_t(runLength), std::memory_order_relaxed);
+      for (std::size_t q = 0; q < runLength; ++q) rank[runStart + q] = first + std::uint32_t(q);
+      runLength = 0;
+    };
+    for (std::size_t p = begin; p != end; ++p) {
+      const Vec3d u{(X[p].x - o.x) * invDx, (X[p].y - o.y) * invDx, (X[p].z - o.z) * invDx};
+      const double fx = quadraticBaseFloor(u.x), fy = quadraticBaseFloor(u.y), fz = quadraticBaseFloor(u.z);
+      // The comparisons are false for NaN, so non-finite positions land here too.
+      if (!(fx >= 0 && fx <= bd.i - 1 && fy >= 0 && fy <= bd.j - 1 && fz >= 0 && fz <= bd.k - 1) ||
+          mat[p] >= materialCount) {
+        endRun();
+        key[p] = kBadBase;
+        atomicMin(*firstBad, p);
+        continue;
+      }
+      const int bi = int(fx), bj = int(fy), bk = int(fz);
+      key[p] = std::uint64_t(bi) | (std::uint64_t(bj) << 21) | (std::uint64_t(bk) << 42);
+      const std::size_t flat =
+          std::size_t(bi) + std::size_t(bd.i) * (std::size_t(bj) + std::size_t(bd.j) * std::size_t(bk));
+      if (runLength != 0 && flat != runFlat) endRun();
+      if (runLength == 0) {
+        runFlat = flat;
+        runStart = p;
+      }
+      ++runLength;
+      acc.add(bi, bj, bk);
+    }
+    endRun();
+  }
+};
+
+/// Pass 1 of the binning on a range of particles (BinKernel::range), for any x86-64 CPU.
+void binRange(const BinKernel& k, std::size_t begin, std::size_t end, BaseBox& acc) { k.range(begin, end, acc); }
+
+#if defined(LODESTONE_MPM_AVX2)
+/// The same range compiled for AVX2 (floor in one instruction; the same results).
+__attribute__((target("avx2"))) void binRangeAvx2(const BinKernel& k, std::size_t begin, std::size_t end,
+                                                 BaseBox& acc) {
+  k.range(begin, end, acc);
+}
+#endif
+
 }  // namespace
 
 MpmGrid::MpmGrid(const GridSpec& spec) : spec_(spec) {
@@ -376,27 +437,33 @@ void MpmGrid::bin(const MpmParticles& particles, std::size_t materialCount) {
 
   // Pass 1: base node of every particle (packed 21 bits per axis), a
   // scheduling-dependent slot in its bin, and the box of bases in use
-  // (min/max are exact, so the reduction is deterministic).
+  // (min/max are exact, so the reduction is deterministic). A run of
+  // consecutive particles in one bin (the usual case once the particles are
+  // ordered by cell) takes its slots with one atomic addition.
+  BinKernel kernel;
+  kernel.X = X;
+  kernel.mat = mat;
+  kernel.materialCount = materialCount;
+  kernel.o = o;
+  kernel.invDx = invDx;
+  kernel.bd = bd;
+  kernel.key = key_.data();
+  kernel.rank = rank_.data();
+  kernel.binSize = binSize;
+  kernel.firstBad = &firstBad;
+#if defined(LODESTONE_MPM_AVX2)
+  const bool avx2 = cpuHasAvx2Fma();
+#endif
   const BaseBox box = tbb::parallel_reduce(
       tbb::blocked_range<std::size_t>(0, np, 2048), BaseBox{},
       [&](const tbb::blocked_range<std::size_t>& r, BaseBox acc) {
-        for (std::size_t p = r.begin(); p != r.end(); ++p) {
-          const Vec3d u{(X[p].x - o.x) * invDx, (X[p].y - o.y) * invDx, (X[p].z - o.z) * invDx};
-          const double fx = quadraticBaseFloor(u.x), fy = quadraticBaseFloor(u.y), fz = quadraticBaseFloor(u.z);
-          // The comparisons are false for NaN, so non-finite positions land here too.
-          if (!(fx >= 0 && fx <= bd.i - 1 && fy >= 0 && fy <= bd.j - 1 && fz >= 0 && fz <= bd.k - 1) ||
-              mat[p] >= materialCount) {
-            key_[p] = kBadBase;
-            atomicMin(firstBad, p);
-            continue;
-          }
-          const int bi = int(fx), bj = int(fy), bk = int(fz);
-          key_[p] = std::uint64_t(bi) | (std::uint64_t(bj) << 21) | (std::uint64_t(bk) << 42);
-          const std::size_t flat =
-              std::size_t(bi) + std::size_t(bd.i) * (std::size_t(bj) + std::size_t(bd.j) * std::size_t(bk));
-          rank_[p] = binSize[flat].fetch_add(1, std::memory_order_relaxed);
-          acc.add(bi, bj, bk);
+#if defined(LODESTONE_MPM_AVX2)
+        if (avx2) {
+          binRangeAvx2(kernel, r.begin(), r.end(), acc);
+          return acc;
         }
+#endif
+        binRange(kernel, r.begin(), r.end(), acc);
         return acc;
       },
       [](BaseBox a, const BaseBox& b) {
