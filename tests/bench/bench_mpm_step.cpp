@@ -62,7 +62,8 @@ struct Timing {
   std::size_t particles = 0;
   int steps = 0;
   double dt = 0, total = 0, p2g = 0, binning = 0, grid = 0, g2p = 0;  // mean seconds per step
-  double bytes = 0;  // bytes a substep must move (see the header)
+  // Bytes a substep must move (see the header).
+  double bytes = 0;
 };
 
 /// Bytes one substep must move at the least (the count in the header).
@@ -274,7 +275,7 @@ int main(int argc, char** argv) {
         "reorder interval %d)\n",
         threads, nodes, steps, age + 2, reorder);
     std::printf("%-8s %10s %10s %10s %9s %9s %9s %9s %9s %10s %7s %7s %6s\n", "material", "particles", "projection",
-              "dt s", "ms/step", "P2G", "(binning)", "grid", "G2P", "ns/p/step", "GB/s", "copy", "ratio");
+                "dt s", "ms/step", "P2G", "(binning)", "grid", "G2P", "ns/p/step", "GB/s", "copy", "ratio");
     for (double c : counts)
       for (int fluid = 0; fluid < 2; ++fluid)
         for (int projection = collider == "none" ? 1 : 0; projection < 2; ++projection) {
@@ -284,8 +285,8 @@ int main(int argc, char** argv) {
           const double ns = 1e9 * t.total / double(t.particles);
           const double gbs = t.bytes / t.total * 1e-9, copyGbs = t.bytes / copySeconds(t.bytes, 5) * 1e-9;
           std::printf("%-8s %10zu %10s %10.3g %9.2f %9.2f %9.2f %9.2f %9.2f %10.1f %7.1f %7.1f %6.2f\n", name,
-                      t.particles, proj, t.dt, 1e3 * t.total, 1e3 * t.p2g, 1e3 * t.binning, 1e3 * t.grid,
-                      1e3 * t.g2p, ns, gbs, copyGbs, gbs / copyGbs);
+                      t.particles, proj, t.dt, 1e3 * t.total, 1e3 * t.p2g, 1e3 * t.binning, 1e3 * t.grid, 1e3 * t.g2p,
+                      ns, gbs, copyGbs, gbs / copyGbs);
           std::fflush(stdout);
           csv << name << ',' << t.particles << ',' << nodes << ',' << t.steps << ',' << age << ',' << reorder << ','
               << collider << ',' << proj << ',' << t.dt << ',' << 1e3 * t.total << ',' << 1e3 * t.p2g << ','

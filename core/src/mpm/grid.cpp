@@ -86,11 +86,11 @@ void atomicMin(std::atomic<std::size_t>& a, std::size_t v) {
 struct MaterialParams {
   bool fluid = false;
   bool viscoplastic = false;
-  bool elastoplastic = false;  // tracks F_E, Hencky + von Mises + Kelvin-Voigt (viscosity = eta)
+  bool elastoplastic = false;             // tracks F_E, Hencky + von Mises + Kelvin-Voigt (viscosity = eta)
   double mu = 0, lambda = 0;              // Pa (solid)
   double viscosity = 0, bulkModulus = 0;  // Pa*s, Pa (fluid)
   double yieldStress = 0, consistency = 0, flowIndex = 1, maxViscosity = 0;  // Pa, Pa*s^n, -, Pa*s
-  double surfaceTension = 0;                                                  // N/m (fluid)
+  double surfaceTension = 0;                                                 // N/m (fluid)
 };
 
 std::vector<MaterialParams> paramsOf(const std::vector<MpmMaterial>& materials) {
@@ -117,13 +117,13 @@ std::vector<MaterialParams> paramsOf(const std::vector<MpmMaterial>& materials) 
 struct DepositKernel {
   const MaterialParams* params = nullptr;
   double dx = 0, invDx = 0, stressScale = 0, dt = 0;  // m, 1/m, s/m^2, s
-  Vec3d o;                                           // grid origin, m
-  std::size_t sj = 0, sk = 0;                        // node strides of j and k
+  Vec3d o;                                            // grid origin, m
+  std::size_t sj = 0, sk = 0;                         // node strides of j and k
   const Vec3d *X = nullptr, *V = nullptr;
   const Mat3d *Cp = nullptr, *Fp = nullptr;
   const double *Jp = nullptr, *M = nullptr, *V0 = nullptr;
   const std::uint32_t* mat = nullptr;
-  const Mat3d* capillary = nullptr;     // capillary stress per particle (Pa), or none
+  const Mat3d* capillary = nullptr;       // capillary stress per particle (Pa), or none
   const Vec3d* particleForces = nullptr;  // N per particle, or none
   MpmNode* nodes = nullptr;
   const std::uint32_t *sorted = nullptr, *offsets = nullptr;  // the binning
@@ -153,12 +153,11 @@ struct DepositKernel {
         const double m = M[p];
         const MaterialParams& mp = params[mat[p]];
         // Kirchhoff stress tau = J sigma (Pa): Eq. 18, Eqs. 19-21, Herschel-Bulkley or damped Hencky.
-        Mat3d tau = mp.viscoplastic ? viscoplasticFluidKirchhoff(Cp[p], Jp[p], mp.yieldStress, mp.consistency,
-                                                                       mp.flowIndex, mp.maxViscosity, mp.bulkModulus)
-                          : mp.fluid      ? viscousFluidKirchhoff(Cp[p], Jp[p], mp.viscosity, mp.bulkModulus)
-                          : mp.elastoplastic
-                              ? elastoplasticKirchhoff(Fp[p], Cp[p], mp.mu, mp.lambda, mp.viscosity)
-                              : neoHookeanKirchhoff(Fp[p], mp.mu, mp.lambda);
+        Mat3d tau = mp.viscoplastic    ? viscoplasticFluidKirchhoff(Cp[p], Jp[p], mp.yieldStress, mp.consistency,
+                                                                    mp.flowIndex, mp.maxViscosity, mp.bulkModulus)
+                    : mp.fluid         ? viscousFluidKirchhoff(Cp[p], Jp[p], mp.viscosity, mp.bulkModulus)
+                    : mp.elastoplastic ? elastoplasticKirchhoff(Fp[p], Cp[p], mp.mu, mp.lambda, mp.viscosity)
+                                       : neoHookeanKirchhoff(Fp[p], mp.mu, mp.lambda);
         // The capillary stress T_p (Cauchy, Pa) of the liquids with surface tension: tau += J T_p.
         if (capillary) {
           const Mat3d& Tc = capillary[p];
@@ -263,8 +262,7 @@ struct G2PKernel {
       Vec3d xn = x + dt * vp;
       if (!(isFinite(xn) && isFinite(vp) && std::isfinite(Jp[p]))) {
         ++acc.nonFinite;
-      } else if (bounded &&
-                 (xn.x < lo.x || xn.x > hi.x || xn.y < lo.y || xn.y > hi.y || xn.z < lo.z || xn.z > hi.z)) {
+      } else if (bounded && (xn.x < lo.x || xn.x > hi.x || xn.y < lo.y || xn.y > hi.y || xn.z < lo.z || xn.z > hi.z)) {
         if (clamp) {
           for (int a = 0; a < 3; ++a) {
             if (xn[a] < lo[a]) {
@@ -293,7 +291,7 @@ void g2pRange(const G2PKernel& k, std::size_t begin, std::size_t end, G2PSums& a
 #if defined(LODESTONE_MPM_AVX2)
 /// The same range compiled for AVX2 (no FMA: the arithmetic stays the scalar one, lane by lane).
 __attribute__((target("avx2"))) void g2pRangeAvx2(const G2PKernel& k, std::size_t begin, std::size_t end,
-                                                 G2PSums& acc) {
+                                                  G2PSums& acc) {
   k.range(begin, end, acc);
 }
 #endif
@@ -374,7 +372,7 @@ void binRange(const BinKernel& k, std::size_t begin, std::size_t end, BaseBox& a
 #if defined(LODESTONE_MPM_AVX2)
 /// The same range compiled for AVX2 (floor in one instruction; the same results).
 __attribute__((target("avx2"))) void binRangeAvx2(const BinKernel& k, std::size_t begin, std::size_t end,
-                                                 BaseBox& acc) {
+                                                  BaseBox& acc) {
   k.range(begin, end, acc);
 }
 #endif
@@ -760,7 +758,6 @@ void MpmGrid::computeCapillaryStress(const MpmParticles& particles, const std::v
     }
   });
 }
-
 
 GridToParticleReport MpmGrid::gridToParticle(MpmParticles& particles, const std::vector<MpmMaterial>& materials,
                                              double dt, const ParticleBounds* bounds) const {
