@@ -23,6 +23,7 @@
 #include <cstring>
 #include <functional>
 #include <limits>
+#include <utility>
 
 #include "lodestone/core/base/bspline.h"
 #include "lodestone/core/base/cpu_features.h"
@@ -70,6 +71,33 @@ inline Vec3d apicVec3<Lanes4>(const Lanes4& lanes) {
 }
 
 namespace {
+
+// The kernels below (DepositKernel, G2PKernel, BinKernel) are compiled twice:
+// for any x86-64 CPU and for AVX2, chosen at run time. Without FMA the AVX2
+// variant does the same arithmetic, so the same bits.
+template <typename Kernel, typename... Args>
+void runPortable(const Kernel& kernel, Args&&... args) {
+  kernel(std::forward<Args>(args)...);
+}
+
+#if defined(LODESTONE_MPM_AVX2)
+template <typename Kernel, typename... Args>
+__attribute__((target("avx2"))) void runAvx2(const Kernel& kernel, Args&&... args) {
+  kernel(std::forward<Args>(args)...);
+}
+#endif
+
+/// kernel(args...) in the widest variant the CPU runs.
+template <typename Kernel, typename... Args>
+void runKernel(const Kernel& kernel, Args&&... args) {
+#if defined(LODESTONE_MPM_AVX2)
+  if (cpuHasAvx2Fma()) {
+    runAvx2(kernel, std::forward<Args>(args)...);
+    return;
+  }
+#endif
+  runPortable(kernel, std::forward<Args>(args)...);
+}
 
 using Clock = std::chrono::steady_clock;
 constexpr std::size_t kNone = std::numeric_limits<std::size_t>::max();
@@ -132,7 +160,7 @@ struct DepositKernel {
   // Deposits the particles of the bins of row (bj, bk), bins in increasing
   // bi, each in increasing particle index. Inlined into each instruction-set
   // variant below.
-  __attribute__((always_inline)) inline void row(int bj, int bk) const {
+  __attribute__((always_inline)) inline void operator()(int bj, int bk) const {
     const std::size_t firstBin =
         std::size_t(binDims.i) * (std::size_t(bj - binLo.j) + std::size_t(binDims.j) * std::size_t(bk - binLo.k));
     for (int bi = binLo.i; bi < binLo.i + binDims.i; ++bi) {
@@ -195,14 +223,6 @@ struct DepositKernel {
   }
 };
 
-/// One row of P2G (DepositKernel::row), for any x86-64 CPU.
-void depositRow(const DepositKernel& k, int bj, int bk) { k.row(bj, bk); }
-
-#if defined(LODESTONE_MPM_AVX2)
-/// The same row compiled for AVX2 (no FMA: the arithmetic stays the scalar one, lane by lane).
-__attribute__((target("avx2"))) void depositRowAvx2(const DepositKernel& k, int bj, int bk) { k.row(bj, bk); }
-#endif
-
 struct G2PSums {
   double maxSpeed2 = 0;
   std::size_t clamped = 0, outside = 0, nonFinite = 0;
@@ -229,8 +249,8 @@ struct G2PKernel {
   Vec3d lo, hi;  // ParticleBounds, m
 
   // G2P of particles [begin, end), their counts added to acc. Inlined into
-  // each instruction-set variant below.
-  __attribute__((always_inline)) inline void range(std::size_t begin, std::size_t end, G2PSums& acc) const {
+  // each instruction-set variant (runKernel).
+  __attribute__((always_inline)) inline void operator()(std::size_t begin, std::size_t end, G2PSums& acc) const {
     for (std::size_t p = begin; p != end; ++p) {
       const Vec3d x = X[p];
       const double ux = (x.x - o.x) * invDx, uy = (x.y - o.y) * invDx, uz = (x.z - o.z) * invDx;
@@ -285,17 +305,6 @@ struct G2PKernel {
   }
 };
 
-/// G2P of a range of particles (G2PKernel::range), for any x86-64 CPU.
-void g2pRange(const G2PKernel& k, std::size_t begin, std::size_t end, G2PSums& acc) { k.range(begin, end, acc); }
-
-#if defined(LODESTONE_MPM_AVX2)
-/// The same range compiled for AVX2 (no FMA: the arithmetic stays the scalar one, lane by lane).
-__attribute__((target("avx2"))) void g2pRangeAvx2(const G2PKernel& k, std::size_t begin, std::size_t end,
-                                                  G2PSums& acc) {
-  k.range(begin, end, acc);
-}
-#endif
-
 /// Box of base nodes touched: [lo, hi] inclusive, as a reduction value.
 struct BaseBox {
   int lo[3] = {std::numeric_limits<int>::max(), std::numeric_limits<int>::max(), std::numeric_limits<int>::max()};
@@ -330,8 +339,8 @@ struct BinKernel {
   std::atomic<std::size_t>* firstBad = nullptr;
 
   // Bases, bin slots and the box of bases of particles [begin, end). Inlined
-  // into each instruction-set variant below.
-  __attribute__((always_inline)) inline void range(std::size_t begin, std::size_t end, BaseBox& acc) const {
+  // into each instruction-set variant (runKernel).
+  __attribute__((always_inline)) inline void operator()(std::size_t begin, std::size_t end, BaseBox& acc) const {
     std::size_t runFlat = 0, runStart = 0, runLength = 0;
     auto endRun = [&] {
       if (runLength == 0) return;
@@ -365,17 +374,6 @@ struct BinKernel {
     endRun();
   }
 };
-
-/// Pass 1 of the binning on a range of particles (BinKernel::range), for any x86-64 CPU.
-void binRange(const BinKernel& k, std::size_t begin, std::size_t end, BaseBox& acc) { k.range(begin, end, acc); }
-
-#if defined(LODESTONE_MPM_AVX2)
-/// The same range compiled for AVX2 (floor in one instruction; the same results).
-__attribute__((target("avx2"))) void binRangeAvx2(const BinKernel& k, std::size_t begin, std::size_t end,
-                                                  BaseBox& acc) {
-  k.range(begin, end, acc);
-}
-#endif
 
 }  // namespace
 
@@ -438,30 +436,11 @@ void MpmGrid::bin(const MpmParticles& particles, std::size_t materialCount) {
   // (min/max are exact, so the reduction is deterministic). A run of
   // consecutive particles in one bin (the usual case once the particles are
   // ordered by cell) takes its slots with one atomic addition.
-  BinKernel kernel;
-  kernel.X = X;
-  kernel.mat = mat;
-  kernel.materialCount = materialCount;
-  kernel.o = o;
-  kernel.invDx = invDx;
-  kernel.bd = bd;
-  kernel.key = key_.data();
-  kernel.rank = rank_.data();
-  kernel.binSize = binSize;
-  kernel.firstBad = &firstBad;
-#if defined(LODESTONE_MPM_AVX2)
-  const bool avx2 = cpuHasAvx2Fma();
-#endif
+  const BinKernel kernel{X, mat, materialCount, o, invDx, bd, key_.data(), rank_.data(), binSize, &firstBad};
   const BaseBox box = tbb::parallel_reduce(
       tbb::blocked_range<std::size_t>(0, np, 2048), BaseBox{},
       [&](const tbb::blocked_range<std::size_t>& r, BaseBox acc) {
-#if defined(LODESTONE_MPM_AVX2)
-        if (avx2) {
-          binRangeAvx2(kernel, r.begin(), r.end(), acc);
-          return acc;
-        }
-#endif
-        binRange(kernel, r.begin(), r.end(), acc);
+        runKernel(kernel, r.begin(), r.end(), acc);
         return acc;
       },
       [](BaseBox a, const BaseBox& b) {
@@ -666,13 +645,7 @@ void MpmGrid::particleToGrid(const MpmParticles& particles, const std::vector<Mp
   kernel.offsets = offsets_.data();
   kernel.binLo = binLo_;
   kernel.binDims = binDims_;
-#if defined(LODESTONE_MPM_AVX2)
-  if (cpuHasAvx2Fma()) {
-    forEachRow([&](int bj, int bk) { depositRowAvx2(kernel, bj, bk); });
-    return;
-  }
-#endif
-  forEachRow([&](int bj, int bk) { depositRow(kernel, bj, bk); });
+  forEachRow([&](int bj, int bk) { runKernel(kernel, bj, bk); });
 }
 
 void MpmGrid::computeCapillaryStress(const MpmParticles& particles, const std::vector<double>& sigmaOf) {
@@ -789,19 +762,10 @@ GridToParticleReport MpmGrid::gridToParticle(MpmParticles& particles, const std:
     kernel.lo = bounds->lo;
     kernel.hi = bounds->hi;
   }
-#if defined(LODESTONE_MPM_AVX2)
-  const bool avx2 = cpuHasAvx2Fma();
-#endif
   const G2PSums sums = tbb::parallel_reduce(
       tbb::blocked_range<std::size_t>(0, particles.size(), 1024), G2PSums{},
       [&](const tbb::blocked_range<std::size_t>& r, G2PSums acc) {
-#if defined(LODESTONE_MPM_AVX2)
-        if (avx2) {
-          g2pRangeAvx2(kernel, r.begin(), r.end(), acc);
-          return acc;
-        }
-#endif
-        g2pRange(kernel, r.begin(), r.end(), acc);
+        runKernel(kernel, r.begin(), r.end(), acc);
         return acc;
       },
       [](G2PSums a, const G2PSums& b) {
