@@ -15,12 +15,27 @@
 // the price of the capillary stress (colour scatter and gradient pass) is the
 // difference. Prints tables and writes CSV. Not a test: timings are
 // machine-dependent.
+//
+// Bandwidth. Each case also reports the bytes a substep must move at the
+// least and the bandwidth that achieves, against a STREAM-like copy of the
+// same number of bytes timed in the same run on the same threads. The bytes
+// counted per particle: P2G reads x, v, C, J, mass, volume0, material (148
+// B) and F for solids (72 B); G2P reads x and material (28 B), J for fluids
+// or F for solids, and writes x, v, C, J (128 B) and F for solids: 312 B per
+// fluid particle, 520 B per solid one. Per node of the active box: the
+// node's mass and momentum written by P2G (32 B), read by the grid update
+// (32 B), which writes the velocity (24 B) that G2P reads (24 B): 112 B.
+// The binning's index arrays and the reordering are not counted (work the
+// algorithm adds). The copy moves the same bytes, half read and half
+// written, as STREAM counts them; the ratio is the substep's bandwidth over
+// the copy's (1 would be a substep as fast as copying its data once).
 // `lodestone-bench-mpm-step --help` lists the options.
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <fstream>
 #include <memory>
 #include <optional>
@@ -28,8 +43,10 @@
 #include <string>
 #include <vector>
 
+#include <tbb/blocked_range.h>
 #include <tbb/global_control.h>
 #include <tbb/info.h>
+#include <tbb/parallel_for.h>
 
 #include "lodestone/cli/command_line.h"
 
@@ -45,7 +62,33 @@ struct Timing {
   std::size_t particles = 0;
   int steps = 0;
   double dt = 0, total = 0, p2g = 0, binning = 0, grid = 0, g2p = 0;  // mean seconds per step
+  // Bytes a substep must move (see the header).
+  double bytes = 0;
 };
+
+/// Bytes one substep must move at the least (the count in the header).
+double substepBytes(std::size_t particles, bool fluid, std::size_t activeNodes) {
+  const double perParticle = fluid ? 312 : 520;
+  return perParticle * double(particles) + 112.0 * double(activeNodes);
+}
+
+/// Best seconds of a parallel copy of bytes/2 bytes into another buffer
+/// (STREAM's copy: bytes moved = 2 x the buffer) over `repeats` copies.
+double copySeconds(double bytes, int repeats) {
+  using Clock = std::chrono::steady_clock;
+  const std::size_t n = std::size_t(bytes / 2 / sizeof(double));
+  std::vector<double> from(n, 1.0), to(n, 0.0);  // touched: no first-touch faults in the timing
+  double best = 1e300;
+  for (int r = 0; r < repeats; ++r) {
+    const auto t0 = Clock::now();
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 1 << 16), [&](const tbb::blocked_range<std::size_t>& b) {
+      std::memcpy(to.data() + b.begin(), from.data() + b.begin(), (b.end() - b.begin()) * sizeof(double));
+    });
+    best = std::min(best, std::chrono::duration<double>(Clock::now() - t0).count());
+  }
+  require(to[n / 2] == 1.0, "bench: the copy did not copy");
+  return best;
+}
 
 /// The floor slab of --collider: 1.5 cm thick, as wide as the domain, its top 2 cells above the floor.
 MpmCollider floorSlab(const std::string& kind, const MpmSolver& solver) {
@@ -104,6 +147,11 @@ Timing run(bool fluid, double targetParticles, int steps, int nodes, int reorder
   }
   t.steps = steps;
   t.dt = dt;
+  const MpmGrid& g = solver.grid();
+  const std::size_t activeNodes = std::size_t(g.activeHi().i - g.activeLo().i) *
+                                  std::size_t(g.activeHi().j - g.activeLo().j) *
+                                  std::size_t(g.activeHi().k - g.activeLo().k);
+  t.bytes = substepBytes(t.particles, fluid, activeNodes);
   t.total /= steps;
   t.p2g /= steps;
   t.binning /= steps;
@@ -218,15 +266,16 @@ int main(int argc, char** argv) {
     std::ofstream csv(csvPath);
     require(bool(csv), "cannot write ", csvPath);
     csv << "material,particles,grid_nodes_per_axis,steps,age_steps,reorder_interval,collider,collider_projection,dt_s,"
-           "ms_per_step,ms_p2g,ms_binning,ms_grid_update,ms_g2p,ns_per_particle_step,threads\n";
+           "ms_per_step,ms_p2g,ms_binning,ms_grid_update,ms_g2p,ns_per_particle_step,threads,bytes_per_step,"
+           "gb_per_s,copy_gb_per_s,bandwidth_ratio\n";
     if (threads == 0) threads = tbb::info::default_concurrency();
     tbb::global_control limit(tbb::global_control::max_allowed_parallelism, std::size_t(threads));
     std::printf(
         "Lodestone MPM step benchmark (%d threads, %d^3 grid, dx = 7.8 mm, %d timed substeps after %d, "
         "reorder interval %d)\n",
         threads, nodes, steps, age + 2, reorder);
-    std::printf("%-8s %10s %10s %10s %9s %9s %9s %9s %9s %10s\n", "material", "particles", "projection", "dt s",
-                "ms/step", "P2G", "(binning)", "grid", "G2P", "ns/p/step");
+    std::printf("%-8s %10s %10s %10s %9s %9s %9s %9s %9s %10s %7s %7s %6s\n", "material", "particles", "projection",
+                "dt s", "ms/step", "P2G", "(binning)", "grid", "G2P", "ns/p/step", "GB/s", "copy", "ratio");
     for (double c : counts)
       for (int fluid = 0; fluid < 2; ++fluid)
         for (int projection = collider == "none" ? 1 : 0; projection < 2; ++projection) {
@@ -234,12 +283,15 @@ int main(int argc, char** argv) {
           const char* name = fluid ? "fluid" : "elastic";
           const char* proj = collider == "none" ? "-" : projection ? "on" : "off";
           const double ns = 1e9 * t.total / double(t.particles);
-          std::printf("%-8s %10zu %10s %10.3g %9.2f %9.2f %9.2f %9.2f %9.2f %10.1f\n", name, t.particles, proj, t.dt,
-                      1e3 * t.total, 1e3 * t.p2g, 1e3 * t.binning, 1e3 * t.grid, 1e3 * t.g2p, ns);
+          const double gbs = t.bytes / t.total * 1e-9, copyGbs = t.bytes / copySeconds(t.bytes, 5) * 1e-9;
+          std::printf("%-8s %10zu %10s %10.3g %9.2f %9.2f %9.2f %9.2f %9.2f %10.1f %7.1f %7.1f %6.2f\n", name,
+                      t.particles, proj, t.dt, 1e3 * t.total, 1e3 * t.p2g, 1e3 * t.binning, 1e3 * t.grid, 1e3 * t.g2p,
+                      ns, gbs, copyGbs, gbs / copyGbs);
           std::fflush(stdout);
           csv << name << ',' << t.particles << ',' << nodes << ',' << t.steps << ',' << age << ',' << reorder << ','
               << collider << ',' << proj << ',' << t.dt << ',' << 1e3 * t.total << ',' << 1e3 * t.p2g << ','
-              << 1e3 * t.binning << ',' << 1e3 * t.grid << ',' << 1e3 * t.g2p << ',' << ns << ',' << threads << '\n';
+              << 1e3 * t.binning << ',' << 1e3 * t.grid << ',' << 1e3 * t.g2p << ',' << ns << ',' << threads << ','
+              << t.bytes << ',' << gbs << ',' << copyGbs << ',' << gbs / copyGbs << '\n';
         }
     if (!bodies.empty()) {
       std::printf("\nrigid bodies in a fluid block of %.3g particles: ms per substep\n%8s %12s %12s %10s\n", counts.front(),

@@ -1,5 +1,12 @@
 // MLS-MPM particle <-> grid transfers. The formulas and the determinism
 // argument are in mpm_grid.h.
+// Lanes4 (below) never crosses a call out of this file, so GCC's note that
+// passing it without AVX changes the ABI does not apply; it comes from
+// apic_gather.h's templates too, hence before the includes.
+#if defined(__GNUC__) && !defined(__clang__)
+#pragma GCC diagnostic ignored "-Wpsabi"
+#endif
+
 #include "lodestone/core/mpm/grid.h"
 
 #include "lodestone/core/mpm/apic_gather.h"
@@ -12,18 +19,85 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstddef>
+#include <cstring>
 #include <functional>
 #include <limits>
+#include <utility>
 
 #include "lodestone/core/base/bspline.h"
+#include "lodestone/core/base/cpu_features.h"
 #include "lodestone/core/base/error.h"
 #include "lodestone/core/mpm/constitutive.h"
 #include "lodestone/core/mpm/surface_tension.h"
+
+#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
+#define LODESTONE_MPM_AVX2 1
+#endif
 
 namespace lodestone {
 inline namespace mpm {
 
 namespace {
+
+// Four doubles processed lane-wise (GCC/Clang vector extension): a node's
+// momentum and mass, or a velocity and a zero lane. Each lane does exactly the
+// scalar arithmetic, in the same order, so the results are bitwise those of the
+// scalar formulas; the compiler uses the widest vector registers the target
+// has.
+typedef double Lanes4 __attribute__((vector_size(32)));
+
+inline Lanes4 load4(const double* p) {
+  Lanes4 v;
+  std::memcpy(&v, p, sizeof v);
+  return v;
+}
+
+inline void store4(double* p, const Lanes4& v) { std::memcpy(p, &v, sizeof v); }
+
+static_assert(sizeof(MpmNode) == 4 * sizeof(double) && offsetof(MpmNode, mass) == 3 * sizeof(double),
+              "MpmNode: momentum x, y, z then mass, packed");
+
+}  // namespace
+
+// The gather of G2P (apic_gather.h) in Lanes4: a velocity and a zero lane.
+template <>
+inline Lanes4 apicLanes<Lanes4>(const Vec3d& v) {
+  return Lanes4{v.x, v.y, v.z, 0.0};
+}
+template <>
+inline Vec3d apicVec3<Lanes4>(const Lanes4& lanes) {
+  return {lanes[0], lanes[1], lanes[2]};
+}
+
+namespace {
+
+// The kernels below (DepositKernel, G2PKernel, BinKernel) are compiled twice:
+// for any x86-64 CPU and for AVX2, chosen at run time. Without FMA the AVX2
+// variant does the same arithmetic, so the same bits.
+template <typename Kernel, typename... Args>
+void runPortable(const Kernel& kernel, Args&&... args) {
+  kernel(std::forward<Args>(args)...);
+}
+
+#if defined(LODESTONE_MPM_AVX2)
+template <typename Kernel, typename... Args>
+__attribute__((target("avx2"))) void runAvx2(const Kernel& kernel, Args&&... args) {
+  kernel(std::forward<Args>(args)...);
+}
+#endif
+
+/// kernel(args...) in the widest variant the CPU runs.
+template <typename Kernel, typename... Args>
+void runKernel(const Kernel& kernel, Args&&... args) {
+#if defined(LODESTONE_MPM_AVX2)
+  if (cpuHasAvx2Fma()) {
+    runAvx2(kernel, std::forward<Args>(args)...);
+    return;
+  }
+#endif
+  runPortable(kernel, std::forward<Args>(args)...);
+}
 
 using Clock = std::chrono::steady_clock;
 constexpr std::size_t kNone = std::numeric_limits<std::size_t>::max();
@@ -40,11 +114,11 @@ void atomicMin(std::atomic<std::size_t>& a, std::size_t v) {
 struct MaterialParams {
   bool fluid = false;
   bool viscoplastic = false;
-  bool elastoplastic = false;  // tracks F_E, Hencky + von Mises + Kelvin-Voigt (viscosity = eta)
+  bool elastoplastic = false;             // tracks F_E, Hencky + von Mises + Kelvin-Voigt (viscosity = eta)
   double mu = 0, lambda = 0;              // Pa (solid)
   double viscosity = 0, bulkModulus = 0;  // Pa*s, Pa (fluid)
   double yieldStress = 0, consistency = 0, flowIndex = 1, maxViscosity = 0;  // Pa, Pa*s^n, -, Pa*s
-  double surfaceTension = 0;                                                  // N/m (fluid)
+  double surfaceTension = 0;                                                 // N/m (fluid)
 };
 
 std::vector<MaterialParams> paramsOf(const std::vector<MpmMaterial>& materials) {
@@ -67,6 +141,170 @@ std::vector<MaterialParams> paramsOf(const std::vector<MpmMaterial>& materials) 
   return out;
 }
 
+/// What a P2G deposit reads and writes (MpmGrid::particleToGrid sets it up).
+struct DepositKernel {
+  const MaterialParams* params = nullptr;
+  double dx = 0, invDx = 0, stressScale = 0, dt = 0;  // m, 1/m, s/m^2, s
+  Vec3d o;                                            // grid origin, m
+  std::size_t sj = 0, sk = 0;                         // node strides of j and k
+  const Vec3d *X = nullptr, *V = nullptr;
+  const Mat3d *Cp = nullptr, *Fp = nullptr;
+  const double *Jp = nullptr, *M = nullptr, *V0 = nullptr;
+  const std::uint32_t* mat = nullptr;
+  const Mat3d* capillary = nullptr;       // capillary stress per particle (Pa), or none
+  const Vec3d* particleForces = nullptr;  // N per particle, or none
+  MpmNode* nodes = nullptr;
+  const std::uint32_t *sorted = nullptr, *offsets = nullptr;  // the binning
+  Index3 binLo, binDims;
+
+  // Deposits the particles of the bins of row (bj, bk), bins in increasing
+  // bi, each in increasing particle index. Inlined into each instruction-set
+  // variant below.
+  __attribute__((always_inline)) inline void operator()(int bj, int bk) const {
+    const std::size_t firstBin =
+        std::size_t(binDims.i) * (std::size_t(bj - binLo.j) + std::size_t(binDims.j) * std::size_t(bk - binLo.k));
+    for (int bi = binLo.i; bi < binLo.i + binDims.i; ++bi) {
+      const std::size_t bin = firstBin + std::size_t(bi - binLo.i);
+      const std::uint32_t* it = sorted + offsets[bin];
+      const std::uint32_t* end = sorted + offsets[bin + 1];
+      if (it == end) continue;
+      MpmNode* corner = nodes + (std::size_t(bi) + sj * std::size_t(bj) + sk * std::size_t(bk));
+      for (; it != end; ++it) {
+        const std::size_t p = *it;
+        const Vec3d x = X[p];
+        const double ux = (x.x - o.x) * invDx, uy = (x.y - o.y) * invDx, uz = (x.z - o.z) * invDx;
+        const QuadraticWeights<double> wx = quadraticWeightsAt(ux, bi);
+        const QuadraticWeights<double> wy = quadraticWeightsAt(uy, bj);
+        const QuadraticWeights<double> wz = quadraticWeightsAt(uz, bk);
+        const double fx = ux - bi, fy = uy - bj, fz = uz - bk;  // in [1/2, 3/2)
+
+        const double m = M[p];
+        const MaterialParams& mp = params[mat[p]];
+        // Kirchhoff stress tau = J sigma (Pa): Eq. 18, Eqs. 19-21, Herschel-Bulkley or damped Hencky.
+        Mat3d tau = mp.viscoplastic    ? viscoplasticFluidKirchhoff(Cp[p], Jp[p], mp.yieldStress, mp.consistency,
+                                                                    mp.flowIndex, mp.maxViscosity, mp.bulkModulus)
+                    : mp.fluid         ? viscousFluidKirchhoff(Cp[p], Jp[p], mp.viscosity, mp.bulkModulus)
+                    : mp.elastoplastic ? elastoplasticKirchhoff(Fp[p], Cp[p], mp.mu, mp.lambda, mp.viscosity)
+                                       : neoHookeanKirchhoff(Fp[p], mp.mu, mp.lambda);
+        // The capillary stress T_p (Cauchy, Pa) of the liquids with surface tension: tau += J T_p.
+        if (capillary) {
+          const Mat3d& Tc = capillary[p];
+          for (int a = 0; a < 3; ++a)
+            for (int b = 0; b < 3; ++b) tau(a, b) += Jp[p] * Tc(a, b);
+        }
+        // A = m C - dt D^-1 V0 tau (kg/s): the MLS-MPM affine momentum with the stress impulse.
+        Mat3d A;
+        const double s = stressScale * V0[p];
+        for (int a = 0; a < 3; ++a)
+          for (int b = 0; b < 3; ++b) A(a, b) = m * Cp[p](a, b) - s * tau(a, b);
+        // Contribution at node offset (a, b, c): m v + dt f + A d with
+        // d = ((a - fx) dx, (b - fy) dx, (c - fz) dx) = q0 + a A0 + b A1 + c A2.
+        Vec3d q0 = m * V[p] - A * Vec3d{fx * dx, fy * dx, fz * dx};
+        if (particleForces) q0 += dt * particleForces[p];
+        // Node lanes: momentum x, y, z and mass; the mass lane of q is m (A's lane is 0).
+        const Lanes4 A0{A(0, 0) * dx, A(1, 0) * dx, A(2, 0) * dx, 0.0};
+        const Lanes4 A1{A(0, 1) * dx, A(1, 1) * dx, A(2, 1) * dx, 0.0};
+        const Lanes4 A2{A(0, 2) * dx, A(1, 2) * dx, A(2, 2) * dx, 0.0};
+        const Lanes4 twoA0 = 2.0 * A0;
+        const Lanes4 q0m{q0.x, q0.y, q0.z, m};
+        for (int c = 0; c < 3; ++c) {
+          for (int b = 0; b < 3; ++b) {
+            const double wbc = wy.w[b] * wz.w[c];
+            const Lanes4 q = q0m + double(b) * A1 + double(c) * A2;
+            double* line = reinterpret_cast<double*>(corner + std::size_t(b) * sj + std::size_t(c) * sk);
+            const double w0 = wx.w[0] * wbc, w1 = wx.w[1] * wbc, w2 = wx.w[2] * wbc;
+            store4(line, load4(line) + w0 * q);
+            store4(line + 4, load4(line + 4) + w1 * (q + A0));
+            store4(line + 8, load4(line + 8) + w2 * (q + twoA0));
+          }
+        }
+      }
+    }
+  }
+};
+
+struct G2PSums {
+  double maxSpeed2 = 0;
+  std::size_t clamped = 0, outside = 0, nonFinite = 0;
+  void join(const G2PSums& o) {
+    maxSpeed2 = std::max(maxSpeed2, o.maxSpeed2);
+    clamped += o.clamped;
+    outside += o.outside;
+    nonFinite += o.nonFinite;
+  }
+};
+
+/// What G2P reads and writes (MpmGrid::gridToParticle sets it up).
+struct G2PKernel {
+  const MaterialParams* params = nullptr;
+  double dt = 0, invDx = 0, cScale = 0;  // s, 1/m, 4/dx (1/m)
+  Vec3d o;                               // grid origin, m
+  std::size_t nx = 0, ny = 0;            // nodes along x and y
+  const Vec3d* vel = nullptr;            // node velocities, m/s
+  Vec3d *X = nullptr, *V = nullptr;
+  Mat3d *Cp = nullptr, *Fp = nullptr;
+  double* Jp = nullptr;
+  const std::uint32_t* mat = nullptr;
+  bool bounded = false, clamp = false;
+  Vec3d lo, hi;  // ParticleBounds, m
+
+  // G2P of particles [begin, end), their counts added to acc. Inlined into
+  // each instruction-set variant (runKernel).
+  __attribute__((always_inline)) inline void operator()(std::size_t begin, std::size_t end, G2PSums& acc) const {
+    for (std::size_t p = begin; p != end; ++p) {
+      const Vec3d x = X[p];
+      const double ux = (x.x - o.x) * invDx, uy = (x.y - o.y) * invDx, uz = (x.z - o.z) * invDx;
+      // The same base as the binning: the same arithmetic on the same,
+      // unmoved position (range-checked there).
+      const int bi = int(quadraticBaseFloor(ux));
+      const int bj = int(quadraticBaseFloor(uy));
+      const int bk = int(quadraticBaseFloor(uz));
+      const double u[3] = {ux, uy, uz};
+      const int b3[3] = {bi, bj, bk};
+      Vec3d vp;
+      Mat3d C;
+      gatherApic<Lanes4>(vel, nx, ny, u, b3, cScale, vp, C);
+      // Step 6: MLS update of the deformation (F <- (I + dt C) F, or J alone for fluids);
+      // the elastoplastic solid's trial F_E is returned to the yield surface.
+      const MaterialParams& mp = params[mat[p]];
+      if (mp.fluid) {
+        Jp[p] *= 1.0 + dt * trace(C);
+      } else {
+        Mat3d G = Mat3d::identity();
+        for (int a = 0; a < 3; ++a)
+          for (int b = 0; b < 3; ++b) G(a, b) += dt * C(a, b);
+        Fp[p] = G * Fp[p];
+        if (mp.elastoplastic) Fp[p] = vonMisesReturn(Fp[p], mp.mu, mp.yieldStress);
+        Jp[p] = determinant(Fp[p]);
+      }
+      Cp[p] = C;
+      // Step 7: advection.
+      Vec3d xn = x + dt * vp;
+      if (!(isFinite(xn) && isFinite(vp) && std::isfinite(Jp[p]))) {
+        ++acc.nonFinite;
+      } else if (bounded && (xn.x < lo.x || xn.x > hi.x || xn.y < lo.y || xn.y > hi.y || xn.z < lo.z || xn.z > hi.z)) {
+        if (clamp) {
+          for (int a = 0; a < 3; ++a) {
+            if (xn[a] < lo[a]) {
+              xn[a] = lo[a];
+              vp[a] = std::max(vp[a], 0.0);
+            } else if (xn[a] > hi[a]) {
+              xn[a] = hi[a];
+              vp[a] = std::min(vp[a], 0.0);
+            }
+          }
+          ++acc.clamped;
+        } else {
+          ++acc.outside;
+        }
+      }
+      V[p] = vp;
+      X[p] = xn;
+      acc.maxSpeed2 = std::max(acc.maxSpeed2, norm2(vp));
+    }
+  }
+};
+
 /// Box of base nodes touched: [lo, hi] inclusive, as a reduction value.
 struct BaseBox {
   int lo[3] = {std::numeric_limits<int>::max(), std::numeric_limits<int>::max(), std::numeric_limits<int>::max()};
@@ -84,6 +322,56 @@ struct BaseBox {
       lo[a] = std::min(lo[a], o.lo[a]);
       hi[a] = std::max(hi[a], o.hi[a]);
     }
+  }
+};
+
+/// What pass 1 of the binning reads and writes (MpmGrid::bin sets it up).
+struct BinKernel {
+  const Vec3d* X = nullptr;
+  const std::uint32_t* mat = nullptr;
+  std::size_t materialCount = 0;
+  Vec3d o;           // grid origin, m
+  double invDx = 0;  // 1/m
+  Index3 bd;         // stencil bases per axis
+  std::uint64_t* key = nullptr;
+  std::uint32_t* rank = nullptr;
+  std::atomic<std::uint32_t>* binSize = nullptr;
+  std::atomic<std::size_t>* firstBad = nullptr;
+
+  // Bases, bin slots and the box of bases of particles [begin, end). Inlined
+  // into each instruction-set variant (runKernel).
+  __attribute__((always_inline)) inline void operator()(std::size_t begin, std::size_t end, BaseBox& acc) const {
+    std::size_t runFlat = 0, runStart = 0, runLength = 0;
+    auto endRun = [&] {
+      if (runLength == 0) return;
+      const std::uint32_t first = binSize[runFlat].fetch_add(std::uint32_t(runLength), std::memory_order_relaxed);
+      for (std::size_t q = 0; q < runLength; ++q) rank[runStart + q] = first + std::uint32_t(q);
+      runLength = 0;
+    };
+    for (std::size_t p = begin; p != end; ++p) {
+      const Vec3d u{(X[p].x - o.x) * invDx, (X[p].y - o.y) * invDx, (X[p].z - o.z) * invDx};
+      const double fx = quadraticBaseFloor(u.x), fy = quadraticBaseFloor(u.y), fz = quadraticBaseFloor(u.z);
+      // The comparisons are false for NaN, so non-finite positions land here too.
+      if (!(fx >= 0 && fx <= bd.i - 1 && fy >= 0 && fy <= bd.j - 1 && fz >= 0 && fz <= bd.k - 1) ||
+          mat[p] >= materialCount) {
+        endRun();
+        key[p] = kBadBase;
+        atomicMin(*firstBad, p);
+        continue;
+      }
+      const int bi = int(fx), bj = int(fy), bk = int(fz);
+      key[p] = std::uint64_t(bi) | (std::uint64_t(bj) << 21) | (std::uint64_t(bk) << 42);
+      const std::size_t flat =
+          std::size_t(bi) + std::size_t(bd.i) * (std::size_t(bj) + std::size_t(bd.j) * std::size_t(bk));
+      if (runLength != 0 && flat != runFlat) endRun();
+      if (runLength == 0) {
+        runFlat = flat;
+        runStart = p;
+      }
+      ++runLength;
+      acc.add(bi, bj, bk);
+    }
+    endRun();
   }
 };
 
@@ -145,27 +433,14 @@ void MpmGrid::bin(const MpmParticles& particles, std::size_t materialCount) {
 
   // Pass 1: base node of every particle (packed 21 bits per axis), a
   // scheduling-dependent slot in its bin, and the box of bases in use
-  // (min/max are exact, so the reduction is deterministic).
+  // (min/max are exact, so the reduction is deterministic). A run of
+  // consecutive particles in one bin (the usual case once the particles are
+  // ordered by cell) takes its slots with one atomic addition.
+  const BinKernel kernel{X, mat, materialCount, o, invDx, bd, key_.data(), rank_.data(), binSize, &firstBad};
   const BaseBox box = tbb::parallel_reduce(
       tbb::blocked_range<std::size_t>(0, np, 2048), BaseBox{},
       [&](const tbb::blocked_range<std::size_t>& r, BaseBox acc) {
-        for (std::size_t p = r.begin(); p != r.end(); ++p) {
-          const Vec3d u{(X[p].x - o.x) * invDx, (X[p].y - o.y) * invDx, (X[p].z - o.z) * invDx};
-          const double fx = quadraticBaseFloor(u.x), fy = quadraticBaseFloor(u.y), fz = quadraticBaseFloor(u.z);
-          // The comparisons are false for NaN, so non-finite positions land here too.
-          if (!(fx >= 0 && fx <= bd.i - 1 && fy >= 0 && fy <= bd.j - 1 && fz >= 0 && fz <= bd.k - 1) ||
-              mat[p] >= materialCount) {
-            key_[p] = kBadBase;
-            atomicMin(firstBad, p);
-            continue;
-          }
-          const int bi = int(fx), bj = int(fy), bk = int(fz);
-          key_[p] = std::uint64_t(bi) | (std::uint64_t(bj) << 21) | (std::uint64_t(bk) << 42);
-          const std::size_t flat =
-              std::size_t(bi) + std::size_t(bd.i) * (std::size_t(bj) + std::size_t(bd.j) * std::size_t(bk));
-          rank_[p] = binSize[flat].fetch_add(1, std::memory_order_relaxed);
-          acc.add(bi, bj, bk);
-        }
+        runKernel(kernel, r.begin(), r.end(), acc);
         return acc;
       },
       [](BaseBox a, const BaseBox& b) {
@@ -346,70 +621,31 @@ void MpmGrid::particleToGrid(const MpmParticles& particles, const std::vector<Mp
     capillary = capillary_.data();
   }
 
-  auto depositRow = [&](int bj, int bk) {
-    const std::size_t firstBin =
-        std::size_t(binDims_.i) * (std::size_t(bj - binLo_.j) + std::size_t(binDims_.j) * std::size_t(bk - binLo_.k));
-    for (int bi = binLo_.i; bi < binLo_.i + binDims_.i; ++bi) {
-      const std::size_t bin = firstBin + std::size_t(bi - binLo_.i);
-      const std::uint32_t* it = sorted_.data() + offsets_[bin];
-      const std::uint32_t* end = sorted_.data() + offsets_[bin + 1];
-      if (it == end) continue;
-      MpmNode* corner = nodes + spec_.index(bi, bj, bk);
-      for (; it != end; ++it) {
-        const std::size_t p = *it;
-        const Vec3d x = X[p];
-        const double ux = (x.x - o.x) * invDx, uy = (x.y - o.y) * invDx, uz = (x.z - o.z) * invDx;
-        const QuadraticWeights<double> wx = quadraticWeightsAt(ux, bi);
-        const QuadraticWeights<double> wy = quadraticWeightsAt(uy, bj);
-        const QuadraticWeights<double> wz = quadraticWeightsAt(uz, bk);
-        const double fx = ux - bi, fy = uy - bj, fz = uz - bk;  // in [1/2, 3/2)
-
-        const double m = M[p];
-        const MaterialParams& mp = params[mat[p]];
-        // Kirchhoff stress tau = J sigma (Pa): Eq. 18, Eqs. 19-21, Herschel-Bulkley or damped Hencky.
-        Mat3d tau = mp.viscoplastic ? viscoplasticFluidKirchhoff(Cp[p], Jp[p], mp.yieldStress, mp.consistency,
-                                                                       mp.flowIndex, mp.maxViscosity, mp.bulkModulus)
-                          : mp.fluid      ? viscousFluidKirchhoff(Cp[p], Jp[p], mp.viscosity, mp.bulkModulus)
-                          : mp.elastoplastic
-                              ? elastoplasticKirchhoff(Fp[p], Cp[p], mp.mu, mp.lambda, mp.viscosity)
-                              : neoHookeanKirchhoff(Fp[p], mp.mu, mp.lambda);
-        // The capillary stress T_p (Cauchy, Pa) of the liquids with surface tension: tau += J T_p.
-        if (capillary) {
-          const Mat3d& Tc = capillary[p];
-          for (int a = 0; a < 3; ++a)
-            for (int b = 0; b < 3; ++b) tau(a, b) += Jp[p] * Tc(a, b);
-        }
-        // A = m C - dt D^-1 V0 tau (kg/s): the MLS-MPM affine momentum with the stress impulse.
-        Mat3d A;
-        const double s = stressScale * V0[p];
-        for (int a = 0; a < 3; ++a)
-          for (int b = 0; b < 3; ++b) A(a, b) = m * Cp[p](a, b) - s * tau(a, b);
-        // Contribution at node offset (a, b, c): m v + dt f + A d with
-        // d = ((a - fx) dx, (b - fy) dx, (c - fz) dx) = q0 + a A0 + b A1 + c A2.
-        Vec3d q0 = m * V[p] - A * Vec3d{fx * dx, fy * dx, fz * dx};
-        if (particleForces) q0 += dt * particleForces[p];
-        const Vec3d A0{A(0, 0) * dx, A(1, 0) * dx, A(2, 0) * dx};
-        const Vec3d A1{A(0, 1) * dx, A(1, 1) * dx, A(2, 1) * dx};
-        const Vec3d A2{A(0, 2) * dx, A(1, 2) * dx, A(2, 2) * dx};
-        for (int c = 0; c < 3; ++c) {
-          for (int b = 0; b < 3; ++b) {
-            const double wbc = wy.w[b] * wz.w[c];
-            const Vec3d q = q0 + double(b) * A1 + double(c) * A2;
-            MpmNode* line = corner + std::size_t(b) * sj + std::size_t(c) * sk;
-            const double w0 = wx.w[0] * wbc, w1 = wx.w[1] * wbc, w2 = wx.w[2] * wbc;
-            line[0].momentum += w0 * q;
-            line[0].mass += w0 * m;
-            line[1].momentum += w1 * (q + A0);
-            line[1].mass += w1 * m;
-            line[2].momentum += w2 * (q + 2.0 * A0);
-            line[2].mass += w2 * m;
-          }
-        }
-      }
-    }
-  };
-
-  forEachRow(depositRow);
+  DepositKernel kernel;
+  kernel.params = params.data();
+  kernel.dx = dx;
+  kernel.invDx = invDx;
+  kernel.stressScale = stressScale;
+  kernel.dt = dt;
+  kernel.o = o;
+  kernel.sj = sj;
+  kernel.sk = sk;
+  kernel.X = X;
+  kernel.V = V;
+  kernel.Cp = Cp;
+  kernel.Fp = Fp;
+  kernel.Jp = Jp;
+  kernel.M = M;
+  kernel.V0 = V0;
+  kernel.mat = mat;
+  kernel.capillary = capillary;
+  kernel.particleForces = particleForces;
+  kernel.nodes = nodes;
+  kernel.sorted = sorted_.data();
+  kernel.offsets = offsets_.data();
+  kernel.binLo = binLo_;
+  kernel.binDims = binDims_;
+  forEachRow([&](int bj, int bk) { runKernel(kernel, bj, bk); });
 }
 
 void MpmGrid::computeCapillaryStress(const MpmParticles& particles, const std::vector<double>& sigmaOf) {
@@ -496,19 +732,6 @@ void MpmGrid::computeCapillaryStress(const MpmParticles& particles, const std::v
   });
 }
 
-namespace {
-struct G2PSums {
-  double maxSpeed2 = 0;
-  std::size_t clamped = 0, outside = 0, nonFinite = 0;
-  void join(const G2PSums& o) {
-    maxSpeed2 = std::max(maxSpeed2, o.maxSpeed2);
-    clamped += o.clamped;
-    outside += o.outside;
-    nonFinite += o.nonFinite;
-  }
-};
-}  // namespace
-
 GridToParticleReport MpmGrid::gridToParticle(MpmParticles& particles, const std::vector<MpmMaterial>& materials,
                                              double dt, const ParticleBounds* bounds) const {
   require(std::isfinite(dt) && dt >= 0, "MPM G2P: time step must be finite and >= 0 (s), got ", dt);
@@ -518,78 +741,31 @@ GridToParticleReport MpmGrid::gridToParticle(MpmParticles& particles, const std:
   const std::vector<MaterialParams> params = paramsOf(materials);
   for (std::uint32_t m : particles.material)
     require(m < materials.size(), "MPM G2P: material index ", m, " out of range (", materials.size(), " materials)");
-  const double dx = spec_.dx;
-  const double invDx = 1.0 / dx;
-  const double cScale = 4.0 * invDx;  // D^-1 dx, 1/m
-  const Vec3d o = spec_.origin;
-  const std::size_t sj = std::size_t(spec_.dims.i);
-  const Vec3d* vel = velocity_.data();
-
-  Vec3d* X = particles.x.data();
-  Vec3d* V = particles.v.data();
-  Mat3d* Cp = particles.C.data();
-  Mat3d* Fp = particles.F.data();
-  double* Jp = particles.J.data();
-  const std::uint32_t* mat = particles.material.data();
-
-  const bool bounded = bounds != nullptr;
-  const bool clamp = bounded && bounds->clamp;
-  const Vec3d lo = bounded ? bounds->lo : Vec3d{}, hi = bounded ? bounds->hi : Vec3d{};
+  G2PKernel kernel;
+  kernel.params = params.data();
+  kernel.dt = dt;
+  kernel.invDx = 1.0 / spec_.dx;
+  kernel.cScale = 4.0 * kernel.invDx;  // D^-1 dx, 1/m
+  kernel.o = spec_.origin;
+  kernel.nx = std::size_t(spec_.dims.i);
+  kernel.ny = std::size_t(spec_.dims.j);
+  kernel.vel = velocity_.data();
+  kernel.X = particles.x.data();
+  kernel.V = particles.v.data();
+  kernel.Cp = particles.C.data();
+  kernel.Fp = particles.F.data();
+  kernel.Jp = particles.J.data();
+  kernel.mat = particles.material.data();
+  kernel.bounded = bounds != nullptr;
+  kernel.clamp = kernel.bounded && bounds->clamp;
+  if (kernel.bounded) {
+    kernel.lo = bounds->lo;
+    kernel.hi = bounds->hi;
+  }
   const G2PSums sums = tbb::parallel_reduce(
       tbb::blocked_range<std::size_t>(0, particles.size(), 1024), G2PSums{},
       [&](const tbb::blocked_range<std::size_t>& r, G2PSums acc) {
-        for (std::size_t p = r.begin(); p != r.end(); ++p) {
-          const Vec3d x = X[p];
-          const double ux = (x.x - o.x) * invDx, uy = (x.y - o.y) * invDx, uz = (x.z - o.z) * invDx;
-          // The same base as the binning: the same arithmetic on the same,
-          // unmoved position (range-checked there).
-          const int bi = int(quadraticBaseFloor(ux));
-          const int bj = int(quadraticBaseFloor(uy));
-          const int bk = int(quadraticBaseFloor(uz));
-          const double u[3] = {ux, uy, uz};
-          const int b3[3] = {bi, bj, bk};
-          Vec3d vp;
-          Mat3d C;
-          gatherApic(vel, sj, std::size_t(spec_.dims.j), u, b3, cScale, vp, C);
-          // Step 6: MLS update of the deformation (F <- (I + dt C) F, or J alone for fluids);
-          // the elastoplastic solid's trial F_E is returned to the yield surface.
-          const MaterialParams& mp = params[mat[p]];
-          if (mp.fluid) {
-            Jp[p] *= 1.0 + dt * trace(C);
-          } else {
-            Mat3d G = Mat3d::identity();
-            for (int a = 0; a < 3; ++a)
-              for (int b = 0; b < 3; ++b) G(a, b) += dt * C(a, b);
-            Fp[p] = G * Fp[p];
-            if (mp.elastoplastic) Fp[p] = vonMisesReturn(Fp[p], mp.mu, mp.yieldStress);
-            Jp[p] = determinant(Fp[p]);
-          }
-          Cp[p] = C;
-          // Step 7: advection.
-          Vec3d xn = x + dt * vp;
-          if (!(isFinite(xn) && isFinite(vp) && std::isfinite(Jp[p]))) {
-            ++acc.nonFinite;
-          } else if (bounded &&
-                     (xn.x < lo.x || xn.x > hi.x || xn.y < lo.y || xn.y > hi.y || xn.z < lo.z || xn.z > hi.z)) {
-            if (clamp) {
-              for (int a = 0; a < 3; ++a) {
-                if (xn[a] < lo[a]) {
-                  xn[a] = lo[a];
-                  vp[a] = std::max(vp[a], 0.0);
-                } else if (xn[a] > hi[a]) {
-                  xn[a] = hi[a];
-                  vp[a] = std::min(vp[a], 0.0);
-                }
-              }
-              ++acc.clamped;
-            } else {
-              ++acc.outside;
-            }
-          }
-          V[p] = vp;
-          X[p] = xn;
-          acc.maxSpeed2 = std::max(acc.maxSpeed2, norm2(vp));
-        }
+        runKernel(kernel, r.begin(), r.end(), acc);
         return acc;
       },
       [](G2PSums a, const G2PSums& b) {

@@ -16,9 +16,28 @@
 namespace lodestone {
 inline namespace mpm {
 
+/// A node velocity in the lanes of the arithmetic type L the gather sums in
+/// (gatherApic): Vec3d itself here; a host vector type (x, y, z and lanes the
+/// gather ignores) specialises these two.
+template <typename L>
+LODESTONE_HOSTDEV inline L apicLanes(const Vec3d& v);
+template <typename L>
+LODESTONE_HOSTDEV inline Vec3d apicVec3(const L& lanes);
+template <>
+LODESTONE_HOSTDEV inline Vec3d apicLanes<Vec3d>(const Vec3d& v) {
+  return v;
+}
+template <>
+LODESTONE_HOSTDEV inline Vec3d apicVec3<Vec3d>(const Vec3d& lanes) {
+  return lanes;
+}
+
 /// `vel`: the nodal velocities (m/s) of a grid of nx x ny nodes; u: the
 /// particle's grid coordinates (cells, (x - origin) / dx) and b the stencil's
 /// base node (from the same u); cScale = 4/dx (1/m). Sets vp (m/s) and C (1/s).
+/// The sums run in L lane by lane (component-wise the same arithmetic for any
+/// L, so the same bits).
+template <typename L = Vec3d>
 LODESTONE_HOSTDEV inline void gatherApic(const Vec3d* vel, std::size_t nx, std::size_t ny, const double u[3],
                                          const int b3[3], double cScale, Vec3d& vp, Mat3d& C) {
   const QuadraticWeights<double> wx = quadraticWeightsAt(u[0], b3[0]);
@@ -28,23 +47,24 @@ LODESTONE_HOSTDEV inline void gatherApic(const Vec3d* vel, std::size_t nx, std::
   const std::size_t sj = nx, sk = nx * ny;
   const Vec3d* corner = vel + (std::size_t(b3[0]) + nx * (std::size_t(b3[1]) + ny * std::size_t(b3[2])));
   // v_p = sum w v_i; S_a = sum w v_i (node offset index along a).
-  Vec3d S0{}, S1{}, S2{};
-  vp = Vec3d{};
+  L S0{}, S1{}, S2{}, v{};
   for (int c = 0; c < 3; ++c) {
     for (int b = 0; b < 3; ++b) {
       const double wbc = wy.w[b] * wz.w[c];
       const Vec3d* line = corner + std::size_t(b) * sj + std::size_t(c) * sk;
-      const Vec3d l1 = wx.w[1] * line[1], l2 = wx.w[2] * line[2];
-      const Vec3d s0 = wx.w[0] * line[0] + l1 + l2;
-      const Vec3d s1 = l1 + 2.0 * l2;
-      vp += wbc * s0;
+      const L l1 = wx.w[1] * apicLanes<L>(line[1]), l2 = wx.w[2] * apicLanes<L>(line[2]);
+      const L s0 = wx.w[0] * apicLanes<L>(line[0]) + l1 + l2;
+      const L s1 = l1 + 2.0 * l2;
+      v += wbc * s0;
       S0 += wbc * s1;
       S1 += (double(b) * wbc) * s0;
       S2 += (double(c) * wbc) * s0;
     }
   }
+  vp = apicVec3(v);
   // d_i = (index - f) dx: column a of C is (4/dx)(S_a - v_p f_a).
-  const Vec3d col[3] = {cScale * (S0 - f[0] * vp), cScale * (S1 - f[1] * vp), cScale * (S2 - f[2] * vp)};
+  const Vec3d col[3] = {cScale * (apicVec3(S0) - f[0] * vp), cScale * (apicVec3(S1) - f[1] * vp),
+                        cScale * (apicVec3(S2) - f[2] * vp)};
   for (int a = 0; a < 3; ++a) {
     C(0, a) = col[a].x;
     C(1, a) = col[a].y;
