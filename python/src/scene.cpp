@@ -45,6 +45,29 @@ void bindScene(py::module_& m) {
       .def_property_readonly("frame_duration", &Scene::frameDuration, "s")
       .def_property_readonly("grid", [](const Scene& s) { return s.settings.grid; }, "The MPM Grid.")
       .def_property_readonly("settings", [](const Scene& s) { return s.settings; }, "The MpmSettings (a copy).")
+      .def(
+          "memory_estimate",
+          [](const Scene& s) {
+            const std::unique_ptr<MpmSolver> solver = plugin::buildSolver(s);
+            const plugin::MemoryCounts c = plugin::sceneMemory(s, *solver);
+            const plugin::MemoryEstimate e = plugin::estimateMemory(c);
+            py::dict d;
+            d["total_bytes"] = e.total();
+            d["mpm_grid_bytes"] = e.mpmGrid;
+            d["field_solve_bytes"] = e.fieldGrid;
+            d["particles_bytes"] = e.particles;
+            d["previews_bytes"] = e.outputs;
+            d["mpm_nodes"] = c.mpmNodes;
+            d["field_solve_nodes"] = c.fieldNodes;
+            d["particles"] = c.particles;
+            d["limit_bytes"] = plugin::memoryLimitBytes();
+            return d;
+          },
+          "The memory a run of the scene needs at its largest, bytes, by part (docs/cli.md, \"Memory\"): "
+          "total_bytes, mpm_grid_bytes, field_solve_bytes, particles_bytes, previews_bytes (frame previews), "
+          "the counts behind them (mpm_nodes, field_solve_nodes, particles: with all that emitters add by the "
+          "last frame) and limit_bytes (this machine's memory, a lower control-group limit, or "
+          "LODESTONE_MEMORY_LIMIT_GIB). Without what this process already holds; builds the solver to count.")
       .def("build_solver", [](const Scene& s) { return std::shared_ptr<MpmSolver>(plugin::buildSolver(s)); },
            "A new MpmSolver with the scene's bodies, magnets, fields and colliders at the scene's start time.")
       .def(

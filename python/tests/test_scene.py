@@ -61,3 +61,22 @@ def test_vdb_round_trip(tmp_path):
     np.testing.assert_array_equal(H, stage.field)
     n_back = lodestone.read_vdb_grid(str(tmp_path / "f.vdb"), "n", stage.grid)
     np.testing.assert_array_equal(n_back, stage.density)
+
+
+def test_memory_estimate_counts_the_scene_by_part():
+    scene = cube_scene()
+    m = scene.memory_estimate()
+    solver = scene.build_solver()
+    grid = scene.grid
+    # The counts are the scene's: the MPM grid's nodes, the particles, and a
+    # field-solve grid padded around it (the cube is magnetic, a magnet is there).
+    assert m["mpm_nodes"] == np.prod(grid.dims)
+    assert m["particles"] == solver.particle_count
+    assert m["field_solve_nodes"] > m["mpm_nodes"]
+    # Each part is its count times the documented figure (docs/cli.md, "Memory").
+    assert m["mpm_grid_bytes"] == 64 * m["mpm_nodes"]
+    assert m["field_solve_bytes"] == 392 * m["field_solve_nodes"]
+    assert m["particles_bytes"] == (392 + 277) * m["particles"]
+    assert m["total_bytes"] == pytest.approx(
+        m["mpm_grid_bytes"] + m["field_solve_bytes"] + m["particles_bytes"] + m["previews_bytes"])
+    assert 0 < m["total_bytes"] < m["limit_bytes"]
