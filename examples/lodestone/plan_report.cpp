@@ -171,7 +171,7 @@ std::vector<std::string> fluidCompressionWarnings(const plugin::Scene& scene, co
 
 plugin::MemoryEstimate printMemoryEstimate(const plugin::Scene& scene, const MpmSolver& solver, double processBytes,
                                            const OutputSelection& outputs, std::FILE* out) {
-  plugin::MemoryCounts c = plugin::sceneMemory(scene, solver);
+  plugin::MemoryCounts c = plugin::sceneMemory(scene, &solver);
   if (!outputs.has("png")) c.previewPixels = 0;
   if (outputs.has("fields")) c.fieldFileNodes = c.fieldNodes;
   if (outputs.rendersSurface()) c.surfaceParticles = c.particles;

@@ -13,6 +13,7 @@
 
 #include "lodestone/core/base/constants.h"
 #include "lodestone/core/base/error.h"
+#include "lodestone/core/base/number_text.h"
 #include "lodestone/core/field/material.h"
 #include "lodestone/core/sources/cuboid_magnet.h"
 #include "lodestone/core/sources/cylinder_magnet.h"
@@ -260,9 +261,14 @@ constexpr double kGiB = 1024.0 * 1024.0 * 1024.0;
 std::string countText(double n) { return n < 9e15 ? std::to_string(std::int64_t(n)) : concat(n); }
 }  // namespace
 
-void requireFitsInMemory(const std::string& what, const double nodes[3], double dx, double particles) {
+void requireFitsInMemory(const std::string& what, const double nodes[3], double dx, double particles, GridUse use) {
   const double nodeCount = nodes[0] * nodes[1] * nodes[2];
-  const double need = estimatedMemoryBytes(nodeCount, particles), limit = memoryLimitBytes();
+  MemoryCounts counts;
+  counts.mpmNodes = use == GridUse::FieldSolve ? 0 : nodeCount;
+  counts.fieldNodes = use == GridUse::Mpm ? 0 : nodeCount;
+  counts.particles = counts.magneticParticles = particles;
+  const double need = estimateMemory(counts).total(), limit = memoryLimitBytes();
+  const double nodeBytes = (use == GridUse::FieldSolve ? 0 : kMpmNodeBytes) + (use == GridUse::Mpm ? 0 : kFieldNodeBytes);
   const bool axisTooLong = std::max(nodes[0], std::max(nodes[1], nodes[2])) > kMaxNodesPerAxis;
   if (need <= limit && !axisTooLong) return;
   std::string subject;
@@ -272,9 +278,9 @@ void requireFitsInMemory(const std::string& what, const double nodes[3], double 
   if (particles > 0) subject += concat(subject.empty() ? "" : " and ", countText(particles), " particles");
   if (axisTooLong)
     throw TooLarge(concat(what, ": ", subject, " is too large (more than ", kMaxNodesPerAxis,
-                          " nodes on an axis; needs about ", need / kGiB, " GiB)"));
+                          " nodes on an axis; needs about ", numberText(need / kGiB, 3), " GiB)"));
   throw TooLarge(concat(what, ": ", subject, nodeCount > 0 ? " is too large" : " are too many", " (needs about ",
-                        need / kGiB, " GiB at ", kMpmNodeBytes + kFieldNodeBytes, " B a node and ",
+                        numberText(need / kGiB, 3), " GiB at ", nodeBytes, " B a node and ",
                         kParticleBytes + kMagneticParticleBytes, " B a particle; limit ", memoryLimitText(), ")"));
 }
 
@@ -298,7 +304,9 @@ MpmSettings mpmSettingsFrom(const ParamSet& p, double particles) {
   // Node counts in double first: a tiny dx must be refused, not overflow an int.
   double n[3];
   for (int a = 0; a < 3; ++a) n[a] = std::ceil((hi[a] - lo[a]) / dx - 1e-9) + 1;
-  requireFitsInMemory("domain", n, dx, particles);
+  // The MPM grid here; the field solve's grid once the scene's materials
+  // and sources are known (sceneFromJson), or when a stage is made.
+  requireFitsInMemory("domain", n, dx, particles, GridUse::Mpm);
   GridSpec g;
   g.origin = lo;
   g.dx = dx;

@@ -304,6 +304,10 @@ Scene sceneFromJson(const nlohmann::json& doc, const std::string& sourceName, co
   } catch (const InvalidArgument& e) {
     throw InvalidArgument(concat(sourceName, ": ", e.what()));
   }
+  // The whole run, now that its materials and sources are known (the domain
+  // was checked for the MPM grid alone): the field solve's grid too when
+  // something magnetic meets a magnet or an applied field.
+  requireFitsInMemory(sourceName, estimateMemory(sceneMemory(scene)));
   return scene;
 }
 
@@ -364,31 +368,35 @@ std::unique_ptr<MpmSolver> buildSolver(const Scene& scene) {
   return solver;
 }
 
-MemoryCounts sceneMemory(const Scene& scene, const MpmSolver& solver) {
-  const std::vector<MpmMaterial>& materials = solver.materials();
+MemoryCounts sceneMemory(const Scene& scene, const MpmSolver* solver) {
   MemoryCounts c;
   c.mpmNodes = double(scene.settings.grid.nodeCount());
   c.previewPixels = double(scene.output.width) * double(scene.output.height);
   bool magnetic = false;
-  const MpmParticles& p = solver.particles();
-  for (std::size_t i = 0; i < p.size(); ++i) {
-    const MpmMaterial& m = materials[p.material[i]];
-    magnetic = magnetic || m.isMagnetic();
-    c.magneticParticles += m.isMagnetic() ? 1 : 0;
-    c.capillaryParticles += m.hasSurfaceTension() ? 1 : 0;
+  // `n` points of scene material `material`.
+  const auto add = [&](const MpmMaterial& m, double n) {
+    magnetic = magnetic || (m.isMagnetic() && n > 0);
+    c.particles += n;
+    c.magneticParticles += m.isMagnetic() ? n : 0;
+    c.capillaryParticles += m.hasSurfaceTension() ? n : 0;
+  };
+  if (solver) {
+    const std::vector<MpmMaterial>& materials = solver->materials();
+    const MpmParticles& p = solver->particles();
+    for (std::size_t i = 0; i < p.size(); ++i) add(materials[p.material[i]], 1);
+    const double end = solver->time() + scene.frames * scene.frameDuration();
+    for (std::size_t e = 0; e < solver->emitterCount(); ++e) {
+      const RateEmitter& emitter = solver->emitter(e);
+      add(materials[emitter.materialIndex()], emitter.particlesBy(end) - emitter.particlesBy(solver->time()));
+    }
+  } else {
+    for (const SceneBody& b : scene.bodies)
+      add(scene.materials[b.material], estimatedParticles(b.shape.volume(), b.emit.cellSize, b.emit.particlesPerCell));
+    for (const SceneEmitter& e : scene.emitters)
+      add(scene.materials[e.material],
+          estimatedEmittedParticles(e.shape, e.settings, scene.startTime(), scene.frameTime(scene.lastFrame())));
   }
-  c.particles = double(p.size());
-  const double end = solver.time() + scene.frames * scene.frameDuration();
-  for (std::size_t e = 0; e < solver.emitterCount(); ++e) {
-    const RateEmitter& emitter = solver.emitter(e);
-    const double added = emitter.particlesBy(end) - emitter.particlesBy(solver.time());
-    const MpmMaterial& m = materials[emitter.materialIndex()];
-    magnetic = magnetic || (m.isMagnetic() && added > 0);
-    c.particles += added;
-    c.magneticParticles += m.isMagnetic() ? added : 0;
-    c.capillaryParticles += m.hasSurfaceTension() ? added : 0;
-  }
-  const bool sources = !scene.fields.empty() || solver.magnetCount() > 0;
+  const bool sources = !scene.fields.empty() || !scene.magnets.empty();
   if (magnetic && sources) {
     const GridSpec& mg = scene.settings.magneticGrid ? *scene.settings.magneticGrid : scene.settings.grid;
     c.fieldNodes = double(mg.nodeCount());

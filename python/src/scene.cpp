@@ -49,7 +49,7 @@ void bindScene(py::module_& m) {
           "memory_estimate",
           [](const Scene& s) {
             const std::unique_ptr<MpmSolver> solver = plugin::buildSolver(s);
-            const plugin::MemoryCounts c = plugin::sceneMemory(s, *solver);
+            const plugin::MemoryCounts c = plugin::sceneMemory(s, solver.get());
             const plugin::MemoryEstimate e = plugin::estimateMemory(c);
             py::dict d;
             d["total_bytes"] = e.total();

@@ -88,7 +88,7 @@ lodestone_status stageCreate(lodestone_context* c, const lodestone_stage_params*
     const std::int64_t padded[3] = {std::int64_t(g.dims.i) + 2 * pad, std::int64_t(g.dims.j) + 2 * pad,
                                     std::int64_t(g.dims.k) + 2 * pad};
     const double nodes[3] = {double(padded[0]), double(padded[1]), double(padded[2])};
-    requireFitsInMemory("params.grid (padded)", nodes, g.dx, 0);
+    requireFitsInMemory("params.grid (padded)", nodes, g.dx, 0, GridUse::FieldSolve);
     g.origin = g.origin - double(pad) * Vec3d{g.dx, g.dx, g.dx};
     g.dims = {int(padded[0]), int(padded[1]), int(padded[2])};
     MagneticStageSettings s;

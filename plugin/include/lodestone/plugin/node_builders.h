@@ -89,15 +89,22 @@ std::optional<RigidBodySettings> rigidBodyFrom(const ParamSet& params);
 /// goes to `restPose` when given.
 SourcesData::Magnet magnetFrom(const ParamSet& params, Pose* restPose = nullptr);
 
+/// What the nodes of a grid hold, for its memory estimate.
+enum class GridUse {
+  MpmAndFieldSolve,  ///< unknown: counted as both (kMpmNodeBytes + kFieldNodeBytes)
+  Mpm,               ///< the MPM grid (kMpmNodeBytes)
+  FieldSolve,        ///< a field solve's grid (kFieldNodeBytes)
+};
+
 /// Throws TooLarge "<what>: a grid of a x b x c nodes at dx = h m [and N
-/// particles] is too large (needs about G GiB ...; limit ...)" when the
-/// conservative estimatedMemoryBytes (memory_estimate.h: each node counted
-/// as an MPM and a field-solve node, each particle as magnetic) exceeds
-/// memoryLimitBytes() or an axis has more than 2^20 nodes: the guard before
-/// anything is allocated.
+/// particles] is too large (needs about G GiB at B B a node ...; limit ...)"
+/// when the estimate (memory_estimate.h: the nodes at what `use` holds, each
+/// particle counted as magnetic) exceeds memoryLimitBytes() or an axis has
+/// more than 2^20 nodes: the guard before anything is allocated.
 /// Node counts are doubles, so a tiny dx or a huge count is named rather
 /// than overflowing; a zero count leaves the grid out of the message.
-void requireFitsInMemory(const std::string& what, const double nodes[3], double dx, double particles);
+void requireFitsInMemory(const std::string& what, const double nodes[3], double dx, double particles,
+                         GridUse use = GridUse::MpmAndFieldSolve);
 
 /// Throws TooLarge "<what> needs about G GiB: MPM grid ..., more than <limit>"
 /// when the estimate exceeds memoryLimitBytes().

@@ -132,12 +132,14 @@ Scene parseScene(const std::string& text, const std::string& sourceName, const S
 /// centre is outside it when it first switches on.
 std::unique_ptr<MpmSolver> buildSolver(const Scene& scene);
 
-/// What a run of `scene` from `solver`'s state (as buildSolver made it) holds
-/// at its largest: the MPM grid; the field solve's grid when some material
-/// is magnetic and the scene has a magnet or an applied field; the particles
-/// now plus all the emitters add by the scene's last frame (an upper bound:
-/// blocked or removed particles are not subtracted); the preview's pixels
-/// (no other frame file: the caller adds those it writes).
-MemoryCounts sceneMemory(const Scene& scene, const MpmSolver& solver);
+/// What a run of `scene` holds at its largest: the MPM grid; the field
+/// solve's grid when some material is magnetic and the scene has a magnet or
+/// an applied field; the particles, with all the emitters add by the scene's
+/// last frame (an upper bound: blocked or removed particles are not
+/// subtracted); the preview's pixels (no other frame file: the caller adds
+/// those it writes). With `solver` (as buildSolver made it, or later) the
+/// particles are its own from its time on; without, the bodies' are
+/// estimated from their volumes (loadScene checks this estimate).
+MemoryCounts sceneMemory(const Scene& scene, const MpmSolver* solver = nullptr);
 
 }  // namespace lodestone::plugin

@@ -1,0 +1,63 @@
+#!/bin/sh
+# Memory and time per substep of the dense MPM grid against particle count
+# (1e5 to 1e7 particles on a 129^3 grid) and against domain size at fixed
+# material (1e6 particles in boxes of 129^3 to 513^3 nodes), without
+# magnetism: an elastic block (Neo-Hookean, 8 particles per cell, dx = 7.8
+# mm) falling for 10 substeps of 5e-5 s. Each case is one `lodestone run` of
+# one frame; its stats.json gives the substep's phases and the estimated and
+# measured peak memory. The 1025^3 box is not run: the estimate refuses it
+# (printed). Prints a table and writes CSV.
+#   tests/bench/scaling.sh BUILD_DIR [CSV] [THREADS]
+set -eu
+build=${1:?usage: scaling.sh BUILD_DIR [CSV] [THREADS]}
+csv=${2:-scaling.csv}
+threads=${3:-2}
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+echo "series,particles_target,particles,grid_nodes,substeps,ms_per_substep,p2g_ms,grid_ms,g2p_ms,estimated_bytes,peak_bytes" > "$csv"
+# series, particles, box side (m): the grid has side/0.0078 + 1 nodes an axis
+cases="particles 1e5 1.0
+particles 1e6 1.0
+particles 1e7 1.0
+domain 1e6 1.0
+domain 1e6 2.0
+domain 1e6 3.0
+domain 1e6 4.0
+domain 1e6 8.0"
+echo "$cases" | while read -r series n side; do
+  python3 - "$n" "$side" > "$work/scene.json" <<'PY'
+import json, sys
+n, side = float(sys.argv[1]), float(sys.argv[2])
+dx = side / round(side / 0.0078)
+half = 0.5 * dx * round((n / 8) ** (1 / 3))
+print(json.dumps({
+    "name": "scaling", "domain": {"min": [0, 0, 0], "max": [side, side, side], "dx": dx},
+    "time": {"frames": 1, "fps": 2000, "dt": 5e-5},
+    "materials": [{"name": "jelly", "model": "solid", "density": 1000, "youngs_modulus": 2e4, "poisson_ratio": 0.4}],
+    "bodies": [{"name": "block", "material": "jelly", "shape": "box",
+                "center": [0.5, 0.5, 0.1 + half + 2 * dx], "half_size": [half, half, half]}],
+    "output": {"png": False, "ply": False}}))
+PY
+  rm -rf "$work/out"
+  if ! "$build/examples/lodestone" run "$work/scene.json" --out "$work/out" --threads "$threads" > "$work/log" 2>&1; then
+    if grep -q "needs about" "$work/log"; then
+      echo "$series $n $side: refused: $(grep -o 'needs about.*' "$work/log" | head -1)"
+      continue
+    fi
+    cat "$work/log" >&2
+    exit 1
+  fi
+  python3 - "$work/out/stats.json" "$series" "$n" >> "$csv" <<'PY'
+import json, sys
+d = json.load(open(sys.argv[1]))
+f, m, g = d["frames"][-1], d["memory"], d["grid"]["dims"]
+s, n = f["stages"], f["substeps"]
+per = lambda k: 1e3 * s[k] / n
+print(",".join([sys.argv[2], sys.argv[3], str(f["particles"]), str(g[0] * g[1] * g[2]), str(n),
+                "%.2f" % (per("p2g_s") + per("grid_update_s") + per("g2p_s")), "%.2f" % per("p2g_s"),
+                "%.2f" % per("grid_update_s"), "%.2f" % per("g2p_s"), "%.0f" % m["estimated_peak_bytes"],
+                "%.0f" % m["peak_resident_bytes"]]))
+PY
+  tail -1 "$csv"
+done
+echo "wrote $csv"
