@@ -1,12 +1,12 @@
 #!/bin/sh
 # Memory and time per substep of the dense MPM grid against particle count
 # (1e5 to 1e7 particles on a 129^3 grid) and against domain size at fixed
-# material (1e6 particles in boxes of 129^3 to 513^3 nodes), without
+# material (1e6 particles in boxes of 129^3 to 514^3 nodes), without
 # magnetism: an elastic block (Neo-Hookean, 8 particles per cell, dx = 7.8
 # mm) falling for 25 substeps of 5e-5 s (one particle reordering among
 # them, as in any longer run). Each case is one `lodestone run` of
 # one frame; its stats.json gives the substep's phases and the estimated and
-# measured peak memory. The 1025^3 box is not run: the estimate refuses it
+# measured peak memory. The 1027^3 box is not run: the estimate refuses it
 # (printed). Prints a table and writes CSV.
 #   tests/bench/scaling.sh BUILD_DIR [CSV] [THREADS]
 set -eu
