@@ -64,9 +64,6 @@ double cgroupLimitBytes() {
   return 0;
 }
 
-/// The resident memory when this file's statics were initialized (at load).
-const double gResidentAtLoad = residentBytes();
-
 std::string gib(double bytes) {
   char text[32];
   std::snprintf(text, sizeof text, "%.3g", bytes / kGiB);
@@ -129,8 +126,6 @@ double residentBytes() {
 #endif
   return 0;
 }
-
-double residentBytesAtLoad() { return gResidentAtLoad; }
 
 double peakResidentBytes() {
 #if __has_include(<sys/resource.h>)

@@ -66,8 +66,8 @@ struct MemoryEstimate {
 };
 
 /// The estimate of `counts`, with `processBytes` as what the process holds
-/// besides them: the program and its libraries (residentBytesAtLoad()), or
-/// residentBytes() once the scene's files (meshes, level sets) are loaded.
+/// besides them: e.g. residentBytes() once the scene's files (meshes, level
+/// sets) are loaded, which counts the program and its libraries too.
 MemoryEstimate estimateMemory(const MemoryCounts& counts, double processBytes = 0);
 
 /// A conservative estimate, bytes, for a grid that may serve both the MPM and
@@ -88,9 +88,6 @@ std::string memoryLimitText();
 
 /// The process's resident memory now, bytes (0 where it cannot be read).
 double residentBytes();
-/// The process's resident memory when Lodestone's plugin library was loaded,
-/// bytes: what a run holds besides its scene (the program, its libraries).
-double residentBytesAtLoad();
 /// The process's peak resident memory so far, bytes (0 where it cannot be read).
 double peakResidentBytes();
 
