@@ -754,6 +754,7 @@ int run(const Args& a) {
                      {"estimated_mpm_grid_bytes", memory.mpmGrid},
                      {"estimated_field_solve_bytes", memory.fieldGrid},
                      {"estimated_particles_bytes", memory.particles},
+                     {"estimated_frame_files_bytes", memory.outputs},
                      {"process_before_bytes", memory.process},
                      {"limit_bytes", memoryLimitBytes()},
                      {"peak_resident_bytes", peakResidentBytes()}};

@@ -68,6 +68,10 @@ Memory run(const fs::path& scene, const fs::path& dir, const std::string& args) 
   r.mpmGrid = m.at("estimated_mpm_grid_bytes").get<double>();
   r.fieldSolve = m.at("estimated_field_solve_bytes").get<double>();
   r.particles = m.at("estimated_particles_bytes").get<double>();
+  // The parts stats.json lists add up to its total.
+  EXPECT_DOUBLE_EQ(r.mpmGrid + r.fieldSolve + r.particles + m.at("estimated_frame_files_bytes").get<double>() +
+                       m.at("process_before_bytes").get<double>(),
+                   r.estimated);
   return r;
 }
 
