@@ -45,6 +45,20 @@ void MpmParticles::reserve(std::size_t n) {
   magneticForce.reserve(n);
 }
 
+void MpmParticles::shrinkToFit() {
+  x.shrink_to_fit();
+  v.shrink_to_fit();
+  C.shrink_to_fit();
+  F.shrink_to_fit();
+  J.shrink_to_fit();
+  mass.shrink_to_fit();
+  volume0.shrink_to_fit();
+  count.shrink_to_fit();
+  material.shrink_to_fit();
+  id.shrink_to_fit();
+  magneticForce.shrink_to_fit();
+}
+
 void MpmParticles::clear() {
   x.clear();
   v.clear();

@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <sstream>
 
@@ -178,7 +179,7 @@ MpmSolver::MpmSolver(const MpmSettings& settings) : settings_(settings) {
   sameGrid_ = magneticGrid_ == settings_.grid;
   grid_ = MpmGrid(settings_.grid);
   scene_ = std::make_unique<SceneField>(sources_, magnets_);
-  if (sameGrid_) magneticForce_.reset(settings_.grid, Vec3d{});
+  // magneticForce_ is allocated by the first field solve on the MPM grid.
 }
 
 MpmSolver::~MpmSolver() = default;
@@ -222,7 +223,11 @@ const RateEmitter& MpmSolver::emitter(std::size_t i) const {
 void MpmSolver::emitFromEmitters(double dt, MpmStepReport& rep) {
   if (emitters_.empty()) return;
   const ParticleBounds bounds = domainBounds();
+  const std::size_t before = particles_.size();
+  // Every process emits the same chunks (the emitters are deterministic) and
+  // keeps those it owns.
   for (const RateEmitter& e : emitters_) rep.emitted += e.emitBetween(particles_, time_, time_ + dt, bounds);
+  keepOwnedParticles(before);
 }
 
 double MpmSolver::maxEmissionSpeed() const {
@@ -301,6 +306,97 @@ const FieldSource& MpmSolver::appliedField() const { return *scene_; }
 void MpmSolver::setTime(double t) {
   require(std::isfinite(t), "MPM solver: time must be finite (s), got ", t);
   time_ = t;
+}
+
+// ---------------------------------------------------------------------------
+// Partition (mpm/partition.h)
+
+void MpmSolver::requirePartitionable() const {
+  for (std::size_t m = 0; m < materials_.size(); ++m)
+    require(!materials_[m].hasSurfaceTension(), "MPM solver: material ", m, " has surface tension (",
+            materials_[m].surfaceTension,
+            " N/m), which does not run partitioned yet (its colour field needs the whole neighbourhood); run it "
+            "on one process");
+  require(!anyDynamicBodies(),
+          "MPM solver: dynamic rigid bodies do not run partitioned yet (their momentum exchange sums over every "
+          "node they cover); run the scene on one process");
+}
+
+void MpmSolver::setPartition(std::shared_ptr<MpmPartition> partition) {
+  require(partition != nullptr, "MPM solver: setPartition needs a partition, got null");
+  const GridSpec& g = settings_.grid;
+  const Index3 lo = partition->windowLo(), hi = partition->windowHi();
+  for (int a = 0; a < 3; ++a)
+    require(lo[a] >= 0 && hi[a] <= g.dims[a] && hi[a] - lo[a] >= 3, "MPM solver: partition window [", lo.i, ", ",
+            lo.j, ", ", lo.k, ") .. (", hi.i, ", ", hi.j, ", ", hi.k, ") of rank ", partition->rank(),
+            " must lie in the grid of ", g.dims.i, " x ", g.dims.j, " x ", g.dims.k,
+            " nodes and hold at least 3 nodes per axis");
+  requirePartitionable();
+  partition_ = std::move(partition);
+  GridSpec window;
+  window.dx = g.dx;
+  window.origin = g.nodePosition(lo.i, lo.j, lo.k);
+  window.dims = {hi.i - lo.i, hi.j - lo.j, hi.k - lo.k};
+  grid_ = MpmGrid(window);
+  std::size_t removed = 0, nonFinite = 0;
+  enforceDomain(removed, nonFinite);  // every process the same: owners are decided inside the domain
+  keepOwnedParticles(0);
+  particles_.shrinkToFit();  // the whole scene's arrays were built on every process
+  particlesDirty_ = false;
+}
+
+void MpmSolver::keepOwnedParticles(std::size_t from) {
+  if (!partition_ || from >= particles_.size()) return;
+  const int me = partition_->rank();
+  std::vector<std::uint8_t> drop(particles_.size(), 0);
+  for (std::size_t p = from; p < particles_.size(); ++p) drop[p] = partition_->owner(particles_.x[p]) != me;
+  particles_.removeFlagged(drop);
+}
+
+void MpmSolver::gatherParticlesToRoot() {
+  if (partition_) partition_->gatherToRoot(particles_);
+}
+
+MpmSolver::MagneticPoints MpmSolver::magneticPoints() const {
+  MagneticPoints pts;
+  if (!partition_) {
+    for (std::size_t p = 0; p < particles_.size(); ++p) {
+      if (!isMagneticPoint(p)) continue;
+      pts.index.push_back(std::uint32_t(p));
+      pts.x.push_back(particles_.x[p]);
+      pts.count.push_back(particles_.count[p]);
+    }
+    return pts;
+  }
+  // Records of 7 values: x, y, z, n_p, id (its bits), rank, index.
+  constexpr std::size_t R = 7;
+  const int me = partition_->rank();
+  std::vector<double> local;
+  for (std::size_t p = 0; p < particles_.size(); ++p) {
+    if (!isMagneticPoint(p)) continue;
+    double id = 0;
+    std::memcpy(&id, &particles_.id[p], sizeof id);
+    local.insert(local.end(), {particles_.x[p].x, particles_.x[p].y, particles_.x[p].z, particles_.count[p], id,
+                               double(me), double(p)});
+  }
+  const std::vector<double> all = partition_->allGather(local);
+  const std::size_t n = all.size() / R;
+  const auto idOf = [&](std::size_t q) {
+    std::uint64_t id = 0;
+    std::memcpy(&id, &all[q * R + 4], sizeof id);
+    return id;
+  };
+  std::vector<std::uint32_t> order(n);
+  for (std::size_t q = 0; q < n; ++q) order[q] = std::uint32_t(q);
+  std::sort(order.begin(), order.end(), [&](std::uint32_t a, std::uint32_t b) { return idOf(a) < idOf(b); });
+  for (const std::uint32_t q : order) {
+    const double* r = &all[q * R];
+    pts.x.push_back({r[0], r[1], r[2]});
+    pts.count.push_back(r[3]);
+    pts.id.push_back(idOf(q));
+    pts.index.push_back(int(r[5]) == me ? std::uint32_t(r[6]) : MagneticPoints::kElsewhere);
+  }
+  return pts;
 }
 
 // ---------------------------------------------------------------------------
@@ -390,8 +486,7 @@ void MpmSolver::poseMagnetsAt(double t) const {
 bool MpmSolver::movedSinceSolve() const {
   if (!(settings_.magneticSolveDistance > 0)) return false;
   const double d = settings_.magneticSolveDistance * magneticGrid_.dx;
-  const auto magnetic = [this](std::size_t p) { return isMagneticPoint(p); };
-  if (!reuse_.pointsWithin(particles_.x, magnetic, d)) return true;
+  if (!magneticPointsWithin(d)) return true;
   // Magnets: posed at the last solve (or the planner's last reuse test).
   for (std::size_t m = 0; m < magnets_.size(); ++m) {
     const Pose now = magnetMotion(m).poseAt(time_), & then = magnets_[m]->pose();
@@ -403,13 +498,32 @@ bool MpmSolver::movedSinceSolve() const {
   return false;
 }
 
+bool MpmSolver::magneticPointsWithin(double distance) const {
+  const auto magnetic = [this](std::size_t p) { return isMagneticPoint(p); };
+  if (!partition_) return reuse_.pointsWithin(particles_.x, magnetic, distance);
+  const std::vector<Vec3d>& then = reuse_.positions();
+  bool within = !reuse_.samples().empty() && then.size() == solvedIds_.size();
+  const double d2 = distance * distance;
+  double count = 0;  // this process's magnetic points
+  for (std::size_t p = 0; p < particles_.size(); ++p) {
+    if (!magnetic(p)) continue;
+    ++count;
+    if (!within) continue;
+    const auto it = std::lower_bound(solvedIds_.begin(), solvedIds_.end(), particles_.id[p]);
+    within = it != solvedIds_.end() && *it == particles_.id[p] &&
+             norm2(particles_.x[p] - then[std::size_t(it - solvedIds_.begin())]) <= d2;
+  }
+  double agreed[2] = {within ? 0.0 : 1.0, count};
+  partition_->sumOverRanks(agreed, 2);
+  return agreed[0] == 0 && agreed[1] == double(then.size());
+}
+
 bool MpmSolver::lastSolveHolds() {
   // The planner's reuse (field_reuse.h): only with a force to keep and a
   // plan that allows it; the applied field is compared only when no magnetic
   // point moved too far, with the magnets where they are now.
   if (!haveMagneticForce_ || !settings_.planner.enabled || !(lastPlan_.reuseDistance > 0)) return false;
-  const auto magnetic = [this](std::size_t p) { return isMagneticPoint(p); };
-  if (!reuse_.pointsWithin(particles_.x, magnetic, lastPlan_.reuseDistance)) return false;
+  if (!magneticPointsWithin(lastPlan_.reuseDistance)) return false;
   poseMagnetsAt(time_);
   return reuse_.fieldWithin(*scene_, time_, lastPlan_.reuseFieldChange);
 }
@@ -417,10 +531,8 @@ bool MpmSolver::lastSolveHolds() {
 MagneticPlan MpmSolver::planMagneticNow() const { return planMagneticAt(time_); }
 
 MagneticPlan MpmSolver::planMagneticAt(double t) const {
-  std::vector<Vec3d> positions;
+  const std::vector<Vec3d> positions = magneticPoints().x;
   const MagneticMaterial* law = magneticLaw();
-  for (std::size_t p = 0; p < particles_.size(); ++p)
-    if (isMagneticPoint(p)) positions.push_back(particles_.x[p]);
   poseMagnetsAt(t);
   PlannerInputs in = plannerInputs(positions, law ? *law : nonMagneticMaterial());
   in.time = t;
@@ -445,26 +557,22 @@ bool MpmSolver::anyMagneticParticles() const {
   bool anyMaterial = false;
   for (const MpmMaterial& m : materials_) anyMaterial = anyMaterial || m.isMagnetic();
   if (!anyMaterial) return false;
-  for (std::size_t p = 0; p < particles_.size(); ++p)
-    if (particles_.count[p] > 0) return true;
-  return false;
+  bool any = false;
+  for (std::size_t p = 0; p < particles_.size() && !any; ++p) any = particles_.count[p] > 0;
+  return partition_ ? partition_->maxOverRanks(any ? 1.0 : 0.0) > 0 : any;
 }
 
 void MpmSolver::solveMagnetic(MpmStepReport& rep) {
   const auto t0 = Clock::now();
-  // The magnetic points, handed to the stage as an external host would.
-  std::vector<std::uint32_t> index;
-  std::vector<Vec3d> positions;
-  std::vector<double> counts;
+  // The magnetic points, handed to the stage as an external host would
+  // (with a partition: every process's, so that each runs the same solve).
+  const MagneticPoints points = magneticPoints();
+  const std::vector<std::uint32_t>& index = points.index;
+  const std::vector<Vec3d>& positions = points.x;
+  const std::vector<double>& counts = points.count;
   const MagneticMaterial* law = magneticLaw();
-  for (std::size_t p = 0; p < particles_.size(); ++p) {
-    if (isMagneticPoint(p)) {
-      index.push_back(std::uint32_t(p));
-      positions.push_back(particles_.x[p]);
-      counts.push_back(particles_.count[p]);
-    }
-  }
   std::fill(particles_.magneticForce.begin(), particles_.magneticForce.end(), Vec3d{});
+  if (sameGrid_ && !(magneticForce_.spec() == settings_.grid)) magneticForce_.reset(settings_.grid, Vec3d{});
   if (sameGrid_) magneticForce_.fill(Vec3d{});
   magneticDropped_ = {};
   haveMagneticForce_ = false;
@@ -510,7 +618,14 @@ void MpmSolver::solveMagnetic(MpmStepReport& rep) {
     if (sameGrid_ && !(magneticForce_.spec() == settings_.grid)) magneticForce_.reset(settings_.grid, Vec3d{});
   }
   // What the reuse test and the automatic solve frequency compare against.
-  reuse_.record(particles_.x, index, *scene_, time_);
+  if (partition_) {
+    std::vector<std::uint32_t> all(positions.size());
+    for (std::size_t q = 0; q < all.size(); ++q) all[q] = std::uint32_t(q);
+    reuse_.record(positions, all, *scene_, time_);
+    solvedIds_ = points.id;
+  } else {
+    reuse_.record(particles_.x, index, *scene_, time_);
+  }
   if (!stage_) stage_ = std::make_unique<MagneticForceStage>(magneticGrid_, *law, settings_.magnetic);
   const ParticleView view{positions.data(), counts.data(), positions.size()};
   stage_->setProgress(fieldSolveProgress_);
@@ -531,7 +646,8 @@ void MpmSolver::solveMagnetic(MpmStepReport& rep) {
   } else {
     std::vector<Vec3d> forces(positions.size());
     stage_->particleForces(view, forces.data());
-    for (std::size_t q = 0; q < index.size(); ++q) particles_.magneticForce[index[q]] = forces[q];
+    for (std::size_t q = 0; q < index.size(); ++q)
+      if (index[q] != MagneticPoints::kElsewhere) particles_.magneticForce[index[q]] = forces[q];
   }
   // The material's pull on the dynamic magnets (kept, like the force, until the next solve).
   for (std::size_t m = 0; m < magnets_.size(); ++m)
@@ -546,6 +662,14 @@ void MpmSolver::solveMagnetic(MpmStepReport& rep) {
 
 void MpmSolver::gridUpdate(double dt, MpmStepReport& rep) {
   const GridSpec& g = settings_.grid;
+  const GridSpec& w = grid_.spec();  // the window (mpm/partition.h); the whole grid without a partition
+  // `off` takes window indices to the grid's (mpm/partition.h).
+  const Index3 off = partition_ ? partition_->windowLo() : Index3{0, 0, 0};
+  const Index3 boxLo = partition_ ? partition_->boxLo() : Index3{0, 0, 0};
+  const Index3 boxHi = partition_ ? partition_->boxHi() : g.dims;
+  const auto owned = [&](int i, int j, int k) {
+    return i >= boxLo.i && j >= boxLo.j && k >= boxLo.k && i < boxHi.i && j < boxHi.j && k < boxHi.k;
+  };
   const Index3 lo = grid_.activeLo(), hi = grid_.activeHi();
   if (lo.i >= hi.i || lo.j >= hi.j || lo.k >= hi.k) return;
   const double tNew = time_ + dt;
@@ -570,26 +694,27 @@ void MpmSolver::gridUpdate(double dt, MpmStepReport& rep) {
       const int k = lo.k + int(row / std::size_t(nj));
       Vec3d impulse{};
       for (int i = lo.i; i < hi.i; ++i) {
-        const std::size_t n = g.index(i, j, k);
+        const std::size_t n = w.index(i, j, k);
         const double m = nodes[n].mass;
         if (!(m > 0)) {
           vel[n] = Vec3d{};
           continue;
         }
+        const int gi = i + off.i, gj = j + off.j, gk = k + off.k;  // grid indices
         Vec3d p = nodes[n].momentum;
         if (magnetic) {
-          const Vec3d I = dt * fmag[n];  // N*s
+          const Vec3d I = dt * fmag[g.index(gi, gj, gk)];  // N*s
           p += I;
-          impulse += I;
+          if (!partition_ || owned(gi, gj, gk)) impulse += I;  // each node's once over the processes
         }
         Vec3d v = p / m + dg;
         if (!colliders_.empty()) {
-          const Vec3d x = g.nodePosition(i, j, k);
+          const Vec3d x = g.nodePosition(gi, gj, gk);
           for (std::size_t c = 0; c < colliders_.size(); ++c)
             if (!colliders_[c].isDynamic()) v = colliders_[c].apply(states[c], x, v);
         }
         if (W > 0) {
-          const int idx[3] = {i, j, k};
+          const int idx[3] = {gi, gj, gk};
           const int dims[3] = {g.dims.i, g.dims.j, g.dims.k};
           v = applyDomainWalls(v, idx, dims, W, walls);
         }
@@ -632,10 +757,11 @@ void MpmSolver::checkFiniteParticles(const char* where) const {
 }
 
 void MpmSolver::checkFiniteGrid(const char* where) const {
-  const GridSpec& g = settings_.grid;
+  const GridSpec& g = grid_.spec();  // the window, with a partition (its nodes' indices are the window's)
   const std::vector<MpmNode>& nodes = grid_.nodes();
   const std::vector<Vec3d>& vel = grid_.velocity();
-  const Vec3d* fmag = sameGrid_ && haveMagneticForce_ && !magneticForce_.empty() ? magneticForce_.data() : nullptr;
+  const Vec3d* fmag =
+      !partition_ && sameGrid_ && haveMagneticForce_ && !magneticForce_.empty() ? magneticForce_.data() : nullptr;
   const std::size_t nn = std::min(nodes.size(), vel.size());
   const std::size_t n = firstBad(nn, [&](std::size_t i) {
     return !std::isfinite(nodes[i].mass) || !isFinite(nodes[i].momentum) || !isFinite(vel[i]) ||
@@ -648,7 +774,9 @@ void MpmSolver::checkFiniteGrid(const char* where) const {
                                                          : "magnetic nodal force (N)";
   const std::size_t plane = std::size_t(g.dims.i) * std::size_t(g.dims.j);
   const std::size_t k = n / plane, j = (n % plane) / std::size_t(g.dims.i), i = n % std::size_t(g.dims.i);
-  throw Error(concat("MPM finite check: non-finite grid ", what, " at node (", i, ", ", j, ", ", k, ") ", where,
+  const Index3 off = partition_ ? partition_->windowLo() : Index3{0, 0, 0};
+  throw Error(concat("MPM finite check: non-finite grid ", what, " at node (", i + std::size_t(off.i), ", ",
+                     j + std::size_t(off.j), ", ", k + std::size_t(off.k), ") ", where,
                      " in substep ", substeps_ + 1, " at t = ", time_, " s (node mass ", nodes[n].mass, " kg)"));
 }
 
@@ -671,6 +799,12 @@ MpmStepReport MpmSolver::step(double dt) {
   // put back where their stencil fits; G2P keeps the others there.
   auto t = Clock::now();
   enforceDomainOfHandedOut(rep);
+  // With a partition: particles whose stencil base left this process's box
+  // go to their owner (mpm/partition.h).
+  if (partition_) {
+    requirePartitionable();
+    partition_->migrate(particles_);
+  }
   const double secondsDomain = secondsSince(t);
 
   // 2-3. The magnetic force: n_p -> n_i, the field solve and the
@@ -710,8 +844,10 @@ MpmStepReport MpmSolver::step(double dt) {
   const bool removedAfterP2G = gridToParticle(dt, rep);
   ++substeps_;
   ++stepsSinceSolve_;
-  if (!removedAfterP2G && particleReorderDue(settings_.reorderInterval, substeps_))
-    reorderParticles(grid_.binnedOrder(), particles_, reuse_);
+  if (!removedAfterP2G && particleReorderDue(settings_.reorderInterval, substeps_)) {
+    FieldReuse byId;  // with a partition the record is in id order, not the particles'
+    reorderParticles(grid_.binnedOrder(), particles_, partition_ ? byId : reuse_);
+  }
   // 8. The rate emitters: the chunks born in (t, t + dt], at their place at t + dt.
   emitFromEmitters(dt, rep);
   rep.secondsG2P = secondsSince(t);
@@ -750,6 +886,10 @@ void MpmSolver::updateMagneticForce(MpmStepReport& rep) {
 void MpmSolver::particleToGrid(double dt, MpmStepReport& rep) {
   const bool particleForces = !sameGrid_ && haveMagneticForce_;
   grid_.particleToGrid(particles_, materials_, dt, particleForces ? particles_.magneticForce.data() : nullptr);
+  if (partition_) {
+    partition_->sumNodes(grid_.nodes());  // every window node now holds mass deposited elsewhere too
+    grid_.activateWholeGrid();
+  }
   if (particleForces) {
     rep.magneticImpulse =
         deterministicSum<Vec3d>(particles_.size(), [&](std::size_t p) { return dt * particles_.magneticForce[p]; });

@@ -36,14 +36,16 @@ double MpmSolver::maxParticleSpeed() const {
         return m;
       },
       [](double a, double b) { return std::max(a, b); });
-  return std::sqrt(vmax2);
+  return partition_ ? partition_->maxOverRanks(std::sqrt(vmax2)) : std::sqrt(vmax2);
 }
 
 double MpmSolver::colliderCrossingDt() const { return colliderCrossingDt(maxParticleSpeed()); }
 
 double MpmSolver::colliderCrossingDt(double vmax) const {
   double dt = std::numeric_limits<double>::infinity();
-  if (colliders_.empty() || particles_.size() == 0) return dt;
+  if (colliders_.empty()) return dt;
+  const bool any = particles_.size() > 0;
+  if (!(partition_ ? partition_->maxOverRanks(any ? 1.0 : 0.0) > 0 : any)) return dt;
   const GridSpec& g = settings_.grid;
   const Vec3d lo = g.origin, hi = g.maxCorner();
   for (std::size_t k = 0; k < colliders_.size(); ++k) {
@@ -183,6 +185,22 @@ MpmFrameReport MpmSolver::advanceFrame(double frameDuration, const MpmProgressCa
     }
     if (last) break;
   }
+  fr.energies = energies();
+  if (partition_) {
+    // The whole simulation's energies and counts, the same on every process.
+    double sums[10] = {fr.energies.kinetic, fr.energies.gravitational, fr.energies.elastic, double(fr.clamped),
+                       double(fr.removed),  double(fr.nonFinite),      double(fr.projected), fr.magneticImpulse.x,
+                       fr.magneticImpulse.y, fr.magneticImpulse.z};
+    partition_->sumOverRanks(sums, 10);
+    fr.energies.kinetic = sums[0];
+    fr.energies.gravitational = sums[1];
+    fr.energies.elastic = sums[2];
+    fr.clamped = std::size_t(sums[3]);
+    fr.removed = std::size_t(sums[4]);
+    fr.nonFinite = std::size_t(sums[5]);
+    fr.projected = std::size_t(sums[6]);
+    fr.magneticImpulse = {sums[7], sums[8], sums[9]};
+  }
   if (fr.dtAtMinimum > 0)
     fr.warnings.push_back(concat(fr.dtAtMinimum, " substep(s) needed less than dtMin = ", settings_.dtMin,
                                  " s and were taken at dtMin; the step may be unstable"));
@@ -193,7 +211,6 @@ MpmFrameReport MpmSolver::advanceFrame(double frameDuration, const MpmProgressCa
                                  " s exceeded the stability bound (a cell per substep, dx^2/(6 nu), the capillary limit sqrt(rho dx^3/(2 pi sigma)), a collider's half-thickness) and was "
                                  "shortened to cfl times the bound"));
   fr.time = time_;
-  fr.energies = energies();
   fr.bodies = rigidBodies();
   return fr;
 }

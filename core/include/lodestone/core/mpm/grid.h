@@ -119,6 +119,14 @@ class MpmGrid {
   Index3 activeLo() const { return activeLo_; }
   Index3 activeHi() const { return activeHi_; }
 
+  /// Widens the active box to the whole grid: for a caller that wrote node
+  /// data outside it (a partition's sums, mpm/partition.h), so that the grid
+  /// update covers those nodes and the next particleToGrid zeroes them.
+  void activateWholeGrid() {
+    activeLo_ = {0, 0, 0};
+    activeHi_ = spec_.dims;
+  }
+
   /// The particle indices of the last P2G grouped by stencil bin (bins in
   /// flat order, ascending index within a bin): a cache-friendly order.
   const std::vector<std::uint32_t>& binnedOrder() const { return sorted_; }

@@ -37,6 +37,8 @@ struct MpmParticles {
   bool empty() const { return x.empty(); }
   void reserve(std::size_t n);
   void clear();
+  /// Releases the arrays' unused capacity.
+  void shrinkToFit();
 
   /// Appends one point at rest state (F = I, J = 1, C = 0, no magnetic force)
   /// and returns its index. Values are validated: finite position (m) and

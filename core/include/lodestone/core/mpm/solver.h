@@ -81,6 +81,7 @@
 #include "lodestone/core/mpm/grid.h"
 #include "lodestone/core/mpm/material.h"
 #include "lodestone/core/mpm/particles.h"
+#include "lodestone/core/mpm/partition.h"
 #include "lodestone/core/mpm/rate_emitter.h"
 #include "lodestone/core/mpm/rigid_body.h"
 #include "lodestone/core/mpm/rigid_contact.h"
@@ -384,7 +385,8 @@ class MpmSolver {
   /// the frame from its advanceFrame callback. Empty (the default): none.
   void setFieldSolveProgress(SolveProgress progress) { fieldSolveProgress_ = std::move(progress); }
   /// The nodal magnetic force (N) applied on the MPM grid until the next
-  /// solve (zero when the stage grid differs from the MPM grid).
+  /// solve; an empty view (null data) before the first field solve on the
+  /// MPM grid and when the stage grid differs from the MPM grid.
   GridView<const Vec3d> magneticNodalForce() const { return magneticForce_.view(); }
   /// Force the last solve could not place on the support of the density
   /// (gatherToSupport's dropped part), N.
@@ -398,6 +400,26 @@ class MpmSolver {
 
   /// Substeps taken since construction (or restored from a checkpoint).
   long long substepCount() const { return substeps_; }
+
+  /// Shares this simulation with other processes (mpm/partition.h): every
+  /// process builds the same solver (materials, colliders, sources,
+  /// particles) and then calls this with its part of one partition; each
+  /// keeps only the particles it owns and holds the MPM grid on its window.
+  /// From then on step() and advanceFrame() are collective: every process
+  /// calls them with the same arguments. Throws InvalidArgument for what does
+  /// not yet run partitioned: dynamic rigid bodies (their momentum exchange
+  /// sums over every node of the body), surface tension (its colour field
+  /// would need a second exchange inside P2G); and a null partition or one
+  /// whose window does not lie in the grid or is thinner than 3 nodes.
+  /// The field solve runs on every process on the gathered magnetic points
+  /// (the same solve, replicated); each applies its window of the force.
+  void setPartition(std::shared_ptr<MpmPartition> partition);
+  /// The partition, or null when the solver holds the whole simulation.
+  const MpmPartition* partition() const { return partition_.get(); }
+  /// With a partition: moves every particle to rank 0 (collective) so that
+  /// rank 0 holds the whole simulation's particles, e.g. to write a frame;
+  /// the next substep hands them back to their owners. Without: nothing.
+  void gatherParticlesToRoot();
 
   /// The effects planner's decisions for the magnetic stages in the current
   /// state (what the next field solve would do), without solving.
@@ -453,6 +475,25 @@ class MpmSolver {
   /// Whether a magnetic point or a magnet moved magneticSolveDistance cells since the last solve.
   bool movedSinceSolve() const;           // move the magnets to their motion's pose at t (s)
   PlannerInputs plannerInputs(const std::vector<Vec3d>& positions, const MagneticMaterial& law) const;
+  // The magnetic points of the whole simulation: index (into particles_,
+  // or kElsewhere for a point another process holds), position, n_p and id.
+  // Without a partition the solver's own, in index order; with one, every
+  // process's, gathered and sorted by id (the same on every process).
+  struct MagneticPoints {
+    static constexpr std::uint32_t kElsewhere = ~std::uint32_t(0);
+    std::vector<std::uint32_t> index;
+    std::vector<Vec3d> x;
+    std::vector<double> count;
+    std::vector<std::uint64_t> id;  // with a partition (ascending)
+  };
+  MagneticPoints magneticPoints() const;
+  // Whether every magnetic point lies within `distance` (m) of its place at
+  // the last solve (FieldReuse::pointsWithin). With a partition each process
+  // tests its own points against the record, which every process keeps in
+  // id order (solvedIds_), and the answer is agreed (collective).
+  bool magneticPointsWithin(double distance) const;
+  void keepOwnedParticles(std::size_t from);  // with a partition: drops particles [from, size) owned elsewhere
+  void requirePartitionable() const;          // throws for what does not run partitioned
 
   MpmSettings settings_;
   GridSpec magneticGrid_;
@@ -482,6 +523,8 @@ class MpmSolver {
   std::vector<MagnetWrench> magnetWrench_;          // per magnet: reaction + other magnets
   std::vector<MagnetWrench> magnetReaction_;        // per magnet: the material's pull at the last field solve
   std::vector<Vec3d> materialImpulse_, contactImpulse_;  // per collider, since the frame started
+  std::shared_ptr<MpmPartition> partition_;  // setPartition; null: this solver holds the whole simulation
+  std::vector<std::uint64_t> solvedIds_;     // with a partition: ids of reuse_'s positions (ascending)
   FieldReuse reuse_;  // the last solve's record for the planner's reuse test, permuted with the particles
   long long substeps_ = 0;
   double time_ = 0;

@@ -1,0 +1,76 @@
+#pragma once
+// One MPM simulation shared by several processes (MpmSolver::setPartition).
+// Core defines what the solver needs of the other processes; dist/ provides
+// it over MPI and PETSc (dist/mpm_partition.h, docs/distributed.md). Core
+// never includes MPI.
+//
+// The MPM grid is split into boxes of nodes, one per process. A process owns
+// the particles whose stencil base node (floor((x - origin)/dx - 1/2) per
+// axis, the node MpmGrid bins a particle by) lies in its box, and holds the
+// grid on its window: its box widened by two nodes on each side (clipped to
+// the grid), which covers every node its particles' 3x3x3 stencils reach.
+// A substep of a partitioned solver:
+//   - migrate: particles whose base node left the box go to their new owner;
+//   - P2G on the window, then sumNodes: every window node gets the sum of the
+//     mass and momentum all processes deposited on it;
+//   - the grid update on the whole window (a node held by several processes
+//     gets the same velocity on each: same sums, same rules);
+//   - G2P of the process's own particles from its window.
+// Reductions make the time step, the frame's energies and counts, and the
+// field-solve decisions the same on every process. Every call below is
+// collective: all processes make it, in the same order.
+#include <cstdint>
+#include <vector>
+
+#include "lodestone/core/base/grid.h"
+#include "lodestone/core/mpm/grid.h"
+#include "lodestone/core/mpm/particles.h"
+
+namespace lodestone {
+inline namespace mpm {
+
+class MpmPartition {
+ public:
+  virtual ~MpmPartition() = default;
+
+  /// This process's rank, 0..ranks()-1, and the number of processes.
+  virtual int rank() const = 0;
+  virtual int ranks() const = 0;
+
+  /// The box of nodes this process owns, [boxLo, boxHi) in the global
+  /// grid's node indices (the boxes of all processes tile the grid).
+  virtual Index3 boxLo() const = 0;
+  virtual Index3 boxHi() const = 0;
+  /// The window of nodes this process holds, [windowLo, windowHi) in the
+  /// global grid's node indices.
+  virtual Index3 windowLo() const = 0;
+  virtual Index3 windowHi() const = 0;
+
+  /// The rank that owns a particle at x (m): the process whose box holds
+  /// its stencil base node (x inside the grid's particle range).
+  virtual int owner(const Vec3d& x) const = 0;
+
+  /// Sends every particle this process holds but does not own to its owner
+  /// and appends those it receives (collective). Returns how many it sent.
+  virtual std::size_t migrate(MpmParticles& particles) = 0;
+
+  /// Moves every particle to rank 0 (collective): rank 0 then holds the whole
+  /// simulation's particles (for output), the others none. The next substep's
+  /// migrate hands them back to their owners.
+  virtual void gatherToRoot(MpmParticles& particles) = 0;
+
+  /// `window` holds one MpmNode per window node (x fastest); afterwards every
+  /// entry is the sum over the processes of what they deposited there.
+  virtual void sumNodes(std::vector<MpmNode>& window) = 0;
+
+  /// The largest value over the processes.
+  virtual double maxOverRanks(double value) = 0;
+  /// Sums n values element-wise over the processes, in place.
+  virtual void sumOverRanks(double* values, int n) = 0;
+  /// Every process's `local` array, concatenated in rank order, on every
+  /// process.
+  virtual std::vector<double> allGather(const std::vector<double>& local) = 0;
+};
+
+}  // namespace mpm
+}  // namespace lodestone
