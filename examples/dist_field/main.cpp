@@ -2,9 +2,10 @@
 // MPI ranks (dist/, docs/distributed.md), written as the OpenVDB grids of
 // `lodestone export-fields` (n, phi, H, M, B, force):
 //   mpirun -n 4 lodestone-dist-field SCENE --out fields.vdb [--frame N] [--pc mg|gamg|hypre]
-// Every rank reads the scene; with --frame, every rank runs the MPM up to
-// that frame (replicated, not distributed: the same cost as one process);
-// rank 0 deposits the magnetic particles' density n on the magnetic grid (or
+// Every rank reads the scene; with --frame, the ranks run the MPM up to that
+// frame split over them (dist/mpm_partition.h; replicated on every rank for
+// a scene that does not run partitioned: surface tension, dynamic bodies);
+// rank 0 gathers the particles, deposits the magnetic particles' density n on the magnetic grid (or
 // reads it from --density FILE.vdb) and sends it to all. The nonlinear field
 // solve runs across the ranks (each owns a box of the grid); rank 0 gathers
 // phi, recovers H, M, B and the force (MagneticForceStage::runOnPotential,
@@ -21,6 +22,7 @@
 #include "lodestone/core/stage/magnetic_stage.h"
 #include "lodestone/core/stage/transfer.h"
 #include "lodestone/dist/distributed_field_solve.h"
+#include "lodestone/dist/mpm_partition.h"
 #include "lodestone/dist/petsc_session.h"
 #include "lodestone/plugin/scene.h"
 #include "lodestone/vdb_io/field_file.h"
@@ -43,7 +45,18 @@ int run(const Options& o, int rank) {
   if (frame < scene.initialFrame() || frame > scene.lastFrame())
     throw InvalidArgument(concat("--frame ", frame, ": the scene has frames ", scene.initialFrame(), "..",
                                  scene.lastFrame()));
+  int ranks = 1;
+  MPI_Comm_size(MPI_COMM_WORLD, &ranks);
+  if (frame > scene.initialFrame() && ranks > 1) {
+    // The MPM up to the frame across the ranks too, where the scene allows.
+    try {
+      solver->setPartition(std::make_shared<PetscMpmPartition>(MPI_COMM_WORLD, scene.settings.grid));
+    } catch (const InvalidArgument& e) {
+      if (rank == 0) std::printf("the MPM runs on every rank (replicated): %s\n", e.what());
+    }
+  }
   for (int f = scene.initialFrame(); f < frame; ++f) solver->advanceFrame(scene.frameDuration());
+  solver->gatherParticlesToRoot();  // rank 0 deposits the density of every particle
   const MpmMaterial* law = nullptr;
   for (const MpmMaterial& m : solver->materials())
     if (m.isMagnetic()) law = &m;
@@ -114,7 +127,7 @@ int main(int argc, char** argv) {
   cli::helpLayout(app, 24);
   app.add_option("scene", o.scene, "scene file (.json)")->required();
   app.add_option("--out", o.out, "output .vdb file")->required();
-  app.add_option("--frame", o.frame, "scene frame (default: the initial state); the MPM runs on every rank");
+  app.add_option("--frame", o.frame, "scene frame (default: the initial state); the MPM runs split over the ranks");
   app.add_option("--density", o.density, "read n (1/m^3) from this .vdb instead of depositing the particles");
   app.add_option("--density-grid", o.densityGrid, "grid name in --density")->default_str(o.densityGrid);
   app.add_option("--pc", o.pc, "preconditioner of the CG solves")

@@ -13,6 +13,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <thread>
 #include <utility>
 #include <vector>
 
@@ -37,6 +38,7 @@
 #include "farm_commands.h"
 #include "outputs.h"
 #include "plan_report.h"
+#include "rank_job.h"
 #include "run_directory.h"
 #include "surface_command.h"
 #include "lodestone/plugin/output/stats_json.h"
@@ -54,6 +56,7 @@ struct Args {
   bool framesGiven = false;  // run: --frames given (else all the scene's frames)
   SceneOptions options;
   int threads = 0;
+  int ranks = 0;             // run: --ranks N (0: as launched)
   int frame = 0;            // export-fields: scene frame number
   bool frameGiven = false;  // export-fields: --frame given (else the initial state)
   std::string density, densityGrid = "n";  // export-fields: n (1/m^3) from a .vdb instead of the particles
@@ -130,6 +133,11 @@ std::optional<int> parseArgs(int argc, char** argv, Args& a) {
       ->type_name("N")
       ->check(cli::wholeNumber(0, 1024))
       ->default_str(cli::formatNumber(a.threads));
+  cli::addNumber(run, "--ranks", a.ranks,
+                 "split the simulation over N processes (starts mpirun -n N; or start lodestone under mpirun / "
+                 "srun yourself; docs/distributed.md)")
+      ->type_name("N")
+      ->check(cli::wholeNumber(1, 4096));
   std::string outputNames;
   for (const OutputKind& k : outputKinds()) outputNames += concat(outputNames.empty() ? "" : ", ", k.name);
   run.add_option("--outputs", a.outputs,
@@ -694,10 +702,23 @@ std::string resumeCommand(const Args& a) {
 
 int run(const Args& a) {
   if (a.out.empty()) usageError("run needs --out DIR");
+  if (a.ranks > 1 && !startedByMpiLauncher()) execUnderMpirun(a.ranks, a.args);
+  // Under an MPI launcher every process runs this; rank 0 writes and prints.
+  const RankJob job;
+  if (a.ranks > 0 && a.ranks != job.ranks())
+    usageError(concat("--ranks ", a.ranks, " but the MPI launcher started ", job.ranks(), " processes"));
+  if (!job.writes() && !std::freopen("/dev/null", "w", stdout)) throw Error("cannot silence rank output");
   std::signal(SIGPIPE, SIG_IGN);  // a closed standard output is noticed and said (stdoutBroken)
   std::unique_ptr<tbb::global_control> threads;
-  if (a.threads > 0)
-    threads = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, std::size_t(a.threads));
+  int threadCount = a.threads;
+  if (threadCount == 0 && job.ranks() > 1) {
+    // The cores of a node shared by the ranks on it.
+    const char* local = std::getenv("OMPI_COMM_WORLD_LOCAL_SIZE");
+    const int perNode = local ? std::max(1, std::atoi(local)) : job.ranks();
+    threadCount = std::max(1, int(std::thread::hardware_concurrency()) / perNode);
+  }
+  if (threadCount > 0)
+    threads = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, std::size_t(threadCount));
   Scene scene = loadScene(a.scene, a.options);
   const double loadedBytes = residentBytes();  // the program, its libraries and the scene's files
   if (a.checkFinite) scene.settings.checkFinite = true;
@@ -729,15 +750,20 @@ int run(const Args& a) {
   };
   const int checkpointEvery = a.checkpointEvery >= 0 ? a.checkpointEvery : scene.output.checkpointEvery;
   const CheckpointOrigin origin{runIdentity(scene), first, last};
-  const RunDirectory directory(a.out, origin.identity, a.clean);
+  // Rank 0 keeps the directory; the other processes write nothing.
+  const std::unique_ptr<const RunDirectory> directory =
+      job.writes() ? std::make_unique<const RunDirectory>(a.out, origin.identity, a.clean) : nullptr;
   const std::string command = commandLine(a.args);
+  const auto record = [&](int firstFrame, int lastFrame, const char* state, int done) {
+    if (directory) directory->record(command, firstFrame, lastFrame, state, done);
+  };
   const std::size_t initialParticles = solver->particles().size();
   // The frame the solver is at: the initial one, or a checkpoint's.
   const int startFrame = a.resume ? resumeFromCheckpoint(a.out, origin, *solver) : initialFrame;
   if (startFrame == last) {
     std::printf("nothing to simulate: %s is at the last frame (%d) of --frames %d:%d; the run in %s is complete\n",
                 checkpointName(startFrame).c_str(), last, first, last, a.out.c_str());
-    directory.record(command, first, last, "complete", last);
+    record(first, last, "complete", last);
     return 0;
   }
 
@@ -786,25 +812,33 @@ int run(const Args& a) {
     std::printf("\ninterrupted: stopped %s frame %d at t = %.6g s; frames up to %d are complete in %s; %s\n",
                 midFrame ? "during" : "after", frame, time, midFrame ? frame - 1 : frame, a.out.c_str(),
                 howToResume().c_str());
-    directory.record(command, first, last, "interrupted", midFrame ? frame - 1 : frame);
+    record(first, last, "interrupted", midFrame ? frame - 1 : frame);
     return 128 + int(gStopSignal);
   };
-  directory.record(command, first, last, "running", startFrame);
+  record(first, last, "running", startFrame);
+  // Several processes: each keeps the particles it owns from here on.
+  if (const std::string split = job.partition(*solver); !split.empty()) std::printf("distributed: %s\n", split.c_str());
   std::signal(SIGINT, onStopSignal);
   std::signal(SIGTERM, onStopSignal);
-  const MpmProgressCallback keepGoing = [](const MpmProgress&) { return gStopSignal == 0; };
+  // The decision to stop is the same on every process (a collective test).
+  const MpmProgressCallback keepGoing = [&](const MpmProgress&) { return !job.anyRank(gStopSignal != 0); };
   // A field solve in progress stops at its next Newton iteration too; its
   // substep ends with the field reached and the frame is dropped.
-  solver->setFieldSolveProgress([](const NewtonIterationRecord&) { return gStopSignal == 0; });
+  solver->setFieldSolveProgress([&](const NewtonIterationRecord&) { return !job.anyRank(gStopSignal != 0); });
   const auto t0 = std::chrono::steady_clock::now();
   ProgressOptions progressOptions{isTerminal(stdout)};
   progressOptions.firstFrame = initialFrame;
   ProgressPrinter progress(std::cout, last - initialFrame, progressOptions);
   ContactSheetCollector sheet(first == scene.startFrame ? initialFrame : first, last);
+  // A frame's files: rank 0 gathers every particle and writes them.
+  const auto writeFrame = [&](int f) {
+    solver->gatherParticlesToRoot();
+    return job.writes() ? writeFrameFiles(a, outputs, scene, *solver, f, sheet) : OutputCosts{};
+  };
   int frame = startFrame;
   try {
     if (first == scene.startFrame && startFrame == initialFrame)
-      addCosts(writeFrameFiles(a, outputs, scene, *solver, initialFrame, sheet));  // the initial state
+      addCosts(writeFrame(initialFrame));  // the initial state
     for (frame = startFrame + 1; frame <= last; ++frame) {
       const MpmFrameReport r = solver->advanceFrame(scene.frameDuration(), keepGoing);
       if (r.cancelled) {
@@ -814,7 +848,7 @@ int run(const Args& a) {
       const auto tio = std::chrono::steady_clock::now();
       OutputCosts frameCosts;
       if (frame >= first) {
-        frameCosts = writeFrameFiles(a, outputs, scene, *solver, frame, sheet);
+        frameCosts = writeFrame(frame);
         addCosts(frameCosts);
       }
       const double io = std::chrono::duration<double>(std::chrono::steady_clock::now() - tio).count();
@@ -836,14 +870,16 @@ int run(const Args& a) {
         }
       }
       stats["memory"]["peak_resident_bytes"] = peakResidentBytes();
-      writeJsonFile(statsPath.string(), stats);
+      if (job.writes()) writeJsonFile(statsPath.string(), stats);
       if (checkpointEvery > 0 && (frame - initialFrame) % checkpointEvery == 0) {
-        writeFileAtomically((std::filesystem::path(a.out) / checkpointName(frame)).string(),
-                            saveMpmCheckpoint(*solver, frame, checkpointTag(origin)));
+        solver->gatherParticlesToRoot();
+        if (job.writes())
+          writeFileAtomically((std::filesystem::path(a.out) / checkpointName(frame)).string(),
+                              saveMpmCheckpoint(*solver, frame, checkpointTag(origin)));
         // A resumed solver starts its next field solve from phi = 0: so does this one.
         solver->resetMagneticWarmStart();
         lastCheckpoint = frame;
-        directory.pruneCheckpoints(frame, a.keepCheckpoints);
+        if (directory) directory->pruneCheckpoints(frame, a.keepCheckpoints);
       }
       for (const MagneticStageReport& m : r.magneticReports)
         if (!m.converged()) progress.message(concat("frame ", frame, ": ", m.solve.message));
@@ -861,7 +897,7 @@ int run(const Args& a) {
                      "run go on.\n",
                      static_cast<long long>(lost), initialParticles, 100.0 * double(lost) / double(initialParticles),
                      frame, solver->time(), a.maxLost, frame, a.out.c_str());
-        directory.record(command, first, last, "failed", frame);
+        record(first, last, "failed", frame);
         return kExitBlownUp;
       }
       if (frame < last && stdoutBroken()) {
@@ -869,21 +905,21 @@ int run(const Args& a) {
                      "lodestone: standard output was closed (broken pipe): stopped after frame %d at t = %.6g s; "
                      "frames up to %d are complete in %s; %s\n",
                      frame, solver->time(), frame, a.out.c_str(), howToResume().c_str());
-        directory.record(command, first, last, "interrupted", frame);
+        record(first, last, "interrupted", frame);
         return kExitBrokenPipe;
       }
-      if (gStopSignal != 0 && frame < last) {
+      if (job.anyRank(gStopSignal != 0) && frame < last) {
         progress.finish();
         return stopMessage(frame, solver->time(), false);
       }
     }
   } catch (...) {
-    directory.record(command, first, last, "failed", frame - 1);
+    record(first, last, "failed", frame - 1);
     throw;
   }
   progress.finish();
-  sheet.write((std::filesystem::path(a.out) / "contact_sheet.png").string());
-  directory.record(command, first, last, "complete", last);
+  if (job.writes()) sheet.write((std::filesystem::path(a.out) / "contact_sheet.png").string());
+  record(first, last, "complete", last);
   if (lost > 0)
     std::printf("%lld of the %zu particles (%.3g%%) were lost as non-finite (within --max-lost %g)\n",
                 static_cast<long long>(lost), initialParticles, 100.0 * double(lost) / double(initialParticles),
