@@ -68,15 +68,25 @@ void unpack(const PetscReal* r, MpmParticles& P) {
   P.id.push_back(id);
   P.magneticForce.push_back(vec(r + 30));
 }
+/// Every node of the ghosted local vector becomes the sum over the ranks of
+/// their local vectors' values there (global: scratch of the DMDA).
+void sumGhosted(DM dm, Vec local, Vec global) {
+  LODESTONE_PETSC(VecSet(global, 0.0));
+  LODESTONE_PETSC(DMLocalToGlobalBegin(dm, local, ADD_VALUES, global));
+  LODESTONE_PETSC(DMLocalToGlobalEnd(dm, local, ADD_VALUES, global));
+  LODESTONE_PETSC(DMGlobalToLocalBegin(dm, global, INSERT_VALUES, local));
+  LODESTONE_PETSC(DMGlobalToLocalEnd(dm, global, INSERT_VALUES, local));
+}
 }  // namespace
 
 struct PetscMpmPartition::Impl {
   MPI_Comm comm = MPI_COMM_NULL;
   int rank = 0, size = 1;
   GridSpec grid;
-  DM da = nullptr;
+  DM da = nullptr;       // 4 values per node: momentum, mass
+  DM scalars = nullptr;  // 1 value per node, the same boxes (the colour field)
   DM swarm = nullptr;
-  Vec global = nullptr, local = nullptr;
+  Vec global = nullptr, local = nullptr, scalarGlobal = nullptr, scalarLocal = nullptr;
   Index3 boxLo, boxHi, windowLo, windowHi, procs;
   std::vector<int> starts[3];  // per axis: first node of each rank column, plus dims at the end
   std::size_t sent = 0;
@@ -172,6 +182,11 @@ PetscMpmPartition::PetscMpmPartition(MPI_Comm comm, const GridSpec& grid) : impl
                        ", ", column[2], "), which is not the x-fastest rank order"));
   LODESTONE_PETSC(DMCreateGlobalVector(m.da, &m.global));
   LODESTONE_PETSC(DMCreateLocalVector(m.da, &m.local));
+  LODESTONE_PETSC(DMDACreate3d(comm, DM_BOUNDARY_NONE, DM_BOUNDARY_NONE, DM_BOUNDARY_NONE, DMDA_STENCIL_BOX,
+                               grid.dims.i, grid.dims.j, grid.dims.k, M, N, P, 1, 2, l[0], l[1], l[2], &m.scalars));
+  LODESTONE_PETSC(DMSetUp(m.scalars));
+  LODESTONE_PETSC(DMCreateGlobalVector(m.scalars, &m.scalarGlobal));
+  LODESTONE_PETSC(DMCreateLocalVector(m.scalars, &m.scalarLocal));
 
   LODESTONE_PETSC(DMCreate(comm, &m.swarm));
   LODESTONE_PETSC(DMSetType(m.swarm, DMSWARM));
@@ -186,6 +201,9 @@ PetscMpmPartition::PetscMpmPartition(MPI_Comm comm, const GridSpec& grid) : impl
 PetscMpmPartition::~PetscMpmPartition() {
   Impl& m = *impl_;
   if (m.swarm) DMDestroy(&m.swarm);
+  if (m.scalarLocal) VecDestroy(&m.scalarLocal);
+  if (m.scalarGlobal) VecDestroy(&m.scalarGlobal);
+  if (m.scalars) DMDestroy(&m.scalars);
   if (m.local) VecDestroy(&m.local);
   if (m.global) VecDestroy(&m.global);
   if (m.da) DMDestroy(&m.da);
@@ -240,11 +258,7 @@ void PetscMpmPartition::sumNodes(std::vector<MpmNode>& window) {
     a[4 * n + 3] = window[n].mass;
   }
   LODESTONE_PETSC(VecRestoreArray(m.local, &a));
-  LODESTONE_PETSC(VecSet(m.global, 0.0));
-  LODESTONE_PETSC(DMLocalToGlobalBegin(m.da, m.local, ADD_VALUES, m.global));
-  LODESTONE_PETSC(DMLocalToGlobalEnd(m.da, m.local, ADD_VALUES, m.global));
-  LODESTONE_PETSC(DMGlobalToLocalBegin(m.da, m.global, INSERT_VALUES, m.local));
-  LODESTONE_PETSC(DMGlobalToLocalEnd(m.da, m.global, INSERT_VALUES, m.local));
+  sumGhosted(m.da, m.local, m.global);
   const PetscScalar* b = nullptr;
   LODESTONE_PETSC(VecGetArrayRead(m.local, &b));
   for (std::size_t n = 0; n < window.size(); ++n) {
@@ -252,6 +266,23 @@ void PetscMpmPartition::sumNodes(std::vector<MpmNode>& window) {
     window[n].mass = b[4 * n + 3];
   }
   LODESTONE_PETSC(VecRestoreArrayRead(m.local, &b));
+}
+
+void PetscMpmPartition::sumScalars(std::vector<double>& window) {
+  Impl& m = *impl_;
+  PetscInt length = 0;
+  LODESTONE_PETSC(VecGetLocalSize(m.scalarLocal, &length));
+  require(std::size_t(length) == window.size(), "MPM partition: the window holds ", window.size(),
+          " values, the DMDA's ghosted box ", length);
+  PetscScalar* a = nullptr;
+  LODESTONE_PETSC(VecGetArray(m.scalarLocal, &a));
+  std::copy(window.begin(), window.end(), a);
+  LODESTONE_PETSC(VecRestoreArray(m.scalarLocal, &a));
+  sumGhosted(m.scalars, m.scalarLocal, m.scalarGlobal);
+  const PetscScalar* b = nullptr;
+  LODESTONE_PETSC(VecGetArrayRead(m.scalarLocal, &b));
+  std::copy(b, b + length, window.begin());
+  LODESTONE_PETSC(VecRestoreArrayRead(m.scalarLocal, &b));
 }
 
 double PetscMpmPartition::maxOverRanks(double value) {

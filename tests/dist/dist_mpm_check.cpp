@@ -10,7 +10,12 @@
 //             planes;
 //   magnetic: a Langevin ferrofluid block falling onto a sphere magnet (the
 //             field solved on the gathered magnetic points, each time the
-//             material has moved a quarter cell).
+//             material has moved a quarter cell);
+//   surface:  liquid drops with surface tension thrown across the planes
+//             (the colour field summed over the ranks);
+//   body:     a dynamic sphere thrown into a liquid pool that spans the
+//             planes (its momentum exchange gathered from every rank); its
+//             final velocity is compared too.
 // Checks: the same particle count and total mass (to 1e-12 relative) after
 // every migration, positions within 1e-10 of the box size and velocities
 // within 1e-10 of the fastest particle's speed, the same number of field
@@ -27,6 +32,7 @@
 #include <string>
 
 #include "lodestone/core/field/material.h"
+#include "lodestone/core/mpm/rigid_body.h"
 #include "lodestone/core/mpm/solver.h"
 #include "lodestone/core/sources/sphere_magnet.h"
 #include "lodestone/dist/mpm_partition.h"
@@ -71,8 +77,32 @@ std::unique_ptr<MpmSolver> makeScene(const std::string& scene) {
     EmitterSettings e;
     e.velocity = {0.6, -0.4, -0.3};
     solver->emit(EmitterShape::box(Pose::at({c - 0.01, c + 0.01, 0.17}), {0.04, 0.03, 0.02}), m, e);
+  } else if (scene == "surface") {
+    // Water-like drops with surface tension (sigma 0.5 N/m for a fast
+    // capillary response at dx = 1 cm) thrown across the middle planes.
+    MpmMaterial liquid = viscousFluid(0.01, 2e4, 1000);
+    liquid.surfaceTension = 0.5;
+    const std::uint32_t m = solver->addMaterial(liquid);
+    EmitterSettings e;
+    e.velocity = {1.2, 0.8, -0.6};
+    solver->emit(EmitterShape::sphere(Pose::at({c - 0.03, c - 0.01, c + 0.01}), 0.04), m, e);
+    e.velocity = {-0.8, -1.0, 0.4};
+    solver->emit(EmitterShape::box(Pose::at({c + 0.05, c + 0.04, c - 0.05}), {0.03, 0.02, 0.03}), m, e);
+  } else if (scene == "body") {
+    // A dynamic sphere (600 kg/m^3) thrown down and sideways into a falling
+    // liquid slab that spans the middle planes.
+    const std::uint32_t m = solver->addMaterial(viscousFluid(0.05, 2e4, 1000));
+    EmitterSettings e;
+    e.velocity = {0, 0, -0.5};
+    solver->emit(EmitterShape::box(Pose::at({c, c, 0.17}), {0.13, 0.13, 0.03}), m, e);
+    const std::size_t ball = solver->addCollider(MpmCollider(
+        ColliderShape::sphere(0.035),
+        ColliderMotion::constantVelocity(Pose::at({c - 0.01, c + 0.01, 0.245}), {0.8, -0.6, -2.0}, {0, 0, 0})));
+    RigidBodySettings b;
+    b.density = 600;
+    solver->collider(ball).setDynamics(b);
   } else {
-    throw InvalidArgument(concat("unknown scene '", scene, "' (elastic, fluid, magnetic)"));
+    throw InvalidArgument(concat("unknown scene '", scene, "' (elastic, fluid, magnetic, surface, body)"));
   }
   return solver;
 }
@@ -131,6 +161,10 @@ int run(const std::string& scene, int substeps) {
   const MpmParticles& a = single->particles();
   const MpmParticles& b = distributed->particles();
   const Differences d = compare(a, b);
+  double body = 0;  // dynamic bodies' velocity difference, m/s
+  const std::vector<RigidBodyReport> ra = single->rigidBodies(), rb = distributed->rigidBodies();
+  for (std::size_t q = 0; q < ra.size() && q < rb.size(); ++q)
+    body = std::max(body, norm(ra[q].velocity - rb[q].velocity) + norm(ra[q].angularVelocity - rb[q].angularVelocity));
   std::printf(
       "%s, %d ranks, %d substeps, %zu particles (%zu single, %zu gathered), %.0f migrations, %d field "
       "solves (%d single)\n",
@@ -152,6 +186,11 @@ int run(const std::string& scene, int substeps) {
   if (d.v > kBound) fail(concat("velocities differ by ", d.v, " of the fastest, more than ", kBound));
   if (d.F > kBound) fail(concat("deformation gradients differ by ", d.F, ", more than ", kBound));
   if (solves != singleSolves) fail("the number of field solves differs");
+  if (ra.size() != rb.size()) fail("the number of dynamic bodies differs");
+  if (!ra.empty()) {
+    std::printf("  dynamic body: velocity %.4g m/s, |v_d - v_s| + |w_d - w_s| = %.3g\n", norm(ra[0].velocity), body);
+    if (body > kBound * std::max(1.0, norm(ra[0].velocity))) fail(concat("body velocities differ by ", body));
+  }
   if (scene == "magnetic" && solves < 2) fail("the magnetic scene solved its field fewer than twice");
   if (size > 1 && sent < 1) fail("no particle migrated: the scene does not test migration");
   if (!(d.vmax > 0.1)) fail("the scene did not move");

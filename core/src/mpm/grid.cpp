@@ -585,7 +585,16 @@ void MpmGrid::particleToGrid(const MpmParticles& particles, const std::vector<Mp
     zeroBox(zlo, zhi);
   else
     zeroBox(activeLo_, activeHi_);
-  if (particles.empty()) return;
+  if (particles.empty()) {
+    // The colour sum is collective: a process without particles adds zeros.
+    const bool surfaceTension =
+        std::any_of(materials.begin(), materials.end(), [](const MpmMaterial& m) { return m.hasSurfaceTension(); });
+    if (colourSum_ && surfaceTension) {
+      colour_.assign(nodes_.size(), 0.0);
+      colourSum_(colour_);
+    }
+    return;
+  }
 
   const std::vector<MaterialParams> params = paramsOf(materials);
   const double dx = spec_.dx;
@@ -661,10 +670,13 @@ void MpmGrid::computeCapillaryStress(const MpmParticles& particles, const std::v
   const double* V0 = particles.volume0.data();
   const std::uint32_t* mat = particles.material.data();
 
-  // The colour field on the active box (nodes outside it are never read).
+  // The colour field on the active box (nodes outside it are never read);
+  // with a sum over processes on the whole grid, which the sum reads.
   if (colour_.size() != nodes_.size()) colour_.assign(nodes_.size(), 0.0);
   double* colour = colour_.data();
-  {
+  if (colourSum_) {
+    std::fill(colour_.begin(), colour_.end(), 0.0);
+  } else {
     const int nj = activeHi_.j - activeLo_.j, ni = activeHi_.i - activeLo_.i;
     const std::size_t rows = std::size_t(nj) * std::size_t(activeHi_.k - activeLo_.k);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, rows, 16), [&](const tbb::blocked_range<std::size_t>& r) {
@@ -698,6 +710,8 @@ void MpmGrid::computeCapillaryStress(const MpmParticles& particles, const std::v
       }
     }
   });
+
+  if (colourSum_) colourSum_(colour_);
 
   // Per particle: g_p = sum_i c_i grad w_ip (1/m) and the capillary stress.
   capillary_.resize(np);

@@ -4,6 +4,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <cstring>
+#include <vector>
 
 #include <tbb/parallel_for.h>
 
@@ -45,6 +47,48 @@ MagnetWrench touchingMagnetInteraction(const MagnetSource& a, const MagnetSource
   const Vec3d r = b.pose().position - a.pose().position;
   if (!(norm(r) > 0)) return {};
   return {dipoleDipoleForce(a.moment(t), b.moment(t), r), dipoleDipoleTorque(a.moment(t), b.moment(t), r)};
+}
+
+/// A body's coupling points over the processes of a partition (collective):
+/// every process's points with their keys (a grid node's flat index in the
+/// whole grid, or a particle's id), sorted by key, on every process. Sorted,
+/// the nodes come in the order one process visits them, so the exchange sums
+/// them in the same order.
+struct GatheredPoints {
+  std::vector<std::uint64_t> keys;
+  std::vector<RigidCouplingPoint> points;
+  /// The position of `key` in keys, or keys.size().
+  std::size_t find(std::uint64_t key) const {
+    const auto it = std::lower_bound(keys.begin(), keys.end(), key);
+    return it != keys.end() && *it == key ? std::size_t(it - keys.begin()) : keys.size();
+  }
+};
+
+GatheredPoints gatherPoints(MpmPartition& partition, const std::vector<std::uint64_t>& keys,
+                            const std::vector<RigidCouplingPoint>& points) {
+  constexpr std::size_t R = 11;  // key bits, m, x, n, v
+  std::vector<double> local;
+  local.reserve(R * points.size());
+  for (std::size_t q = 0; q < points.size(); ++q) {
+    double key = 0;
+    std::memcpy(&key, &keys[q], sizeof key);
+    const RigidCouplingPoint& c = points[q];
+    local.insert(local.end(), {key, c.m, c.x.x, c.x.y, c.x.z, c.n.x, c.n.y, c.n.z, c.v.x, c.v.y, c.v.z});
+  }
+  const std::vector<double> all = partition.allGather(local);
+  const std::size_t n = all.size() / R;
+  std::vector<std::uint64_t> key(n);
+  for (std::size_t q = 0; q < n; ++q) std::memcpy(&key[q], &all[q * R], sizeof(std::uint64_t));
+  std::vector<std::size_t> order(n);
+  for (std::size_t q = 0; q < n; ++q) order[q] = q;
+  std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return key[a] < key[b]; });
+  GatheredPoints g;
+  for (const std::size_t q : order) {
+    const double* r = &all[q * R];
+    g.keys.push_back(key[q]);
+    g.points.push_back({r[1], {r[2], r[3], r[4]}, {r[5], r[6], r[7]}, {r[8], r[9], r[10]}});
+  }
+  return g;
 }
 
 }  // namespace
@@ -170,11 +214,17 @@ void MpmSolver::predictRigidBodies(double dt) {
 
 void MpmSolver::exchangeWithRigidBodies(double dt) {
   const GridSpec& g = settings_.grid;
+  const GridSpec& w = grid_.spec();  // the window, with a partition
+  const Index3 off = partition_ ? partition_->windowLo() : Index3{0, 0, 0};
+  const Index3 boxLo = partition_ ? partition_->boxLo() : Index3{0, 0, 0};
+  const Index3 boxHi = partition_ ? partition_->boxHi() : g.dims;
   const Index3 lo = grid_.activeLo(), hi = grid_.activeHi();
   const std::vector<MpmNode>& nodes = grid_.nodes();
   std::vector<Vec3d>& vel = grid_.velocity();
   std::vector<std::size_t> index;
   std::vector<RigidCouplingPoint> inside;
+  std::vector<std::uint64_t> keys, ownedKeys;  // with a partition: the nodes' flat indices in the whole grid
+  std::vector<RigidCouplingPoint> owned;
   for (std::size_t c = 0; c < colliders_.size(); ++c) {
     const MpmCollider& col = colliders_[c];
     if (!col.isDynamic()) continue;
@@ -188,18 +238,22 @@ void MpmSolver::exchangeWithRigidBodies(double dt) {
     // keep it: their material is there.
     const double R = col.shape().boundingRadius() + g.dx;
     const Vec3d o = pose.pose.position;
+    // Grid indices (the whole grid's) over the active box.
     int from[3], to[3];
-    const int alo[3] = {lo.i, lo.j, lo.k}, ahi[3] = {hi.i, hi.j, hi.k};
+    const int alo[3] = {lo.i + off.i, lo.j + off.j, lo.k + off.k}, ahi[3] = {hi.i + off.i, hi.j + off.j, hi.k + off.k};
     for (int a = 0; a < 3; ++a) {
       from[a] = std::max(alo[a], int(std::floor((o[a] - R - g.origin[a]) / g.dx)));
       to[a] = std::min(ahi[a], int(std::ceil((o[a] + R - g.origin[a]) / g.dx)) + 1);
     }
     index.clear();
     inside.clear();
+    keys.clear();
+    ownedKeys.clear();
+    owned.clear();
     for (int k = from[2]; k < to[2]; ++k)
       for (int j = from[1]; j < to[1]; ++j)
         for (int i = from[0]; i < to[0]; ++i) {
-          const std::size_t n = g.index(i, j, k);
+          const std::size_t n = w.index(i - off.i, j - off.j, k - off.k);
           if (!(nodes[n].mass > 0)) continue;
           const Vec3d x = g.nodePosition(i, j, k);
           const Vec3d xb = pose.pose.toLocal(x);
@@ -208,7 +262,24 @@ void MpmSolver::exchangeWithRigidBodies(double dt) {
           index.push_back(n);
           inside.push_back({nodes[n].mass, x, pose.pose.vectorToWorld(col.shape().normal(xb)),
                             phi > 0 ? vel[n] : vel[n] - dt * settings_.gravity});
+          if (!partition_) continue;
+          keys.push_back(g.index(i, j, k));
+          if (i >= boxLo.i && j >= boxLo.j && k >= boxLo.k && i < boxHi.i && j < boxHi.j && k < boxHi.k) {
+            ownedKeys.push_back(keys.back());
+            owned.push_back(inside.back());
+          }
         }
+    if (partition_) {
+      // Each node once, from its owner; every window that holds it takes its velocity.
+      GatheredPoints all = gatherPoints(*partition_, ownedKeys, owned);
+      if (all.points.empty()) continue;
+      materialImpulse_[c] -= exchangeMomentum(body, col.boundary(), all.points);
+      for (std::size_t q = 0; q < index.size(); ++q) {
+        const std::size_t at = all.find(keys[q]);
+        if (at < all.keys.size()) vel[index[q]] = all.points[at].v;
+      }
+      continue;
+    }
     if (inside.empty()) continue;
     materialImpulse_[c] -= exchangeMomentum(body, col.boundary(), inside);
     for (std::size_t q = 0; q < index.size(); ++q) vel[index[q]] = inside[q].v;
@@ -242,16 +313,27 @@ std::size_t MpmSolver::pushOutOfBody(std::size_t c, const ColliderState& s, doub
   tbb::parallel_for(std::size_t(0), np, [&](std::size_t p) { deep[p] = col.pushOut(s, X[p], allowed, normal[p]); });
   std::vector<std::size_t> index;
   std::vector<RigidCouplingPoint> points;
+  std::vector<std::uint64_t> ids;
   for (std::size_t p = 0; p < np; ++p) {
     if (!deep[p]) continue;
     index.push_back(p);
     points.push_back({particles_.mass[p], X[p], normal[p], particles_.v[p]});
+    ids.push_back(particles_.id[p]);
     if (bounds.excludes(X[p])) ++outside;
   }
-  if (points.empty()) return 0;
   RigidBodyState body = RigidBodyState::dynamic(col.body(), s);
-  const Vec3d given = exchangeMomentum(body, col.boundary(), points);
-  for (std::size_t q = 0; q < index.size(); ++q) particles_.v[index[q]] = points[q].v;
+  Vec3d given;
+  if (partition_) {
+    // Every process's pushed particles, in id order; each takes back its own.
+    GatheredPoints all = gatherPoints(*partition_, ids, points);
+    if (all.points.empty()) return 0;
+    given = exchangeMomentum(body, col.boundary(), all.points);
+    for (std::size_t q = 0; q < index.size(); ++q) particles_.v[index[q]] = all.points[all.find(ids[q])].v;
+  } else {
+    if (points.empty()) return 0;
+    given = exchangeMomentum(body, col.boundary(), points);
+    for (std::size_t q = 0; q < index.size(); ++q) particles_.v[index[q]] = points[q].v;
+  }
   const ColliderState after = body.colliderState();
   col.setMotion(ColliderMotion::dynamic(after.pose, after.velocity, after.angularVelocity));
   if (c < materialImpulse_.size()) materialImpulse_[c] -= given;

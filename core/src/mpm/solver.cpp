@@ -311,17 +311,6 @@ void MpmSolver::setTime(double t) {
 // ---------------------------------------------------------------------------
 // Partition (mpm/partition.h)
 
-void MpmSolver::requirePartitionable() const {
-  for (std::size_t m = 0; m < materials_.size(); ++m)
-    require(!materials_[m].hasSurfaceTension(), "MPM solver: material ", m, " has surface tension (",
-            materials_[m].surfaceTension,
-            " N/m), which does not run partitioned yet (its colour field needs the whole neighbourhood); run it "
-            "on one process");
-  require(!anyDynamicBodies(),
-          "MPM solver: dynamic rigid bodies do not run partitioned yet (their momentum exchange sums over every "
-          "node they cover); run the scene on one process");
-}
-
 void MpmSolver::setPartition(std::shared_ptr<MpmPartition> partition) {
   require(partition != nullptr, "MPM solver: setPartition needs a partition, got null");
   const GridSpec& g = settings_.grid;
@@ -331,13 +320,13 @@ void MpmSolver::setPartition(std::shared_ptr<MpmPartition> partition) {
             lo.j, ", ", lo.k, ") .. (", hi.i, ", ", hi.j, ", ", hi.k, ") of rank ", partition->rank(),
             " must lie in the grid of ", g.dims.i, " x ", g.dims.j, " x ", g.dims.k,
             " nodes and hold at least 3 nodes per axis");
-  requirePartitionable();
   partition_ = std::move(partition);
   GridSpec window;
   window.dx = g.dx;
   window.origin = g.nodePosition(lo.i, lo.j, lo.k);
   window.dims = {hi.i - lo.i, hi.j - lo.j, hi.k - lo.k};
   grid_ = MpmGrid(window);
+  grid_.setColourSum([p = partition_.get()](std::vector<double>& colour) { p->sumScalars(colour); });
   std::size_t removed = 0, nonFinite = 0;
   enforceDomain(removed, nonFinite);  // every process the same: owners are decided inside the domain
   keepOwnedParticles(0);
@@ -801,10 +790,7 @@ MpmStepReport MpmSolver::step(double dt) {
   enforceDomainOfHandedOut(rep);
   // With a partition: particles whose stencil base left this process's box
   // go to their owner (mpm/partition.h).
-  if (partition_) {
-    requirePartitionable();
-    partition_->migrate(particles_);
-  }
+  if (partition_) partition_->migrate(particles_);
   const double secondsDomain = secondsSince(t);
 
   // 2-3. The magnetic force: n_p -> n_i, the field solve and the

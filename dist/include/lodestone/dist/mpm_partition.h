@@ -6,7 +6,9 @@
 //     from its base node), split by PETSC_DECIDE; a rank owns the DMDA's box
 //     of nodes and holds its ghosted box as the window;
 //   - P2G ghost accumulation by DMLocalToGlobal(ADD_VALUES) and the sums
-//     handed back to every window by DMGlobalToLocal(INSERT_VALUES);
+//     handed back to every window by DMGlobalToLocal(INSERT_VALUES); the
+//     colour field of surface tension the same way on a second DMDA of one
+//     value per node over the same boxes;
 //   - particle migration by a DMSwarm (basic type; one record of 33 values
 //     per particle: x, v, C, F, J, mass, V0, n_p, material, id, magnetic
 //     force) and DMSwarmMigrate: each rank puts the particles that leave it
@@ -44,6 +46,7 @@ class PetscMpmPartition final : public MpmPartition {
   std::size_t migrate(MpmParticles& particles) override;
   void gatherToRoot(MpmParticles& particles) override;
   void sumNodes(std::vector<MpmNode>& window) override;
+  void sumScalars(std::vector<double>& window) override;
   double maxOverRanks(double value) override;
   void sumOverRanks(double* values, int n) override;
   std::vector<double> allGather(const std::vector<double>& local) override;

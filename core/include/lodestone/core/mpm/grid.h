@@ -44,6 +44,7 @@
 #include <atomic>
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <vector>
 
@@ -119,6 +120,12 @@ class MpmGrid {
   Index3 activeLo() const { return activeLo_; }
   Index3 activeHi() const { return activeHi_; }
 
+  /// A sum of the colour field over processes (mpm/partition.h): called
+  /// after the colour scatter with the field on the whole grid (zero outside
+  /// what this grid's particles reach), it must leave every node holding the
+  /// total over the processes. Empty (the default): none.
+  void setColourSum(std::function<void(std::vector<double>&)> sum) { colourSum_ = std::move(sum); }
+
   /// Widens the active box to the whole grid: for a caller that wrote node
   /// data outside it (a partition's sums, mpm/partition.h), so that the grid
   /// update covers those nodes and the next particleToGrid zeroes them.
@@ -156,6 +163,7 @@ class MpmGrid {
   std::vector<Vec3d> velocity_;
   std::vector<double> colour_;   // surface tension: colour field per node (allocated when first needed)
   std::vector<Mat3d> capillary_;  // surface tension: capillary Cauchy stress per particle, Pa
+  std::function<void(std::vector<double>&)> colourSum_;  // setColourSum
   Index3 activeLo_{0, 0, 0}, activeHi_{0, 0, 0};
   // Binning scratch. Bins are stencil base nodes; only the box of bins in
   // use, [binLo_, binLo_ + binDims_), gets offsets.

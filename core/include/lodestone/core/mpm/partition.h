@@ -12,7 +12,8 @@
 // A substep of a partitioned solver:
 //   - migrate: particles whose base node left the box go to their new owner;
 //   - P2G on the window, then sumNodes: every window node gets the sum of the
-//     mass and momentum all processes deposited on it;
+//     mass and momentum all processes deposited on it (with surface tension,
+//     the colour field is summed the same way first, sumScalars);
 //   - the grid update on the whole window (a node held by several processes
 //     gets the same velocity on each: same sums, same rules);
 //   - G2P of the process's own particles from its window.
@@ -62,6 +63,10 @@ class MpmPartition {
   /// `window` holds one MpmNode per window node (x fastest); afterwards every
   /// entry is the sum over the processes of what they deposited there.
   virtual void sumNodes(std::vector<MpmNode>& window) = 0;
+
+  /// `window` holds one value per window node; afterwards every entry is the
+  /// sum over the processes (the colour field of surface tension).
+  virtual void sumScalars(std::vector<double>& window) = 0;
 
   /// The largest value over the processes.
   virtual double maxOverRanks(double value) = 0;

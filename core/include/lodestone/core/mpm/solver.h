@@ -406,11 +406,12 @@ class MpmSolver {
   /// particles) and then calls this with its part of one partition; each
   /// keeps only the particles it owns and holds the MPM grid on its window.
   /// From then on step() and advanceFrame() are collective: every process
-  /// calls them with the same arguments. Throws InvalidArgument for what does
-  /// not yet run partitioned: dynamic rigid bodies (their momentum exchange
-  /// sums over every node of the body), surface tension (its colour field
-  /// would need a second exchange inside P2G); and a null partition or one
-  /// whose window does not lie in the grid or is thinner than 3 nodes.
+  /// calls them with the same arguments. Surface tension sums its colour
+  /// field over the processes (a second exchange inside P2G); a dynamic rigid
+  /// body's momentum exchange gathers its coupling nodes and pushed particles
+  /// from every process and each runs the same exchange. Throws
+  /// InvalidArgument for a null partition or one whose window does not lie
+  /// in the grid or is thinner than 3 nodes.
   /// The field solve runs on every process on the gathered magnetic points
   /// (the same solve, replicated); each applies its window of the force.
   void setPartition(std::shared_ptr<MpmPartition> partition);
@@ -493,7 +494,6 @@ class MpmSolver {
   // id order (solvedIds_), and the answer is agreed (collective).
   bool magneticPointsWithin(double distance) const;
   void keepOwnedParticles(std::size_t from);  // with a partition: drops particles [from, size) owned elsewhere
-  void requirePartitionable() const;          // throws for what does not run partitioned
 
   MpmSettings settings_;
   GridSpec magneticGrid_;
