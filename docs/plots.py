@@ -66,3 +66,33 @@ ax.set_title("Newton-PCG field solve at H0 = 1e5 A/m, by relative-residual toler
 ax.legend(fontsize=7)
 fig.tight_layout()
 fig.savefig(os.path.join(here, "images", "field_solve_time.png"))
+
+# The distributed MPM (docs/distributed.md, docs/data/dist_mpm_scaling.csv):
+# seconds per substep and resident memory per rank against the ranks, on the
+# 2-core machine (4 ranks oversubscribed).
+dist = rows("dist_mpm_scaling.csv")
+fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(9, 3.8), dpi=110)
+for series, style in (("strong", "o-"), ("weak", "s-")):
+    rs = [r for r in dist if r["series"] == series]
+    ranks = [int(r["ranks"]) for r in rs]
+    label = {"strong": "strong: 1e6 particles, 129^3", "weak": "weak: 2.5e5 particles per rank"}[series]
+    ax1.plot(ranks, [float(r["substep_s"]) for r in rs], style, label=label)
+    ax2.plot(ranks, [float(r["rss_mb"]) for r in rs], style, label=label)
+ideal = [float(dist[0]["substep_s"]) / r for r in (1, 2, 4)]
+ax1.plot([1, 2, 4], ideal, "k--", lw=0.8, label="ideal strong scaling")
+ax1.axvspan(2.5, 4.3, color="0.9")
+ax1.text(3.2, ax1.get_ylim()[1] * 0.9, "oversubscribed\n(2 cores)", ha="center", va="top", fontsize=8)
+ax1.set_xlabel("ranks")
+ax1.set_ylabel("s per substep")
+ax1.set_xticks([1, 2, 4])
+ax1.set_title("Time per substep")
+ax1.legend(fontsize=7, loc="center left")
+ax1.grid(True, alpha=0.3)
+ax2.set_xlabel("ranks")
+ax2.set_ylabel("resident memory per rank, MB")
+ax2.set_xticks([1, 2, 4])
+ax2.set_title("Memory per rank")
+ax2.legend(fontsize=7)
+ax2.grid(True, alpha=0.3)
+fig.tight_layout()
+fig.savefig(os.path.join(here, "images", "dist_mpm_scaling.png"))
