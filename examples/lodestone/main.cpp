@@ -335,7 +335,7 @@ void printSceneSummary(const Scene& scene, const MpmSolver& solver) {
   std::printf("  grid %d x %d x %d nodes, dx = %.4g m, origin (%.4g, %.4g, %.4g) m\n", g.dims.i, g.dims.j, g.dims.k,
               g.dx, g.origin.x, g.origin.y, g.origin.z);
   std::printf("  %zu particles, %zu materials, %zu magnets, %zu colliders, %zu applied fields\n",
-              solver.particles().size(), solver.materials().size(), solver.magnetCount(), solver.colliderCount(),
+              solver.totalParticles(), solver.materials().size(), solver.magnetCount(), solver.colliderCount(),
               scene.fields.size());
   for (std::size_t m = 0; m < scene.materials.size(); ++m)
     std::printf("  material '%s': %s\n", scene.materialNames[m].c_str(), scene.materials[m].describe().c_str());
@@ -730,8 +730,11 @@ int run(const Args& a) {
   if (first < scene.startFrame || first > scene.lastFrame())
     usageError(concat("--frames starts at ", first, " but ", sceneRange));
   if (last > scene.lastFrame()) usageError(concat("--frames ends at ", last, " but ", sceneRange));
-  auto solver = buildSolver(scene);
+  // Several processes: each builds its part of the scene.
+  auto solver = buildSolver(scene, job.partitionOf(scene.settings.grid));
   printSceneSummary(scene, *solver);
+  if (const MpmPartition* split = solver->partition())
+    std::printf("distributed: %s (figures below per process)\n", split->describe().c_str());
   printPlan(scene, *solver, stdout);
   OutputSelection outputs =
       a.outputs.empty() ? OutputSelection::sceneDefault(scene.output) : OutputSelection::parse(a.outputs);
@@ -757,7 +760,7 @@ int run(const Args& a) {
   const auto record = [&](int firstFrame, int lastFrame, const char* state, int done) {
     if (directory) directory->record(command, firstFrame, lastFrame, state, done);
   };
-  const std::size_t initialParticles = solver->particles().size();
+  const std::size_t initialParticles = solver->totalParticles();
   // The frame the solver is at: the initial one, or a checkpoint's.
   const int startFrame = a.resume ? resumeFromCheckpoint(a.out, origin, *solver) : initialFrame;
   if (startFrame == last) {
@@ -816,8 +819,6 @@ int run(const Args& a) {
     return 128 + int(gStopSignal);
   };
   record(first, last, "running", startFrame);
-  // Several processes: each keeps the particles it owns from here on.
-  if (const std::string split = job.partition(*solver); !split.empty()) std::printf("distributed: %s\n", split.c_str());
   std::signal(SIGINT, onStopSignal);
   std::signal(SIGTERM, onStopSignal);
   // The decision to stop is the same on every process (a collective test).

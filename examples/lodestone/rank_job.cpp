@@ -42,12 +42,9 @@ RankJob::RankJob() {
 
 RankJob::~RankJob() = default;
 
-std::string RankJob::partition(MpmSolver& solver) const {
-  if (ranks_ < 2) return "";
-  auto split = std::make_shared<PetscMpmPartition>(MPI_COMM_WORLD, solver.settings().grid);
-  const std::string line = split->describe();
-  solver.setPartition(split);
-  return line;
+std::shared_ptr<MpmPartition> RankJob::partitionOf(const GridSpec& grid) const {
+  if (ranks_ < 2) return nullptr;
+  return std::make_shared<PetscMpmPartition>(MPI_COMM_WORLD, grid);
 }
 
 bool RankJob::anyRank(bool flag) const {
@@ -89,7 +86,7 @@ RankJob::RankJob() {
 
 RankJob::~RankJob() = default;
 
-std::string RankJob::partition(MpmSolver&) const { return ""; }
+std::shared_ptr<MpmPartition> RankJob::partitionOf(const GridSpec&) const { return nullptr; }
 
 bool RankJob::anyRank(bool flag) const { return flag; }
 

@@ -27,9 +27,9 @@ class RankJob {
   int ranks() const { return ranks_; }
   /// Whether this process writes the run's files (rank 0).
   bool writes() const { return rank_ == 0; }
-  /// Splits the solver's MPM over the job (nothing for a job of one) and
-  /// returns a line describing the split ("" for a job of one).
-  std::string partition(MpmSolver& solver) const;
+  /// The split of an MPM grid over the job (collective), for buildSolver;
+  /// null for a job of one.
+  std::shared_ptr<MpmPartition> partitionOf(const GridSpec& grid) const;
   /// Whether any process has `flag` set (collective with several processes).
   bool anyRank(bool flag) const;
 

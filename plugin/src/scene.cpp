@@ -321,8 +321,10 @@ Scene parseScene(const std::string& text, const std::string& sourceName, const S
 
 Scene loadScene(const std::string& path, const SceneOptions& options) { return parseScene(readJsonFile(path), path, options); }
 
-std::unique_ptr<MpmSolver> buildSolver(const Scene& scene) {
+std::unique_ptr<MpmSolver> buildSolver(const Scene& scene, std::shared_ptr<MpmPartition> partition) {
   auto solver = std::make_unique<MpmSolver>(scene.settings);
+  // Split before emitting: each process keeps only its part of every body.
+  if (partition) solver->setPartition(partition);
   // Before anything is added: magnets and colliders take their pose at the solver's time.
   solver->setTime(scene.startTime());
   for (const MpmMaterial& m : scene.materials) solver->addMaterial(m);
@@ -343,7 +345,9 @@ std::unique_ptr<MpmSolver> buildSolver(const Scene& scene) {
     const auto inside = [&](const Vec3d& p) {
       return p.x >= lo.x && p.x <= hi.x && p.y >= lo.y && p.y <= hi.y && p.z >= lo.z && p.z <= hi.z;
     };
-    if (emitted.particles > 0 && std::none_of(x.begin() + std::ptrdiff_t(first), x.end(), inside))
+    bool any = std::any_of(x.begin() + std::ptrdiff_t(first), x.end(), inside);
+    if (partition) any = partition->maxOverRanks(any ? 1.0 : 0.0) > 0;  // some process holds one
+    if (emitted.particles > 0 && !any)
       throw InvalidArgument(concat(scene.file, ": body '", b.name, "' lies wholly outside the domain ", point(lo),
                                    " .. ", point(hi), " m (where material can be); none of its ", emitted.particles,
                                    " particles is inside"));
@@ -371,6 +375,12 @@ std::unique_ptr<MpmSolver> buildSolver(const Scene& scene) {
 MemoryCounts sceneMemory(const Scene& scene, const MpmSolver* solver) {
   MemoryCounts c;
   c.mpmNodes = double(scene.settings.grid.nodeCount());
+  // With a partition: this process's part (its window of the grid, its particles).
+  const MpmPartition* split = solver ? solver->partition() : nullptr;
+  if (split) {
+    const Index3 lo = split->windowLo(), hi = split->windowHi();
+    c.mpmNodes = double(hi.i - lo.i) * double(hi.j - lo.j) * double(hi.k - lo.k);
+  }
   c.previewPixels = double(scene.output.width) * double(scene.output.height);
   bool magnetic = false;
   // `n` points of scene material `material`.
@@ -387,8 +397,11 @@ MemoryCounts sceneMemory(const Scene& scene, const MpmSolver* solver) {
     const double end = solver->time() + scene.frames * scene.frameDuration();
     for (std::size_t e = 0; e < solver->emitterCount(); ++e) {
       const RateEmitter& emitter = solver->emitter(e);
-      add(materials[emitter.materialIndex()], emitter.particlesBy(end) - emitter.particlesBy(solver->time()));
+      add(materials[emitter.materialIndex()], (emitter.particlesBy(end) - emitter.particlesBy(solver->time())) /
+                                                  (split ? split->ranks() : 1));
     }
+    // Every process runs the field solve: whether there is one is the scene's.
+    for (const SceneBody& b : scene.bodies) magnetic = magnetic || (split && scene.materials[b.material].isMagnetic());
   } else {
     for (const SceneBody& b : scene.bodies)
       add(scene.materials[b.material], estimatedParticles(b.shape.volume(), b.emit.cellSize, b.emit.particlesPerCell));

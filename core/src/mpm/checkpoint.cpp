@@ -392,6 +392,7 @@ struct MpmCheckpointAccess {
 
     // Everything parsed: change the solver.
     s.particles_ = std::move(P);
+    s.keepOwnedParticles(0);  // with a partition: every process reads the same file, each keeps its own
     s.time_ = h.time;
     s.substeps_ = h.substeps;
     s.stepsSinceSolve_ = stepsSinceSolve;

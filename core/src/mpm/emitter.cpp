@@ -222,7 +222,8 @@ EmittedPoint emittedPoint(const MpmMaterial& material, double volume) {
 }
 
 EmitReport emitParticles(MpmParticles& particles, const EmitterShape& shape, const MpmMaterial& material,
-                         std::uint32_t materialIndex, const EmitterSettings& settings) {
+                         std::uint32_t materialIndex, const EmitterSettings& settings,
+                         const std::function<bool(const Vec3d&)>& keep) {
   material.validate();
   particles.checkSizes();
   const EmitterLattice lattice = emitterLattice(shape, settings);
@@ -230,20 +231,23 @@ EmitReport emitParticles(MpmParticles& particles, const EmitterShape& shape, con
 
   EmitReport rep;
   rep.spacing = (lattice.spacing.x + lattice.spacing.y + lattice.spacing.z) / 3;
-  const std::size_t before = particles.size();
   const Vec3d& w = settings.angularVelocity;
   for (const Vec3d& xb : lattice.points) {
     const Vec3d x = shape.pose.toWorld(xb);
+    rep.volume += point.volume;
+    rep.mass += point.mass;
+    rep.count += point.count;
+    ++rep.particles;
+    if (keep && !keep(x)) {
+      ++particles.nextId;  // its id, taken where it is kept
+      continue;
+    }
     const Vec3d v = settings.velocity + cross(w, x - shape.pose.position);
     const std::size_t q = particles.add(x, v, point.mass, point.volume, point.count, materialIndex);
     // The affine matrix is the velocity gradient of the spin, [w]x, so the
     // first P2G carries the rigid rotation exactly (APIC).
     particles.C[q] = Mat3d::cross(w);
-    rep.volume += point.volume;
-    rep.mass += point.mass;
-    rep.count += point.count;
   }
-  rep.particles = particles.size() - before;
   return rep;
 }
 

@@ -204,7 +204,12 @@ EmitReport MpmSolver::emit(const EmitterShape& shape, std::uint32_t material, Em
   require(material < materials_.size(), "MPM solver: material index ", material, " out of range (", materials_.size(),
           " materials)");
   if (settings.cellSize == 0) settings.cellSize = settings_.grid.dx;
-  return emitParticles(particles_, shape, materials_[material], material, settings);
+  if (!partition_) return emitParticles(particles_, shape, materials_[material], material, settings);
+  // Every process emits the same shape and keeps its own points.
+  const int me = partition_->rank();
+  const MpmPartition& split = *partition_;
+  return emitParticles(particles_, shape, materials_[material], material, settings,
+                       [&](const Vec3d& x) { return split.owner(x) == me; });
 }
 
 std::size_t MpmSolver::addEmitter(const EmitterShape& shape, std::uint32_t material, RateEmitterSettings settings) {
@@ -340,6 +345,13 @@ void MpmSolver::keepOwnedParticles(std::size_t from) {
   std::vector<std::uint8_t> drop(particles_.size(), 0);
   for (std::size_t p = from; p < particles_.size(); ++p) drop[p] = partition_->owner(particles_.x[p]) != me;
   particles_.removeFlagged(drop);
+}
+
+std::size_t MpmSolver::totalParticles() const {
+  if (!partition_) return particles_.size();
+  double n = double(particles_.size());
+  partition_->sumOverRanks(&n, 1);
+  return std::size_t(n);
 }
 
 void MpmSolver::gatherParticlesToRoot() {

@@ -54,7 +54,7 @@ class PetscMpmPartition final : public MpmPartition {
   /// Ranks per axis, e.g. {1, 1, 2}.
   Index3 rankGrid() const;
   /// One line: the ranks per axis and this rank's box and window.
-  std::string describe() const;
+  std::string describe() const override;
   /// Particles this rank sent in migrations (not counting gatherToRoot).
   std::size_t sent() const;
 

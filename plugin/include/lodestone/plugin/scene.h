@@ -129,8 +129,11 @@ Scene parseScene(const std::string& text, const std::string& sourceName, const S
 /// colliders (the particles emitted at the scene's dx), at the scene time
 /// startTime(). Throws
 /// InvalidArgument for a body wholly outside the domain, or an emitter whose
-/// centre is outside it when it first switches on.
-std::unique_ptr<MpmSolver> buildSolver(const Scene& scene);
+/// centre is outside it when it first switches on. With a partition
+/// (mpm/partition.h; every process of it calls this, collective) the solver
+/// is split before the bodies are emitted, and each process keeps only the
+/// particles it owns.
+std::unique_ptr<MpmSolver> buildSolver(const Scene& scene, std::shared_ptr<MpmPartition> partition = nullptr);
 
 /// What a run of `scene` holds at its largest: the MPM grid; the field
 /// solve's grid when some material is magnetic and the scene has a magnet or
@@ -139,7 +142,10 @@ std::unique_ptr<MpmSolver> buildSolver(const Scene& scene);
 /// subtracted); the preview's pixels (no other frame file: the caller adds
 /// those it writes). With `solver` (as buildSolver made it, or later) the
 /// particles are its own from its time on; without, the bodies' are
-/// estimated from their volumes (loadScene checks this estimate).
+/// estimated from their volumes (loadScene checks this estimate). For a
+/// partitioned solver: this process's part (its window of the MPM grid, its
+/// particles, its share of what the emitters add; the whole field grid,
+/// which every process solves).
 MemoryCounts sceneMemory(const Scene& scene, const MpmSolver* solver = nullptr);
 
 }  // namespace lodestone::plugin

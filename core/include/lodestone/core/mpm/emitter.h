@@ -23,6 +23,7 @@
 // seeded with `seed`, so a given seed gives the same points on every platform.
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <vector>
 
@@ -100,9 +101,13 @@ EmittedPoint emittedPoint(const MpmMaterial& material, double volume);
 
 /// Appends points filling `shape` to `particles` with material index
 /// `materialIndex` (whose parameters are `material`). Throws InvalidArgument
-/// on bad settings, shapes or materials; adds nothing then.
+/// on bad settings, shapes or materials; adds nothing then. With `keep`,
+/// only the points at positions x (m) with keep(x) are added (a partitioned
+/// solver's own, mpm/partition.h): the others still take their id, so that
+/// ids do not depend on it, and the report counts every point of the shape.
 EmitReport emitParticles(MpmParticles& particles, const EmitterShape& shape, const MpmMaterial& material,
-                         std::uint32_t materialIndex, const EmitterSettings& settings);
+                         std::uint32_t materialIndex, const EmitterSettings& settings,
+                         const std::function<bool(const Vec3d&)>& keep = {});
 
 }  // namespace mpm
 }  // namespace lodestone

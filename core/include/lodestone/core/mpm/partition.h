@@ -21,6 +21,7 @@
 // field-solve decisions the same on every process. Every call below is
 // collective: all processes make it, in the same order.
 #include <cstdint>
+#include <string>
 #include <vector>
 
 #include "lodestone/core/base/grid.h"
@@ -67,6 +68,9 @@ class MpmPartition {
   /// `window` holds one value per window node; afterwards every entry is the
   /// sum over the processes (the colour field of surface tension).
   virtual void sumScalars(std::vector<double>& window) = 0;
+
+  /// One line: how the grid is split and what this process holds.
+  virtual std::string describe() const = 0;
 
   /// The largest value over the processes.
   virtual double maxOverRanks(double value) = 0;

@@ -403,8 +403,10 @@ class MpmSolver {
 
   /// Shares this simulation with other processes (mpm/partition.h): every
   /// process builds the same solver (materials, colliders, sources,
-  /// particles) and then calls this with its part of one partition; each
-  /// keeps only the particles it owns and holds the MPM grid on its window.
+  /// particles) and calls this with its part of one partition, before or
+  /// after emitting; each keeps only the particles it owns (emit() and the
+  /// rate emitters keep only those from then on) and holds the MPM grid on
+  /// its window.
   /// From then on step() and advanceFrame() are collective: every process
   /// calls them with the same arguments. Surface tension sums its colour
   /// field over the processes (a second exchange inside P2G); a dynamic rigid
@@ -415,6 +417,9 @@ class MpmSolver {
   /// The field solve runs on every process on the gathered magnetic points
   /// (the same solve, replicated); each applies its window of the force.
   void setPartition(std::shared_ptr<MpmPartition> partition);
+  /// The particles of the whole simulation: particles().size(), summed over
+  /// the processes with a partition (collective).
+  std::size_t totalParticles() const;
   /// The partition, or null when the solver holds the whole simulation.
   const MpmPartition* partition() const { return partition_.get(); }
   /// With a partition: moves every particle to rank 0 (collective) so that
