@@ -152,7 +152,10 @@ PetscMpmPartition::PetscMpmPartition(MPI_Comm comm, const GridSpec& grid) : impl
   LODESTONE_PETSC(DMDACreate3d(comm, DM_BOUNDARY_NONE, DM_BOUNDARY_NONE, DM_BOUNDARY_NONE, DMDA_STENCIL_BOX,
                                grid.dims.i, grid.dims.j, grid.dims.k, pm, pn, pp, 4, 2, nullptr, nullptr, nullptr,
                                &m.da));
-  LODESTONE_PETSC(DMSetUp(m.da));
+  if (DMSetUp(m.da) != 0)
+    throw Error(concat("MPM partition: PETSc cannot split the ", grid.dims.i, " x ", grid.dims.j, " x ", grid.dims.k,
+                       " node grid over ", m.size, " ranks (each rank's box needs at least 2 nodes per axis); use "
+                       "fewer ranks"));
   PetscInt xs, ys, zs, xm, ym, zm, gxs, gys, gzs, gxm, gym, gzm, M, N, P;
   LODESTONE_PETSC(DMDAGetCorners(m.da, &xs, &ys, &zs, &xm, &ym, &zm));
   LODESTONE_PETSC(DMDAGetGhostCorners(m.da, &gxs, &gys, &gzs, &gxm, &gym, &gzm));
