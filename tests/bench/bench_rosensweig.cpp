@@ -7,7 +7,8 @@
 // The scene (default examples/scenes/rosensweig.json) gives the layer, the
 // liquid (its first material with surface tension), the grid and the time
 // line; its applied fields are replaced by one uniform vertical field of
-// ratio * H0_c, switched on over --ramp seconds; `--law linear` replaces the
+// ratio * H0_c (or the --applied fields, A/m), switched on over --ramp
+// seconds; `--law linear` replaces the
 // liquid's law by its linearisation (the same chi0, no saturation) and its
 // own onset. Writes per-frame figures to
 // --csv and a summary table (markdown) to --table; prints both. Not a test:
@@ -58,6 +59,9 @@ int main(int argc, char** argv) {
     cli::helpLayout(app, 28);
     app.add_option("--scene", scenePath, "the layer's scene")->type_name("FILE")->capture_default_str();
     cli::addNumberList(app, "--ratios", ratios, "applied fields as multiples of the onset field H0_c (each 0..100)");
+    std::vector<double> applied;
+    cli::addNumberList(app, "--applied", applied,
+                       "applied fields in A/m instead of --ratios (the same fields for either --law)");
     cli::addNumber(app, "--ramp", ramp, "time over which the field is switched on, s")
         ->type_name("S")
         ->default_str(cli::formatNumber(ramp));
@@ -99,6 +103,13 @@ int main(int argc, char** argv) {
                 base.name.c_str(), mat.density, mat.surfaceTension, mat.magnetic.describe().c_str(), onset.M, onset.H,
                 onset.appliedH, 1e3 * onset.wavelength, onset.wavelength / h);
 
+    if (!applied.empty()) {
+      ratios.clear();
+      for (const double H : applied) {
+        require(std::isfinite(H) && H >= 0, "--applied: ", H, " A/m is not a field >= 0");
+        ratios.push_back(H / onset.appliedH);
+      }
+    }
     std::ofstream csv(csvPath);
     require(bool(csv), "cannot write ", csvPath);
     csv << "law,ratio,applied_H_A_per_m,frame,time_s,range_m,range_cells,rms_cells,peaks,mean_nearest_m,"
