@@ -468,9 +468,18 @@ void writeFields(const std::string& path, const Scene& scene, const MagneticForc
   o.fields.mass = listed("mass");
   o.fields.velocity = listed("velocity");
   o.displayAliases = sceneGrids && scene.output.vdbAliases;
+  if (solver && solver->partition() && (o.fields.mass || o.fields.velocity)) {
+    // Several processes: rank 0 holds only its window of the MPM grid.
+    static bool said = false;
+    if (!said)
+      std::fprintf(stderr, "lodestone: %s: the MPM grids (mass, velocity) are not written on several processes\n",
+                   path.c_str());
+    said = true;
+    o.fields.mass = o.fields.velocity = false;
+  }
   DenseGrid<double> mass;
   DenseGrid<Vec3d> velocity;
-  if (solver && (o.fields.mass || o.fields.velocity || o.displayAliases)) {
+  if (solver && !solver->partition() && (o.fields.mass || o.fields.velocity || o.displayAliases)) {
     mpmGridData(*solver, mass, velocity);
     o.mpm = {mass.view(), velocity.view()};
   }
