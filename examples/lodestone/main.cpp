@@ -13,7 +13,6 @@
 #include <memory>
 #include <optional>
 #include <string>
-#include <thread>
 #include <utility>
 #include <vector>
 
@@ -719,13 +718,7 @@ int run(const Args& a) {
   if (!job.writes() && !std::freopen("/dev/null", "w", stdout)) throw Error("cannot silence rank output");
   std::signal(SIGPIPE, SIG_IGN);  // a closed standard output is noticed and said (stdoutBroken)
   std::unique_ptr<tbb::global_control> threads;
-  int threadCount = a.threads;
-  if (threadCount == 0 && job.ranks() > 1) {
-    // The cores of a node shared by the ranks on it.
-    const char* local = std::getenv("OMPI_COMM_WORLD_LOCAL_SIZE");
-    const int perNode = local ? std::max(1, std::atoi(local)) : job.ranks();
-    threadCount = std::max(1, int(std::thread::hardware_concurrency()) / perNode);
-  }
+  const int threadCount = a.threads > 0 ? a.threads : job.threadsPerRank();
   if (threadCount > 0)
     threads = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism, std::size_t(threadCount));
   Scene scene = loadScene(a.scene, a.options);

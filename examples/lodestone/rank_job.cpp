@@ -1,7 +1,9 @@
 #include "rank_job.h"
 
+#include <sched.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cstdlib>
 #include <cstring>
@@ -47,6 +49,20 @@ std::shared_ptr<MpmPartition> RankJob::partitionOf(const GridSpec& grid) const {
   return std::make_shared<PetscMpmPartition>(MPI_COMM_WORLD, grid);
 }
 
+int RankJob::threadsPerRank() const {
+  if (ranks_ < 2) return 0;
+  const long online = sysconf(_SC_NPROCESSORS_ONLN);
+  int bound = 0;  // the CPUs this process may run on
+  cpu_set_t set;
+  if (sched_getaffinity(0, sizeof set, &set) == 0) bound = CPU_COUNT(&set);
+  if (bound > 0 && bound < online) return bound;  // the launcher bound it
+  // Processes on this node: Open MPI says; Slurm's "32(x4)" starts with it.
+  const char* local = std::getenv("OMPI_COMM_WORLD_LOCAL_SIZE");
+  if (!local) local = std::getenv("SLURM_NTASKS_PER_NODE");
+  const int perNode = local && std::atoi(local) > 0 ? std::atoi(local) : ranks_;
+  return std::max(1, int(online) / perNode);
+}
+
 bool RankJob::anyRank(bool flag) const {
   if (ranks_ < 2) return flag;
   int mine = flag ? 1 : 0, any = 0;
@@ -87,6 +103,8 @@ RankJob::RankJob() {
 RankJob::~RankJob() = default;
 
 std::shared_ptr<MpmPartition> RankJob::partitionOf(const GridSpec&) const { return nullptr; }
+
+int RankJob::threadsPerRank() const { return 0; }
 
 bool RankJob::anyRank(bool flag) const { return flag; }
 

@@ -30,6 +30,11 @@ class RankJob {
   /// The split of an MPM grid over the job (collective), for buildSolver;
   /// null for a job of one.
   std::shared_ptr<MpmPartition> partitionOf(const GridSpec& grid) const;
+  /// Worker threads for this process when --threads is not given: 0 (all
+  /// cores) for a job of one; otherwise the CPUs the launcher bound it to
+  /// (srun, or mpirun without oversubscription), or when it bound none the
+  /// node's CPUs divided by the processes on the node (at least 1).
+  int threadsPerRank() const;
   /// Whether any process has `flag` set (collective with several processes).
   bool anyRank(bool flag) const;
 
