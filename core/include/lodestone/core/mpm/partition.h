@@ -17,9 +17,12 @@
 //   - the grid update on the whole window (a node held by several processes
 //     gets the same velocity on each: same sums, same rules);
 //   - G2P of the process's own particles from its window.
-// Reductions make the time step, the frame's energies and counts, and the
-// field-solve decisions the same on every process. Every call below is
-// collective: all processes make it, in the same order.
+// A dynamic rigid body's momentum exchange gathers its coupling nodes and
+// the particles pushed out of it from every process (allGather) and runs on
+// each. Reductions make the time step, the frame's energies and counts, and
+// the field-solve decisions the same on every process. The calls that
+// exchange data (migrate, gatherToRoot, the sums, the reductions and
+// allGather) are collective: all processes make them, in the same order.
 #include <cstdint>
 #include <string>
 #include <vector>
