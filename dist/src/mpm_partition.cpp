@@ -5,7 +5,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstring>
 #include <vector>
 
 #include "lodestone/core/base/error.h"
@@ -49,13 +48,11 @@ void pack(const MpmParticles& P, std::size_t p, PetscReal* r) {
   r[26] = P.volume0[p];
   r[27] = P.count[p];
   r[28] = double(P.material[p]);
-  std::memcpy(r + 29, &P.id[p], sizeof(std::uint64_t));  // the id's bits, carried unchanged
+  r[29] = keyAsDouble(P.id[p]);
   put(P.magneticForce[p], r + 30);
 }
 
 void unpack(const PetscReal* r, MpmParticles& P) {
-  std::uint64_t id = 0;
-  std::memcpy(&id, r + 29, sizeof id);
   P.x.push_back(vec(r));
   P.v.push_back(vec(r + 3));
   P.C.push_back(mat(r + 6));
@@ -65,7 +62,7 @@ void unpack(const PetscReal* r, MpmParticles& P) {
   P.volume0.push_back(r[26]);
   P.count.push_back(r[27]);
   P.material.push_back(std::uint32_t(r[28]));
-  P.id.push_back(id);
+  P.id.push_back(keyOf(r[29]));
   P.magneticForce.push_back(vec(r + 30));
 }
 /// Every node of the ghosted local vector becomes the sum over the ranks of
@@ -154,7 +151,8 @@ PetscMpmPartition::PetscMpmPartition(MPI_Comm comm, const GridSpec& grid) : impl
                                &m.da));
   if (DMSetUp(m.da) != 0)
     throw Error(concat("MPM partition: PETSc cannot split the ", grid.dims.i, " x ", grid.dims.j, " x ", grid.dims.k,
-                       " node grid over ", m.size, " ranks (each rank's box needs at least 2 nodes per axis); use "
+                       " node grid over ", m.size,
+                       " ranks (each rank's box needs at least 2 nodes per axis); use "
                        "fewer ranks"));
   PetscInt xs, ys, zs, xm, ym, zm, gxs, gys, gzs, gxm, gym, gzm, M, N, P;
   LODESTONE_PETSC(DMDAGetCorners(m.da, &xs, &ys, &zs, &xm, &ym, &zm));

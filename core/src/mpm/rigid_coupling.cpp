@@ -4,7 +4,6 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
-#include <cstring>
 #include <vector>
 
 #include <tbb/parallel_for.h>
@@ -66,26 +65,19 @@ struct GatheredPoints {
 
 GatheredPoints gatherPoints(MpmPartition& partition, const std::vector<std::uint64_t>& keys,
                             const std::vector<RigidCouplingPoint>& points) {
-  constexpr std::size_t R = 11;  // key bits, m, x, n, v
+  constexpr std::size_t R = 11;  // key, m, x, n, v
   std::vector<double> local;
   local.reserve(R * points.size());
   for (std::size_t q = 0; q < points.size(); ++q) {
-    double key = 0;
-    std::memcpy(&key, &keys[q], sizeof key);
     const RigidCouplingPoint& c = points[q];
-    local.insert(local.end(), {key, c.m, c.x.x, c.x.y, c.x.z, c.n.x, c.n.y, c.n.z, c.v.x, c.v.y, c.v.z});
+    local.insert(local.end(),
+                 {keyAsDouble(keys[q]), c.m, c.x.x, c.x.y, c.x.z, c.n.x, c.n.y, c.n.z, c.v.x, c.v.y, c.v.z});
   }
-  const std::vector<double> all = partition.allGather(local);
-  const std::size_t n = all.size() / R;
-  std::vector<std::uint64_t> key(n);
-  for (std::size_t q = 0; q < n; ++q) std::memcpy(&key[q], &all[q * R], sizeof(std::uint64_t));
-  std::vector<std::size_t> order(n);
-  for (std::size_t q = 0; q < n; ++q) order[q] = q;
-  std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return key[a] < key[b]; });
+  const std::vector<double> all = allGatherByKey(partition, local, R);
   GatheredPoints g;
-  for (const std::size_t q : order) {
+  for (std::size_t q = 0; q < all.size() / R; ++q) {
     const double* r = &all[q * R];
-    g.keys.push_back(key[q]);
+    g.keys.push_back(keyOf(r[0]));
     g.points.push_back({r[1], {r[2], r[3], r[4]}, {r[5], r[6], r[7]}, {r[8], r[9], r[10]}});
   }
   return g;

@@ -8,7 +8,6 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <cstring>
 #include <limits>
 #include <sstream>
 
@@ -369,32 +368,21 @@ MpmSolver::MagneticPoints MpmSolver::magneticPoints() const {
     }
     return pts;
   }
-  // Records of 7 values: x, y, z, n_p, id (its bits), rank, index.
+  // Records of 7 values: id, x, y, z, n_p, rank, index.
   constexpr std::size_t R = 7;
   const int me = partition_->rank();
   std::vector<double> local;
   for (std::size_t p = 0; p < particles_.size(); ++p) {
     if (!isMagneticPoint(p)) continue;
-    double id = 0;
-    std::memcpy(&id, &particles_.id[p], sizeof id);
-    local.insert(local.end(), {particles_.x[p].x, particles_.x[p].y, particles_.x[p].z, particles_.count[p], id,
-                               double(me), double(p)});
+    local.insert(local.end(), {keyAsDouble(particles_.id[p]), particles_.x[p].x, particles_.x[p].y, particles_.x[p].z,
+                               particles_.count[p], double(me), double(p)});
   }
-  const std::vector<double> all = partition_->allGather(local);
-  const std::size_t n = all.size() / R;
-  const auto idOf = [&](std::size_t q) {
-    std::uint64_t id = 0;
-    std::memcpy(&id, &all[q * R + 4], sizeof id);
-    return id;
-  };
-  std::vector<std::uint32_t> order(n);
-  for (std::size_t q = 0; q < n; ++q) order[q] = std::uint32_t(q);
-  std::sort(order.begin(), order.end(), [&](std::uint32_t a, std::uint32_t b) { return idOf(a) < idOf(b); });
-  for (const std::uint32_t q : order) {
+  const std::vector<double> all = allGatherByKey(*partition_, local, R);
+  for (std::size_t q = 0; q < all.size() / R; ++q) {
     const double* r = &all[q * R];
-    pts.x.push_back({r[0], r[1], r[2]});
-    pts.count.push_back(r[3]);
-    pts.id.push_back(idOf(q));
+    pts.id.push_back(keyOf(r[0]));
+    pts.x.push_back({r[1], r[2], r[3]});
+    pts.count.push_back(r[4]);
     pts.index.push_back(int(r[5]) == me ? std::uint32_t(r[6]) : MagneticPoints::kElsewhere);
   }
   return pts;

@@ -84,5 +84,15 @@ class MpmPartition {
   virtual std::vector<double> allGather(const std::vector<double>& local) = 0;
 };
 
+/// A 64-bit key (a particle id, a node's flat index) carried bit for bit in
+/// one double of an exchanged record, and back.
+double keyAsDouble(std::uint64_t key);
+std::uint64_t keyOf(double value);
+
+/// Every process's records of `width` values (collective, allGather), each
+/// with its key in its first value (keyAsDouble), ordered by key: the same
+/// order whatever the number of processes.
+std::vector<double> allGatherByKey(MpmPartition& partition, const std::vector<double>& local, std::size_t width);
+
 }  // namespace mpm
 }  // namespace lodestone
