@@ -34,6 +34,8 @@ class DeviceMpm final : public MpmBackend {
     velocity_.zero();
     density_.zero();
     counters_.resize(5);
+    surfaceTension_ = kernels::anySurfaceTension(materials);
+    if (surfaceTension_) colour_.resize(n);
   }
 
   std::size_t size() const override { return size_; }
@@ -51,6 +53,7 @@ class DeviceMpm final : public MpmBackend {
     if (hasCount_) count_.upload(in.count, size_);
     mat_.upload(in.material, size_);
     pforce_.resize(size_);
+    if (surfaceTension_) capillary_.resize(size_);
   }
   void download(const ParticleOutput& out) const override {
     if (out.x) x_.download(out.x, size_);
@@ -88,11 +91,26 @@ class DeviceMpm final : public MpmBackend {
     const kernels::MpmDims g = g_;
     const MpmMaterialParams* mats = materials_.data();
     const std::uint32_t nm = materialCount_;
-    const kernels::ParticlePointers P = pointers();
+    kernels::ParticlePointers P = pointers();
+    unsigned long long* bad = counters_.data();
+    if (surfaceTension_) {
+      // The colour field (atomic sums), then the capillary stress per particle (surface_tension.h).
+      colour_.zero();
+      double* colour = colour_.data();
+      const kernels::ParticlePointers Q = P;
+      forEach(size_, [=] __device__(std::size_t p) {
+        const bool ok = kernels::colourParticle(g, mats, nm, Q, p, [&](std::size_t node, double c) {
+          if (c != 0) atomicAdd(colour + node, c);
+        });
+        if (!ok) atomicMin(bad, static_cast<unsigned long long>(p));
+      });
+      Mat3d* T = capillary_.data();
+      forEach(size_, [=] __device__(std::size_t p) { T[p] = kernels::capillaryParticle(g, mats, nm, Q, colour, p); });
+      P.capillary = T;
+    }
     double* mass = mass_.data();
     double* mom = reinterpret_cast<double*>(momentum_.data());
     double* dens = density_.data();
-    unsigned long long* bad = counters_.data();
     forEach(size_, [=] __device__(std::size_t p) {
       const bool ok =
           kernels::p2gParticle(g, mats, nm, dt, P, f, p, [&](std::size_t node, double wm, const Vec3d& mv, double wn) {
@@ -175,6 +193,9 @@ class DeviceMpm final : public MpmBackend {
   DeviceBuffer<double> mass_, density_;
   DeviceBuffer<Vec3d> momentum_, velocity_, force_;
   DeviceBuffer<unsigned long long> counters_;
+  bool surfaceTension_ = false;         // some material has sigma > 0
+  DeviceBuffer<double> colour_;         // surface tension: colour field per node
+  DeviceBuffer<Mat3d> capillary_;       // surface tension: capillary stress per particle, Pa
 };
 
 std::unique_ptr<MpmBackend> makeDeviceMpm(const kernels::MpmDims& dims,

@@ -19,7 +19,8 @@ class HostMpm final : public MpmBackend {
         mass_(dims.nodes()),
         momentum_(dims.nodes()),
         velocity_(dims.nodes()),
-        density_(dims.nodes()) {}
+        density_(dims.nodes()),
+        surfaceTension_(kernels::anySurfaceTension(materials)) {}
 
   std::size_t size() const override { return x_.size(); }
 
@@ -50,7 +51,19 @@ class HostMpm final : public MpmBackend {
     std::fill(mass_.begin(), mass_.end(), 0.0);
     std::fill(momentum_.begin(), momentum_.end(), Vec3d{});
     std::fill(density_.begin(), density_.end(), 0.0);
-    const kernels::ParticlePointers P = pointers();
+    kernels::ParticlePointers P = pointers();
+    if (surfaceTension_) {
+      // The colour field, then the capillary stress per particle (surface_tension.h).
+      colour_.assign(g_.nodes(), 0.0);
+      for (std::size_t p = 0; p < x_.size(); ++p)
+        if (!kernels::colourParticle(g_, materials_.data(), std::uint32_t(materials_.size()), P, p,
+                                     [&](std::size_t node, double c) { colour_[node] += c; }))
+          return p;
+      capillary_.resize(x_.size());
+      for (std::size_t p = 0; p < x_.size(); ++p)
+        capillary_[p] = kernels::capillaryParticle(g_, materials_.data(), std::uint32_t(materials_.size()), P, colour_.data(), p);
+      P.capillary = capillary_.data();
+    }
     for (std::size_t p = 0; p < x_.size(); ++p) {
       const bool ok = kernels::p2gParticle(g_, materials_.data(), std::uint32_t(materials_.size()), dt, P, forces, p,
                                            [&](std::size_t node, double wm, const Vec3d& mv, double wn) {
@@ -116,6 +129,9 @@ class HostMpm final : public MpmBackend {
   std::vector<double> mass_;
   std::vector<Vec3d> momentum_, velocity_;
   std::vector<double> density_;
+  bool surfaceTension_ = false;  // some material has sigma > 0
+  std::vector<double> colour_;   // surface tension: colour field per node
+  std::vector<Mat3d> capillary_;  // surface tension: capillary stress per particle, Pa
 };
 
 }  // namespace

@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include "lodestone/core/base/error.h"
+#include "lodestone/core/mpm/material.h"
 #include "mpm_backend.h"
 
 namespace lodestone {
@@ -35,13 +36,19 @@ MpmStepper::MpmStepper(const GridSpec& grid, std::vector<MpmMaterialParams> mate
   require(!materials.empty(), "gpu MPM: at least one material is needed");
   for (std::size_t m = 0; m < materials.size(); ++m) {
     const MpmMaterialParams& p = materials[m];
-    if (p.fluid)
+    if (p.fluid) {
       require(std::isfinite(p.viscosity) && p.viscosity >= 0 && std::isfinite(p.bulkModulus) && p.bulkModulus > 0,
               "gpu MPM material ", m, ": fluid needs viscosity >= 0 (Pa s) and bulk modulus > 0 (Pa), got ",
               p.viscosity, " and ", p.bulkModulus);
-    else
+      require(std::isfinite(p.surfaceTension) && p.surfaceTension >= 0 && p.surfaceTension <= kMaxSurfaceTension,
+              "gpu MPM material ", m, ": surface tension must be in [0, ", kMaxSurfaceTension, "] N/m, got ",
+              p.surfaceTension);
+    } else {
       require(std::isfinite(p.mu) && p.mu >= 0 && std::isfinite(p.lambda), "gpu MPM material ", m,
               ": solid needs finite mu >= 0 and lambda (Pa), got ", p.mu, " and ", p.lambda);
+      require(p.surfaceTension == 0, "gpu MPM material ", m, ": surface tension applies to fluids only, got ",
+              p.surfaceTension, " N/m on a solid");
+    }
   }
   backend_ = resolveBackend(backend, &backendMessage_);
   kernels::MpmDims d;

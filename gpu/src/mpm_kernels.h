@@ -1,12 +1,13 @@
 #pragma once
 // The MLS-MPM transfer and grid-update formulas of core/src/mpm/grid.cpp and
-// mpm_solver.cpp, per particle and per node, written once for the host
-// reference and the CUDA kernels (LODESTONE_HOSTDEV). P2G hands every
-// (node, contribution) pair to an accumulator: plain += on the host,
-// atomicAdd on the device.
+// solver.cpp, per particle and per node, written once for the host
+// reference and the CUDA kernels (LODESTONE_HOSTDEV). P2G (and the colour
+// scatter of surface tension) hands every (node, contribution) pair to an
+// accumulator: plain += on the host, atomicAdd on the device.
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <vector>
 
 #include "lodestone/core/base/bspline.h"
 #include "lodestone/core/base/hostdev.h"
@@ -14,6 +15,7 @@
 #include "lodestone/core/mpm/apic_gather.h"
 #include "lodestone/core/mpm/collider.h"
 #include "lodestone/core/mpm/constitutive.h"
+#include "lodestone/core/mpm/surface_tension.h"
 #include "lodestone/core/base/vec3.h"
 #include "lodestone/gpu/mpm.h"
 
@@ -41,6 +43,9 @@ struct ParticlePointers {
   const double* volume0 = nullptr;
   const double* count = nullptr;  ///< n_p, may be null
   const std::uint32_t* material = nullptr;
+  /// Surface tension: the capillary (Cauchy) stress per particle, Pa, that
+  /// P2G adds to the Kirchhoff stress as J T; null when no material has it.
+  const Mat3d* capillary = nullptr;
 };
 
 /// Stencil base of grid coordinate u when it fits the grid (base in
@@ -74,8 +79,13 @@ LODESTONE_HOSTDEV inline bool p2gParticle(const MpmDims& g, const MpmMaterialPar
   const double fx = ux - bi, fy = uy - bj, fz = uz - bk;
   const double m = P.mass[p];
   const MpmMaterialParams& mp = materials[mi];
-  const Mat3d tau = mp.fluid ? viscousFluidKirchhoff(P.C[p], P.J[p], mp.viscosity, mp.bulkModulus)
-                             : neoHookeanKirchhoff(P.F[p], mp.mu, mp.lambda);
+  Mat3d tau = mp.fluid ? viscousFluidKirchhoff(P.C[p], P.J[p], mp.viscosity, mp.bulkModulus)
+                       : neoHookeanKirchhoff(P.F[p], mp.mu, mp.lambda);
+  if (P.capillary) {
+    const Mat3d& Tc = P.capillary[p];
+    for (int a = 0; a < 3; ++a)
+      for (int b = 0; b < 3; ++b) tau(a, b) += P.J[p] * Tc(a, b);
+  }
   Mat3d A;
   const double s = dt * 4.0 * invDx * invDx * P.volume0[p];
   for (int a = 0; a < 3; ++a)
@@ -97,6 +107,64 @@ LODESTONE_HOSTDEV inline bool p2gParticle(const MpmDims& g, const MpmMaterialPar
       }
     }
   return true;
+}
+
+/// Surface tension, first pass (core's MpmGrid): particle p's share of the
+/// colour field c_i = sum_p w_ip V_p / dx^3 (V_p = V_p^0 J_p) when its
+/// material is a liquid with sigma > 0; acc(node, w V_p / dx^3). Returns false
+/// (and deposits nothing) when the stencil does not fit the grid or the
+/// material index is out of range.
+template <typename Acc>
+LODESTONE_HOSTDEV inline bool colourParticle(const MpmDims& g, const MpmMaterialParams* materials,
+                                             std::uint32_t materialCount, const ParticlePointers& P, std::size_t p,
+                                             const Acc& acc) {
+  const double invDx = 1.0 / g.dx;
+  const Vec3d x = P.x[p];
+  const double ux = (x.x - g.ox) * invDx, uy = (x.y - g.oy) * invDx, uz = (x.z - g.oz) * invDx;
+  int bi, bj, bk;
+  if (!stencilBase(ux, g.nx, bi) || !stencilBase(uy, g.ny, bj) || !stencilBase(uz, g.nz, bk)) return false;
+  if (P.material[p] >= materialCount) return false;
+  if (!(materials[P.material[p]].surfaceTension > 0)) return true;
+  const QuadraticWeights<double> wx = quadraticWeightsAt(ux, bi);
+  const QuadraticWeights<double> wy = quadraticWeightsAt(uy, bj);
+  const QuadraticWeights<double> wz = quadraticWeightsAt(uz, bk);
+  const double fraction = P.volume0[p] * P.J[p] * invDx * invDx * invDx;
+  for (int c = 0; c < 3; ++c)
+    for (int b = 0; b < 3; ++b) {
+      const double wbc = fraction * wy.w[b] * wz.w[c];
+      const std::size_t line = g.index(bi, bj + b, bk + c);
+      for (int a = 0; a < 3; ++a) acc(line + std::size_t(a), wx.w[a] * wbc);
+    }
+  return true;
+}
+
+/// Surface tension, second pass: the capillary stress of particle p (Pa) from
+/// the colour gradient at it (surface_tension.h); zero for materials without
+/// it or whose stencil does not fit the grid (which P2G then reports).
+LODESTONE_HOSTDEV inline Mat3d capillaryParticle(const MpmDims& g, const MpmMaterialParams* materials,
+                                                 std::uint32_t materialCount, const ParticlePointers& P,
+                                                 const double* colour, std::size_t p) {
+  const double invDx = 1.0 / g.dx;
+  const Vec3d x = P.x[p];
+  const double ux = (x.x - g.ox) * invDx, uy = (x.y - g.oy) * invDx, uz = (x.z - g.oz) * invDx;
+  int bi, bj, bk;
+  if (!stencilBase(ux, g.nx, bi) || !stencilBase(uy, g.ny, bj) || !stencilBase(uz, g.nz, bk)) return Mat3d{};
+  if (P.material[p] >= materialCount) return Mat3d{};
+  const double sigma = materials[P.material[p]].surfaceTension;
+  if (!(sigma > 0)) return Mat3d{};
+  const QuadraticWeights<double> wx = quadraticWeightsAt(ux, bi, invDx);
+  const QuadraticWeights<double> wy = quadraticWeightsAt(uy, bj, invDx);
+  const QuadraticWeights<double> wz = quadraticWeightsAt(uz, bk, invDx);
+  const std::size_t sj = std::size_t(g.nx), sk = sj * std::size_t(g.ny);
+  const Vec3d grad = colourGradient(colour + g.index(bi, bj, bk), sj, sk, wx, wy, wz);
+  return particleCapillaryStress(grad, sigma, minColourGradient(invDx));
+}
+
+/// Whether some material has surface tension.
+inline bool anySurfaceTension(const std::vector<MpmMaterialParams>& materials) {
+  for (const MpmMaterialParams& m : materials)
+    if (m.surfaceTension > 0) return true;
+  return false;
 }
 
 /// Grid update at node n (mpm_solver.cpp gridUpdate, without colliders):

@@ -716,7 +716,7 @@ void MpmGrid::computeCapillaryStress(const MpmParticles& particles, const std::v
   // Per particle: g_p = sum_i c_i grad w_ip (1/m) and the capillary stress.
   capillary_.resize(np);
   Mat3d* T = capillary_.data();
-  const double minGradient = 1e-9 * invDx;
+  const double minGradient = minColourGradient(invDx);
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, np, 2048), [&](const tbb::blocked_range<std::size_t>& r) {
     for (std::size_t p = r.begin(); p != r.end(); ++p) {
       const double sigma = sigmaOf[mat[p]];
@@ -729,18 +729,7 @@ void MpmGrid::computeCapillaryStress(const MpmParticles& particles, const std::v
       const QuadraticWeights<double> wx = quadraticWeightsAt(ux, int(quadraticBaseFloor(ux)), invDx);
       const QuadraticWeights<double> wy = quadraticWeightsAt(uy, int(quadraticBaseFloor(uy)), invDx);
       const QuadraticWeights<double> wz = quadraticWeightsAt(uz, int(quadraticBaseFloor(uz)), invDx);
-      const double* corner = colour + spec_.index(wx.base, wy.base, wz.base);
-      Vec3d g;
-      for (int c = 0; c < 3; ++c)
-        for (int b = 0; b < 3; ++b) {
-          const double* line = corner + std::size_t(b) * sj + std::size_t(c) * sk;
-          for (int a = 0; a < 3; ++a) {
-            const double ci = line[a];
-            g.x += ci * wx.dw[a] * wy.w[b] * wz.w[c];
-            g.y += ci * wx.w[a] * wy.dw[b] * wz.w[c];
-            g.z += ci * wx.w[a] * wy.w[b] * wz.dw[c];
-          }
-        }
+      const Vec3d g = colourGradient(colour + spec_.index(wx.base, wy.base, wz.base), sj, sk, wx, wy, wz);
       T[p] = particleCapillaryStress(g, sigma, minGradient);
     }
   });

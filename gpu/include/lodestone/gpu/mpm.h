@@ -5,7 +5,10 @@
 // (gravity, an optional nodal force such as the magnetic force, domain walls)
 // and G2P (APIC velocity and affine matrix, MLS update of F or J, advection,
 // domain bounds). The formulas are those of core's MpmGrid and MpmSolver
-// (core/src/mpm/grid.cpp, mpm_solver.cpp), evaluated by the same
+// (core/src/mpm/grid.cpp, mpm_solver.cpp), surface tension included (the
+// colour field of the liquids with sigma > 0, its gradient at each particle
+// and the capillary stress of core/mpm/surface_tension.h, two passes before
+// the deposit; nothing of it runs when no material has it), evaluated by the same
 // LODESTONE_HOSTDEV functions on the host (Backend::Cpu, serial) and on the
 // device (Backend::Cuda). Colliders other than the domain walls stay on the
 // host's side of the step.
@@ -44,6 +47,10 @@ struct MpmMaterialParams {
   double lambda = 0;       ///< solid: first Lame parameter, Pa
   double viscosity = 0;    ///< fluid: dynamic viscosity, Pa s
   double bulkModulus = 0;  ///< fluid: bulk modulus, Pa
+  /// fluid: surface tension coefficient sigma, N/m, in [0, 10] (core's
+  /// kMaxSurfaceTension); 0 = none. The explicit step must stay below
+  /// capillaryTimeStep(rho, dx, sigma) (core/mpm/surface_tension.h).
+  double surfaceTension = 0;
 };
 
 /// Host particle arrays to upload (non-owning, `size` entries each).

@@ -19,6 +19,9 @@
 #include <cmath>
 #include <limits>
 
+#include <cstddef>
+
+#include "lodestone/core/base/bspline.h"
 #include "lodestone/core/base/constants.h"
 #include "lodestone/core/base/hostdev.h"
 #include "lodestone/core/base/mat3.h"
@@ -41,6 +44,35 @@ LODESTONE_HOSTDEV inline Mat3<T> capillaryStress(const Vec3<T>& g, T sigma, T mi
   for (int i = 0; i < 3; ++i)
     for (int j = 0; j < 3; ++j) s(i, j) = (i == j ? sigma * len : T(0)) - k * g[i] * g[j];
   return s;
+}
+
+/// Colour gradients at or below this (1/m, for cell size 1/invDx) carry no
+/// capillary stress: no interface there.
+template <typename T>
+LODESTONE_HOSTDEV inline T minColourGradient(T invDx) {
+  return T(1e-9) * invDx;
+}
+
+/// The colour gradient at a particle, g_p = sum_i c_i grad w_ip (1/m), from
+/// the colour field on a node-centred grid (x fastest; `corner` the node at
+/// the stencil's base, sj and sk the strides of j and k) and the particle's
+/// quadratic weights with derivatives (quadraticWeightsAt with invDx).
+template <typename T>
+LODESTONE_HOSTDEV inline Vec3<T> colourGradient(const T* corner, std::size_t sj, std::size_t sk,
+                                                const QuadraticWeights<T>& wx, const QuadraticWeights<T>& wy,
+                                                const QuadraticWeights<T>& wz) {
+  Vec3<T> g;
+  for (int c = 0; c < 3; ++c)
+    for (int b = 0; b < 3; ++b) {
+      const T* line = corner + std::size_t(b) * sj + std::size_t(c) * sk;
+      for (int a = 0; a < 3; ++a) {
+        const T ci = line[a];
+        g.x += ci * wx.dw[a] * wy.w[b] * wz.w[c];
+        g.y += ci * wx.w[a] * wy.dw[b] * wz.w[c];
+        g.z += ci * wx.w[a] * wy.w[b] * wz.dw[c];
+      }
+    }
+  return g;
 }
 
 /// The MPM particles carry the stress only where the liquid is: they sample
