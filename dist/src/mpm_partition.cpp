@@ -246,15 +246,15 @@ void PetscMpmPartition::gatherToRoot(MpmParticles& particles) {
   impl_->send(particles, [](std::size_t) { return 0; });
 }
 
-void PetscMpmPartition::sumNodes(std::vector<MpmNode>& window) {
+void PetscMpmPartition::sumNodes(MpmNode* window, std::size_t count) {
   Impl& m = *impl_;
   PetscInt length = 0;
   LODESTONE_PETSC(VecGetLocalSize(m.local, &length));
-  require(std::size_t(length) == 4 * window.size(), "MPM partition: the window holds ", window.size(),
+  require(std::size_t(length) == 4 * count, "MPM partition: the window holds ", count,
           " nodes, the DMDA's ghosted box ", length / 4);
   PetscScalar* a = nullptr;
   LODESTONE_PETSC(VecGetArray(m.local, &a));
-  for (std::size_t n = 0; n < window.size(); ++n) {
+  for (std::size_t n = 0; n < count; ++n) {
     put(window[n].momentum, a + 4 * n);
     a[4 * n + 3] = window[n].mass;
   }
@@ -262,27 +262,27 @@ void PetscMpmPartition::sumNodes(std::vector<MpmNode>& window) {
   sumGhosted(m.da, m.local, m.global);
   const PetscScalar* b = nullptr;
   LODESTONE_PETSC(VecGetArrayRead(m.local, &b));
-  for (std::size_t n = 0; n < window.size(); ++n) {
+  for (std::size_t n = 0; n < count; ++n) {
     window[n].momentum = vec(b + 4 * n);
     window[n].mass = b[4 * n + 3];
   }
   LODESTONE_PETSC(VecRestoreArrayRead(m.local, &b));
 }
 
-void PetscMpmPartition::sumScalars(std::vector<double>& window) {
+void PetscMpmPartition::sumScalars(double* window, std::size_t count) {
   Impl& m = *impl_;
   PetscInt length = 0;
   LODESTONE_PETSC(VecGetLocalSize(m.scalarLocal, &length));
-  require(std::size_t(length) == window.size(), "MPM partition: the window holds ", window.size(),
+  require(std::size_t(length) == count, "MPM partition: the window holds ", count,
           " values, the DMDA's ghosted box ", length);
   PetscScalar* a = nullptr;
   LODESTONE_PETSC(VecGetArray(m.scalarLocal, &a));
-  std::copy(window.begin(), window.end(), a);
+  std::copy(window, window + count, a);
   LODESTONE_PETSC(VecRestoreArray(m.scalarLocal, &a));
   sumGhosted(m.scalars, m.scalarLocal, m.scalarGlobal);
   const PetscScalar* b = nullptr;
   LODESTONE_PETSC(VecGetArrayRead(m.scalarLocal, &b));
-  std::copy(b, b + length, window.begin());
+  std::copy(b, b + length, window);
   LODESTONE_PETSC(VecRestoreArrayRead(m.scalarLocal, &b));
 }
 

@@ -5,6 +5,7 @@
 // tests. Built only inside the full Lodestone tree (it links the core).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <vector>
@@ -232,7 +233,7 @@ TEST(GpuCoreParity, MpmTransfersMatchTheCore) {
   }
   EXPECT_LT(relativeDifference(mass, cm), 1e-14);
   EXPECT_LT(relativeDifference(mom, cp), 1e-13);
-  core.velocity() = vel;
+  std::copy(vel.begin(), vel.end(), core.velocity().begin());
   core.gridToParticle(p, mats, dt);
   host.gridToParticle(dt, s);
   MpmParticles q = p;

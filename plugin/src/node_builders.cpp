@@ -255,6 +255,7 @@ MagneticStageSettings solveSettingsFrom(const ParamSet& p, const std::string& pr
 
 namespace {
 constexpr double kMaxNodesPerAxis = 1 << 20;
+constexpr double kMaxMpmBins = 4294967295.0;  // 2^32 - 1 (core's MpmGrid)
 constexpr double kGiB = 1024.0 * 1024.0 * 1024.0;
 
 /// A count as a whole number while doubles hold it exactly (2.14748e+09 says too little).
@@ -264,23 +265,34 @@ std::string countText(double n) { return n < 9e15 ? std::to_string(std::int64_t(
 void requireFitsInMemory(const std::string& what, const double nodes[3], double dx, double particles, GridUse use) {
   const double nodeCount = nodes[0] * nodes[1] * nodes[2];
   MemoryCounts counts;
-  counts.mpmNodes = use == GridUse::FieldSolve ? 0 : nodeCount;
+  // The MPM grid alone reserves address space: its memory is the box the
+  // material reaches (mpm/grid.h), counted with the scene (sceneMemory).
+  counts.mpmNodes = use == GridUse::MpmAndFieldSolve ? nodeCount : 0;
   counts.fieldNodes = use == GridUse::Mpm ? 0 : nodeCount;
   counts.particles = counts.magneticParticles = particles;
   const double need = estimateMemory(counts).total(), limit = memoryLimitBytes();
-  const double nodeBytes = (use == GridUse::FieldSolve ? 0 : kMpmNodeBytes) + (use == GridUse::Mpm ? 0 : kFieldNodeBytes);
+  const double nodeBytes =
+      (use == GridUse::MpmAndFieldSolve ? kMpmNodeBytes : 0) + (use == GridUse::Mpm ? 0 : kFieldNodeBytes);
   const bool axisTooLong = std::max(nodes[0], std::max(nodes[1], nodes[2])) > kMaxNodesPerAxis;
-  if (need <= limit && !axisTooLong) return;
+  // The MPM grid bins particles by the base node of their stencil (dims - 2
+  // per axis) with 32-bit offsets.
+  const double bins = (nodes[0] - 2) * (nodes[1] - 2) * (nodes[2] - 2);
+  const bool tooManyBins = use != GridUse::FieldSolve && bins >= kMaxMpmBins;
+  if (need <= limit && !axisTooLong && !tooManyBins) return;
   std::string subject;
   if (nodeCount > 0)
     subject = concat("a grid of ", countText(nodes[0]), " x ", countText(nodes[1]), " x ", countText(nodes[2]),
                      " nodes at dx = ", dx, " m");
-  if (particles > 0) subject += concat(subject.empty() ? "" : " and ", countText(particles), " particles");
   if (axisTooLong)
     throw TooLarge(concat(what, ": ", subject, " is too large (more than ", kMaxNodesPerAxis,
                           " nodes on an axis; needs about ", numberText(need / kGiB, 3), " GiB)"));
-  throw TooLarge(concat(what, ": ", subject, nodeCount > 0 ? " is too large" : " are too many", " (needs about ",
-                        numberText(need / kGiB, 3), " GiB at ", nodeBytes, " B a node and ",
+  if (tooManyBins)
+    throw TooLarge(concat(what, ": ", subject, " is too large for the MPM grid (", countText(bins),
+                          " stencil bins, at most ", countText(kMaxMpmBins - 1), ")"));
+  if (particles > 0) subject += concat(subject.empty() ? "" : " and ", countText(particles), " particles");
+  const std::string perNode = nodeBytes > 0 ? concat(nodeBytes, " B a node and ") : std::string();
+  throw TooLarge(concat(what, ": ", subject, nodeCount > 0 ? " is too large" : " are too many",
+                        " (needs about ", numberText(need / kGiB, 3), " GiB at ", perNode,
                         kParticleBytes + kMagneticParticleBytes, " B a particle; limit ", memoryLimitText(), ")"));
 }
 

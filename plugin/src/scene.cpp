@@ -1,8 +1,10 @@
 #include "lodestone/plugin/scene.h"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <limits>
 #include <utility>
 
 #include "lodestone/core/base/error.h"
@@ -372,14 +374,55 @@ std::unique_ptr<MpmSolver> buildSolver(const Scene& scene, std::shared_ptr<MpmPa
   return solver;
 }
 
+namespace {
+
+// Nodes of the MPM grid's box that the material's stencils reach when it
+// spans [lo, hi] (m); the whole grid when lo > hi (unknown).
+double mpmBoxNodes(const GridSpec& g, const Vec3d& lo, const Vec3d& hi) {
+  if (!(lo.x <= hi.x && lo.y <= hi.y && lo.z <= hi.z)) return double(g.nodeCount());
+  double nodes = 1;
+  const int dims[3] = {g.dims.i, g.dims.j, g.dims.k};
+  for (int a = 0; a < 3; ++a) {
+    // Stencil bases floor(u - 1/2), each reaching 3 nodes.
+    const double u0 = std::floor((lo[a] - g.origin[a]) / g.dx - 0.5);
+    const double u1 = std::floor((hi[a] - g.origin[a]) / g.dx - 0.5) + 3;
+    nodes *= std::max(0.0, std::min(double(dims[a]), u1) - std::max(0.0, u0));
+  }
+  return nodes;
+}
+
+}  // namespace
+
 MemoryCounts sceneMemory(const Scene& scene, const MpmSolver* solver) {
   MemoryCounts c;
-  c.mpmNodes = double(scene.settings.grid.nodeCount());
-  // With a partition: this process's part (its window of the grid, its particles).
+  // The MPM grid holds memory for the box the material's stencils reach
+  // (mpm/grid.h): the material's box now (the bodies, or the solver's
+  // particles), the whole grid when emitters will add material.
+  const double inf = std::numeric_limits<double>::infinity();
+  Vec3d lo{inf, inf, inf}, hi{-inf, -inf, -inf};
+  const auto include = [&](const Vec3d& a, const Vec3d& b) {
+    for (int k = 0; k < 3; ++k) {
+      lo[k] = std::min(lo[k], a[k]);
+      hi[k] = std::max(hi[k], b[k]);
+    }
+  };
+  if (solver) {
+    for (const Vec3d& x : solver->particles().x) include(x, x);
+  } else {
+    for (const SceneBody& b : scene.bodies) {
+      Vec3d blo, bhi;
+      b.shape.worldBounds(blo, bhi);
+      include(blo, bhi);
+    }
+  }
+  const bool emitters = solver ? solver->emitterCount() > 0 : !scene.emitters.empty();
+  c.mpmNodes = emitters ? double(scene.settings.grid.nodeCount()) : mpmBoxNodes(scene.settings.grid, lo, hi);
+  // With a partition: this process's part (its window of the grid, which the
+  // sums over the processes write whole, and its particles).
   const MpmPartition* split = solver ? solver->partition() : nullptr;
   if (split) {
-    const Index3 lo = split->windowLo(), hi = split->windowHi();
-    c.mpmNodes = double(hi.i - lo.i) * double(hi.j - lo.j) * double(hi.k - lo.k);
+    const Index3 wlo = split->windowLo(), whi = split->windowHi();
+    c.mpmNodes = double(whi.i - wlo.i) * double(whi.j - wlo.j) * double(whi.k - wlo.k);
   }
   c.previewPixels = double(scene.output.width) * double(scene.output.height);
   bool magnetic = false;

@@ -288,7 +288,7 @@ TEST(MpmTransfer, ParallelParticleToGridIsBitwiseDeterministic) {
     MpmGrid grid(g);
     grid.particleToGrid(p, mats, 1e-3);
     if (ref.empty()) {
-      ref = grid.nodes();
+      ref.assign(grid.nodes().begin(), grid.nodes().end());
       continue;
     }
     ASSERT_EQ(grid.nodes().size(), ref.size());

@@ -97,11 +97,30 @@ Memory cubeCase(const std::string& name, double dx, double half, bool magnetic, 
   return m;
 }
 
-TEST(MemoryEstimate, MpmGridOfAnEmptyBox) {
-  // 129^3 nodes (2.1M) at dx = 7.8 mm around a 6 cm cube: the MPM grid is
-  // most of the memory.
-  const Memory m = cubeCase("mpm_grid", 0.0078, 0.03, false, "--no-png --no-ply", &Memory::mpmGrid, 0.6);
+TEST(MemoryEstimate, MpmGridBetweenTwoSmallBodiesFarApart) {
+  // Two 6 cm cubes at opposite corners of the 129^3 grid (2.1M nodes at
+  // dx = 7.8 mm): the box the material reaches is most of the grid, and the
+  // MPM grid most of the memory.
+  const fs::path dir = scratch("mpm_grid");
+  cubeScene(dir, 0.0078, 0.03, false);
+  nlohmann::json s = readJson(dir / "scene.json");
+  s["bodies"][0]["center"] = {-0.42, -0.42, 0.06};
+  nlohmann::json second = s["bodies"][0];
+  second["name"] = "far";
+  second["center"] = {0.42, 0.42, 0.92};
+  s["bodies"].push_back(second);
+  std::ofstream(dir / "scene.json") << s.dump(1);
+  const Memory m = run(dir / "scene.json", dir, "--no-png --no-ply");
+  expectClose(m, m.mpmGrid, 0.6);
   EXPECT_EQ(m.fieldSolve, 0) << "nothing magnetic: no field solve";
+}
+
+TEST(MemoryEstimate, ASmallBodyInALargeBoxCostsItsOwnBox) {
+  // One 6 cm cube in a 257^3 grid (17M nodes, 1.1 GB if the grid were held
+  // whole): the grid holds the cube's box, the estimate says so.
+  const Memory m = cubeCase("small_body", 0.0039, 0.03, false, "--no-png --no-ply", &Memory::particles, 0.0);
+  EXPECT_LT(m.mpmGrid, 0.01 * 257.0 * 257.0 * 257.0 * 64) << "the estimate counts the whole grid";
+  EXPECT_LT(m.peak, 150e6);
 }
 
 TEST(MemoryEstimate, FieldSolveOfASmallBodyInALargeGrid) {

@@ -128,20 +128,26 @@ TEST(SceneBadInput, GridEstimateIsInGibibytesAndAcceptsTheLargestThatFits) {
   // 257^3 MPM nodes (1.0 GiB), the field solve's 265^3 (6.8 GiB) and 1.9e6
   // points (1.2 GiB): accepted (nothing is allocated by parsing).
   EXPECT_EQ(errorOf(replaced(kScene, "\"dx\": 0.02", "\"dx\": 0.00078125")), "");
-  // 401^3: the MPM grid alone (3.84 GiB) passes the domain's guard, the run
-  // as a whole (the field solve's 409^3 nodes, 26 GiB) is refused, by part.
+  // 401^3: the run as a whole (the field solve's 409^3 nodes, 26 GiB) is
+  // refused, by part; the MPM grid counts the box the sphere's stencils
+  // reach (124^3 nodes, 0.111 GiB), not the domain's 401^3 (3.84 GiB).
   const std::string err = errorOf(replaced(kScene, "\"dx\": 0.02", "\"dx\": 0.0005"));
   EXPECT_NE(err.find("bad.json needs about"), std::string::npos) << err;
-  EXPECT_NE(err.find("MPM grid 3.84, field solve 25"), std::string::npos) << err;
+  EXPECT_NE(err.find("MPM grid 0.111, field solve 25"), std::string::npos) << err;
   EXPECT_NE(err.find("more than LODESTONE_MEMORY_LIMIT_GIB = 25 GiB"), std::string::npos) << err;
   // Without magnetism the same grid needs no field solve: accepted.
   const std::string plain = replaced(kScene, ",\n                   \"magnetic\": { \"law\": \"paper\" }", "");
   EXPECT_EQ(errorOf(replaced(plain, "\"dx\": 0.02", "\"dx\": 0.0005")), "");
-  // A domain too large for the MPM grid alone is refused by its guard,
-  // naming the node counts: 1601^3 x 64 B = 244 GiB.
-  const std::string huge = errorOf(replaced(plain, "\"dx\": 0.02", "\"dx\": 0.000125"));
-  EXPECT_NE(huge.find("domain: a grid of 1601 x 1601 x 1601 nodes"), std::string::npos) << huge;
-  EXPECT_NE(huge.find("at 64 B a node"), std::string::npos) << huge;
+  // A huge domain with a small body: 1601^3 nodes (4.1e9) would be 244 GiB
+  // held whole; the 1 mm sphere's box is what the MPM grid holds: accepted.
+  EXPECT_EQ(errorOf(replaced(replaced(plain, "\"dx\": 0.02", "\"dx\": 0.000125"), "\"radius\": 0.03",
+                             "\"radius\": 0.001")),
+            "");
+  // A domain with more stencil bins than the MPM grid's 32-bit binning holds
+  // is refused by the domain's guard, naming the node counts.
+  const std::string huge = errorOf(replaced(plain, "\"dx\": 0.02", "\"dx\": 0.0001"));
+  EXPECT_NE(huge.find("domain: a grid of 2001 x 2001 x 2001 nodes"), std::string::npos) << huge;
+  EXPECT_NE(huge.find("stencil bins"), std::string::npos) << huge;
   // A body of too many points is refused too, before it is emitted: the grid
   // fits (201^3 nodes), its 1.1e8 points (70 GiB) do not.
   const std::string dense = errorOf(replaced(replaced(kScene, "\"dx\": 0.02", "\"dx\": 0.001"),

@@ -1,6 +1,7 @@
 #include "lodestone/core/mpm/emitter.h"
 
 #include <algorithm>
+#include <limits>
 #include <cmath>
 
 #include "lodestone/core/base/constants.h"
@@ -33,6 +34,37 @@ int fittedCells(double twoA, double h) {
 }
 
 }  // namespace
+
+void EmitterShape::worldBounds(Vec3d& lo, Vec3d& hi) const {
+  Vec3d blo, bhi;  // body frame
+  switch (kind) {
+    case EmitterShapeKind::Box:
+      blo = -1.0 * halfSize;
+      bhi = halfSize;
+      break;
+    case EmitterShapeKind::Sphere:
+      blo = Vec3d{-radius, -radius, -radius};
+      bhi = Vec3d{radius, radius, radius};
+      break;
+    case EmitterShapeKind::Cylinder:
+      blo = Vec3d{-radius, -radius, -halfLength};
+      bhi = Vec3d{radius, radius, halfLength};
+      break;
+    case EmitterShapeKind::LevelSet:
+      levelSet->interiorBounds(blo, bhi);
+      break;
+  }
+  const double inf = std::numeric_limits<double>::infinity();
+  lo = Vec3d{inf, inf, inf};
+  hi = -1.0 * lo;
+  for (int c = 0; c < 8; ++c) {
+    const Vec3d x = pose.toWorld({c & 1 ? bhi.x : blo.x, c & 2 ? bhi.y : blo.y, c & 4 ? bhi.z : blo.z});
+    for (int a = 0; a < 3; ++a) {
+      lo[a] = std::min(lo[a], x[a]);
+      hi[a] = std::max(hi[a], x[a]);
+    }
+  }
+}
 
 EmitterShape EmitterShape::box(const Pose& pose, const Vec3d& halfSize) {
   EmitterShape s;

@@ -387,12 +387,16 @@ MpmGrid::MpmGrid(const GridSpec& spec) : spec_(spec) {
   require(nb < std::size_t(kBadKey), "MPM grid: ", nb, " stencil bins is too many (at most 2^32 - 2)");
   require(spec_.dims.i < (1 << 21) && spec_.dims.j < (1 << 21) && spec_.dims.k < (1 << 21),
           "MPM grid: at most 2^21 - 1 nodes per axis");
-  nodes_.assign(spec_.nodeCount(), MpmNode{});
-  velocity_.assign(spec_.nodeCount(), Vec3d{});
-  binSize_.reset(new std::atomic<std::uint32_t>[nb]);
-  binCapacity_ = nb;
-  for (std::size_t b = 0; b < nb; ++b) binSize_[b].store(0, std::memory_order_relaxed);
+  // Reserved, not yet backed by memory: pages are taken as P2G first writes them.
+  nodes_ = PageArray<MpmNode>(spec_.nodeCount());
+  velocity_ = PageArray<Vec3d>(spec_.nodeCount());
+  binSize_ = PageArray<std::uint32_t>(nb);
 }
+
+static_assert(sizeof(std::atomic<std::uint32_t>) == sizeof(std::uint32_t) &&
+                  alignof(std::atomic<std::uint32_t>) == alignof(std::uint32_t) &&
+                  std::atomic<std::uint32_t>::is_always_lock_free,
+              "the bin sizes are zero-initialised uint32 storage used as lock-free atomics");
 
 MpmGrid::MpmGrid(MpmGrid&&) noexcept = default;
 MpmGrid& MpmGrid::operator=(MpmGrid&&) noexcept = default;
@@ -415,12 +419,81 @@ void MpmGrid::zeroBox(Index3 lo, Index3 hi) {
   });
 }
 
+namespace {
+
+bool emptyBox(Index3 lo, Index3 hi) { return lo.i >= hi.i || lo.j >= hi.j || lo.k >= hi.k; }
+
+// Zeroes the elements of box [lo, hi) that lie outside box [keepLo, keepHi)
+// in an array over a grid of `dims` (x fastest). Contiguous runs are merged,
+// so that the whole pages among them go back to the system.
+// Elements outside the box to keep are zero or about to be, so the pages
+// holding nothing of that box go back to the system whole.
+template <typename T>
+void zeroOutside(PageArray<T>& a, Index3 dims, Index3 lo, Index3 hi, Index3 keepLo, Index3 keepHi) {
+  if (a.empty() || emptyBox(lo, hi)) return;
+  const bool keep = !emptyBox(keepLo, keepHi);
+  const std::size_t rowLength = std::size_t(dims.i), plane = rowLength * std::size_t(dims.j);
+  // Whether elements [e0, e1) all lie outside the box to keep.
+  const auto outsideKeep = [&](std::size_t e0, std::size_t e1) {
+    if (!keep) return true;
+    for (std::size_t e = e0; e < e1;) {
+      const std::size_t i = e % rowLength, j = (e / rowLength) % std::size_t(dims.j), k = e / plane;
+      const std::size_t rowEnd = std::min(e1, e - i + rowLength);
+      const std::size_t iEnd = i + (rowEnd - e);
+      if (int(j) >= keepLo.j && int(j) < keepHi.j && int(k) >= keepLo.k && int(k) < keepHi.k &&
+          int(i) < keepHi.i && int(iEnd) > keepLo.i)
+        return false;
+      e = rowEnd;
+    }
+    return true;
+  };
+  std::size_t runStart = 0, runEnd = 0;  // pending run [runStart, runEnd)
+  const auto flush = [&] { a.zeroPages(runStart, runEnd - runStart, outsideKeep); };
+  const auto zero = [&](std::size_t first, std::size_t count) {
+    if (count == 0) return;
+    if (first == runEnd) {
+      runEnd += count;
+      return;
+    }
+    flush();
+    runStart = first;
+    runEnd = first + count;
+  };
+  const auto at = [&](int i, int j, int k) {
+    return std::size_t(i) + std::size_t(dims.i) * (std::size_t(j) + std::size_t(dims.j) * std::size_t(k));
+  };
+  for (int k = lo.k; k < hi.k; ++k)
+    for (int j = lo.j; j < hi.j; ++j) {
+      const bool rowKept = keep && j >= keepLo.j && j < keepHi.j && k >= keepLo.k && k < keepHi.k;
+      if (!rowKept) {
+        zero(at(lo.i, j, k), std::size_t(hi.i - lo.i));
+        continue;
+      }
+      const int a0 = std::min(hi.i, std::max(lo.i, keepLo.i)), a1 = std::max(lo.i, std::min(hi.i, keepHi.i));
+      zero(at(lo.i, j, k), std::size_t(a0 - lo.i));
+      zero(at(a1, j, k), std::size_t(hi.i - a1));
+    }
+  flush();
+}
+
+}  // namespace
+
+void MpmGrid::releaseOutside(Index3 lo, Index3 hi, Index3 keepLo, Index3 keepHi) {
+  if (emptyBox(lo, hi) || (lo == keepLo && hi == keepHi)) return;
+  zeroOutside(nodes_, spec_.dims, lo, hi, keepLo, keepHi);
+  zeroOutside(velocity_, spec_.dims, lo, hi, keepLo, keepHi);
+  zeroOutside(colour_, spec_.dims, lo, hi, keepLo, keepHi);
+  // The bins: base nodes [lo, hi - 2) of each box (all zero between calls).
+  const auto less2 = [](Index3 a) { return Index3{a.i - 2, a.j - 2, a.k - 2}; };
+  zeroOutside(binSize_, baseDims_, lo, less2(hi), keepLo, emptyBox(keepLo, keepHi) ? keepLo : less2(keepHi));
+}
+
 void MpmGrid::bin(const MpmParticles& particles, std::size_t materialCount) {
   const std::size_t np = particles.size();
   require(np < std::size_t(kBadKey), "MPM grid: at most 2^32 - 2 particles are supported, got ", np);
   // Invariant: every bin size is zero between calls (pass 2 resets the
   // ones it used), so only the bins of the active box are ever touched.
-  std::atomic<std::uint32_t>* binSize = binSize_.get();
+  std::atomic<std::uint32_t>* binSize = binSizes();
   key_.resize(np);
   rank_.resize(np);
 
@@ -450,11 +523,7 @@ void MpmGrid::bin(const MpmParticles& particles, std::size_t materialCount) {
 
   if (const std::size_t bad = firstBad.load(); bad != kNone) {
     // Restore the invariant before throwing.
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, binCapacity_, 8192),
-                      [&](const tbb::blocked_range<std::size_t>& r) {
-                        for (std::size_t b = r.begin(); b != r.end(); ++b)
-                          binSize[b].store(0, std::memory_order_relaxed);
-                      });
+    binSize_.clear();
     key_.clear();
     activeLo_ = activeHi_ = binLo_ = binDims_ = {0, 0, 0};
     const Vec3d x = X[bad];
@@ -577,21 +646,19 @@ void MpmGrid::particleToGrid(const MpmParticles& particles, const std::vector<Mp
   bin(particles, materials.size());
   binningSeconds_ = std::chrono::duration<double>(Clock::now() - t0).count();
 
-  // Zero the union of the previous and the new active boxes: everything
-  // outside the active box stays zero.
-  const Index3 zlo{std::min(prevLo.i, activeLo_.i), std::min(prevLo.j, activeLo_.j), std::min(prevLo.k, activeLo_.k)};
-  const Index3 zhi{std::max(prevHi.i, activeHi_.i), std::max(prevHi.j, activeHi_.j), std::max(prevHi.k, activeHi_.k)};
-  if (prevLo.i < prevHi.i)
-    zeroBox(zlo, zhi);
-  else
-    zeroBox(activeLo_, activeHi_);
+  // Zero the new active box and hand back what the previous one held outside
+  // it: everything outside the active box stays zero, and the memory follows
+  // the box.
+  zeroBox(activeLo_, activeHi_);
+  releaseOutside(prevLo, prevHi, activeLo_, activeHi_);
   if (particles.empty()) {
     // The colour sum is collective: a process without particles adds zeros.
     const bool surfaceTension =
         std::any_of(materials.begin(), materials.end(), [](const MpmMaterial& m) { return m.hasSurfaceTension(); });
     if (colourSum_ && surfaceTension) {
-      colour_.assign(nodes_.size(), 0.0);
-      colourSum_(colour_);
+      if (colour_.size() != nodes_.size()) colour_ = PageArray<double>(nodes_.size());
+      std::fill(colour_.begin(), colour_.end(), 0.0);
+      colourSum_(colour_.data(), colour_.size());
     }
     return;
   }
@@ -672,7 +739,7 @@ void MpmGrid::computeCapillaryStress(const MpmParticles& particles, const std::v
 
   // The colour field on the active box (nodes outside it are never read);
   // with a sum over processes on the whole grid, which the sum reads.
-  if (colour_.size() != nodes_.size()) colour_.assign(nodes_.size(), 0.0);
+  if (colour_.size() != nodes_.size()) colour_ = PageArray<double>(nodes_.size());
   double* colour = colour_.data();
   if (colourSum_) {
     std::fill(colour_.begin(), colour_.end(), 0.0);
@@ -711,7 +778,7 @@ void MpmGrid::computeCapillaryStress(const MpmParticles& particles, const std::v
     }
   });
 
-  if (colourSum_) colourSum_(colour_);
+  if (colourSum_) colourSum_(colour_.data(), colour_.size());
 
   // Per particle: g_p = sum_i c_i grad w_ip (1/m) and the capillary stress.
   capillary_.resize(np);

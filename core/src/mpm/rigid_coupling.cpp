@@ -211,8 +211,8 @@ void MpmSolver::exchangeWithRigidBodies(double dt) {
   const Index3 boxLo = partition_ ? partition_->boxLo() : Index3{0, 0, 0};
   const Index3 boxHi = partition_ ? partition_->boxHi() : g.dims;
   const Index3 lo = grid_.activeLo(), hi = grid_.activeHi();
-  const std::vector<MpmNode>& nodes = grid_.nodes();
-  std::vector<Vec3d>& vel = grid_.velocity();
+  const PageArray<MpmNode>& nodes = grid_.nodes();
+  PageArray<Vec3d>& vel = grid_.velocity();
   std::vector<std::size_t> index;
   std::vector<RigidCouplingPoint> inside;
   std::vector<std::uint64_t> keys, ownedKeys;  // with a partition: the nodes' flat indices in the whole grid

@@ -575,8 +575,8 @@ void MpmSolver::gridUpdate(double dt, MpmStepReport& rep) {
   // The nodal force applies only when it lives on this grid (a restored
   // state may carry a cached force from another stage grid).
   const bool magnetic = sameGrid_ && haveMagneticForce_ && fmag && magneticForce_.spec() == settings_.grid;
-  const std::vector<MpmNode>& nodes = grid_.nodes();
-  std::vector<Vec3d>& vel = grid_.velocity();
+  const PageArray<MpmNode>& nodes = grid_.nodes();
+  PageArray<Vec3d>& vel = grid_.velocity();
   const int nj = hi.j - lo.j;
   const std::size_t rows = std::size_t(nj) * std::size_t(hi.k - lo.k);
   std::vector<Vec3d> rowImpulse(magnetic ? rows : 0);
@@ -651,8 +651,8 @@ void MpmSolver::checkFiniteParticles(const char* where) const {
 
 void MpmSolver::checkFiniteGrid(const char* where) const {
   const GridSpec& g = grid_.spec();  // the window, with a partition (its nodes' indices are the window's)
-  const std::vector<MpmNode>& nodes = grid_.nodes();
-  const std::vector<Vec3d>& vel = grid_.velocity();
+  const PageArray<MpmNode>& nodes = grid_.nodes();
+  const PageArray<Vec3d>& vel = grid_.velocity();
   const Vec3d* fmag =
       !partition_ && sameGrid_ && haveMagneticForce_ && !magneticForce_.empty() ? magneticForce_.data() : nullptr;
   const std::size_t nn = std::min(nodes.size(), vel.size());
@@ -777,7 +777,8 @@ void MpmSolver::particleToGrid(double dt, MpmStepReport& rep) {
   const bool particleForces = !sameGrid_ && haveMagneticForce_;
   grid_.particleToGrid(particles_, materials_, dt, particleForces ? particles_.magneticForce.data() : nullptr);
   if (partition_) {
-    partition_->sumNodes(grid_.nodes());  // every window node now holds mass deposited elsewhere too
+    // Every window node now holds the mass deposited elsewhere too.
+    partition_->sumNodes(grid_.nodes().data(), grid_.nodes().size());
     grid_.activateWholeGrid();
   }
   if (particleForces) {

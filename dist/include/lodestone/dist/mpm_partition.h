@@ -45,8 +45,8 @@ class PetscMpmPartition final : public MpmPartition {
   int owner(const Vec3d& x) const override;
   std::size_t migrate(MpmParticles& particles) override;
   void gatherToRoot(MpmParticles& particles) override;
-  void sumNodes(std::vector<MpmNode>& window) override;
-  void sumScalars(std::vector<double>& window) override;
+  void sumNodes(MpmNode* window, std::size_t count) override;
+  void sumScalars(double* window, std::size_t count) override;
   double maxOverRanks(double value) override;
   void sumOverRanks(double* values, int n) override;
   std::vector<double> allGather(const std::vector<double>& local) override;

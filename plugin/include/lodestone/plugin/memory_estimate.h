@@ -43,7 +43,7 @@ constexpr double kSurfaceParticleBytes = 560;
 
 /// What a simulation holds at its largest.
 struct MemoryCounts {
-  double mpmNodes = 0;           ///< nodes of the MPM grid
+  double mpmNodes = 0;           ///< nodes of the MPM grid that hold memory: the box the material reaches
   double fieldNodes = 0;         ///< nodes of the field solve's grid (0: nothing magnetic ever)
   double particles = 0;          ///< material points, the most the run has at once
   double magneticParticles = 0;  ///< of them, magnetic

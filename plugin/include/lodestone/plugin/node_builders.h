@@ -92,15 +92,18 @@ SourcesData::Magnet magnetFrom(const ParamSet& params, Pose* restPose = nullptr)
 /// What the nodes of a grid hold, for its memory estimate.
 enum class GridUse {
   MpmAndFieldSolve,  ///< unknown: counted as both (kMpmNodeBytes + kFieldNodeBytes)
-  Mpm,               ///< the MPM grid (kMpmNodeBytes)
+  Mpm,               ///< the MPM grid (address space; memory where the material is, sceneMemory)
   FieldSolve,        ///< a field solve's grid (kFieldNodeBytes)
 };
 
 /// Throws TooLarge "<what>: a grid of a x b x c nodes at dx = h m [and N
 /// particles] is too large (needs about G GiB at B B a node ...; limit ...)"
 /// when the estimate (memory_estimate.h: the nodes at what `use` holds, each
-/// particle counted as magnetic) exceeds memoryLimitBytes() or an axis has
-/// more than 2^20 nodes: the guard before anything is allocated.
+/// particle counted as magnetic) exceeds memoryLimitBytes(), when an axis has
+/// more than 2^20 nodes, or when an MPM grid has 2^32 - 1 stencil bins or
+/// more: the guard before anything is allocated. An MPM grid alone
+/// (GridUse::Mpm) reserves address space only: its memory follows the
+/// material (sceneMemory), so only the particles count here.
 /// Node counts are doubles, so a tiny dx or a huge count is named rather
 /// than overflowing; a zero count leaves the grid out of the message.
 void requireFitsInMemory(const std::string& what, const double nodes[3], double dx, double particles,

@@ -56,6 +56,9 @@ struct EmitterShape {
   double volume() const;
   /// True when the body-frame point xb (m) is inside (closed).
   bool containsBody(const Vec3d& xb) const;
+  /// The world-axis box [lo, hi] (m) holding the shape: its body-frame box
+  /// placed by the pose.
+  void worldBounds(Vec3d& lo, Vec3d& hi) const;
   void validate() const;
 };
 

@@ -49,6 +49,7 @@
 #include <vector>
 
 #include "lodestone/core/base/grid.h"
+#include "lodestone/core/base/page_array.h"
 #include "lodestone/core/mpm/material.h"
 #include "lodestone/core/mpm/particles.h"
 
@@ -108,12 +109,14 @@ class MpmGrid {
   GridToParticleReport gridToParticle(MpmParticles& particles, const std::vector<MpmMaterial>& materials, double dt,
                                       const ParticleBounds* bounds = nullptr) const;
 
-  /// Node data of the last P2G (one entry per node, x fastest).
-  std::vector<MpmNode>& nodes() { return nodes_; }
-  const std::vector<MpmNode>& nodes() const { return nodes_; }
+  /// Node data of the last P2G (one entry per node, x fastest). Memory is
+  /// taken only for the pages written (base/page_array.h): the active boxes
+  /// the particles have reached, and handed back when they leave a box.
+  PageArray<MpmNode>& nodes() { return nodes_; }
+  const PageArray<MpmNode>& nodes() const { return nodes_; }
   /// Node velocities (m/s) used by G2P; written by the grid update.
-  std::vector<Vec3d>& velocity() { return velocity_; }
-  const std::vector<Vec3d>& velocity() const { return velocity_; }
+  PageArray<Vec3d>& velocity() { return velocity_; }
+  const PageArray<Vec3d>& velocity() const { return velocity_; }
 
   /// The box of nodes the last P2G could touch: [activeLo, activeHi) per
   /// axis (empty when there were no particles).
@@ -124,7 +127,7 @@ class MpmGrid {
   /// after the colour scatter with the field on the whole grid (zero outside
   /// what this grid's particles reach), it must leave every node holding the
   /// total over the processes. Empty (the default): none.
-  void setColourSum(std::function<void(std::vector<double>&)> sum) { colourSum_ = std::move(sum); }
+  void setColourSum(std::function<void(double* colour, std::size_t count)> sum) { colourSum_ = std::move(sum); }
 
   /// Widens the active box to the whole grid: for a caller that wrote node
   /// data outside it (a partition's sums, mpm/partition.h), so that the grid
@@ -141,7 +144,7 @@ class MpmGrid {
   /// The colour field c_i = sum_p w_ip V_p / dx^3 (dimensionless) of the
   /// liquids with surface tension, valid on the active box after a P2G of a
   /// scene that has one (empty when none ever had).
-  const std::vector<double>& colour() const { return colour_; }
+  const PageArray<double>& colour() const { return colour_; }
 
   /// Seconds spent binning in the last particleToGrid.
   double lastBinningSeconds() const { return binningSeconds_; }
@@ -149,6 +152,8 @@ class MpmGrid {
  private:
   void bin(const MpmParticles& particles, std::size_t materialCount);
   void zeroBox(Index3 lo, Index3 hi);
+  // Hands back the node data of box [lo, hi) outside the box [keepLo, keepHi).
+  void releaseOutside(Index3 lo, Index3 hi, Index3 keepLo, Index3 keepHi);
   // Runs rowFn(bj, bk) on every row of bins of the active box, in the nine
   // colours of disjoint nodes (grid.cpp).
   template <typename RowFn>
@@ -159,11 +164,11 @@ class MpmGrid {
 
   GridSpec spec_;
   Index3 baseDims_{0, 0, 0};
-  std::vector<MpmNode> nodes_;
-  std::vector<Vec3d> velocity_;
-  std::vector<double> colour_;   // surface tension: colour field per node (allocated when first needed)
+  PageArray<MpmNode> nodes_;
+  PageArray<Vec3d> velocity_;
+  PageArray<double> colour_;      // surface tension: colour field per node (reserved when first needed)
   std::vector<Mat3d> capillary_;  // surface tension: capillary Cauchy stress per particle, Pa
-  std::function<void(std::vector<double>&)> colourSum_;  // setColourSum
+  std::function<void(double*, std::size_t)> colourSum_;  // setColourSum
   Index3 activeLo_{0, 0, 0}, activeHi_{0, 0, 0};
   // Binning scratch. Bins are stencil base nodes; only the box of bins in
   // use, [binLo_, binLo_ + binDims_), gets offsets.
@@ -176,8 +181,10 @@ class MpmGrid {
   Index3 binLo_{0, 0, 0}, binDims_{0, 0, 0};
   std::vector<std::uint64_t> key_;   // per particle: base node, 21 bits per axis
   std::vector<std::uint32_t> rank_;  // per particle: slot in its bin (scheduling-dependent, re-sorted)
-  std::unique_ptr<std::atomic<std::uint32_t>[]> binSize_;  // per base node; zero between calls
-  std::size_t binCapacity_ = 0;
+  // Per base node (dims - 2 per axis): the particles in each bin, zero between
+  // calls; used as std::atomic<std::uint32_t> (binSizes()).
+  PageArray<std::uint32_t> binSize_;
+  std::atomic<std::uint32_t>* binSizes() { return reinterpret_cast<std::atomic<std::uint32_t>*>(binSize_.data()); }
   std::vector<std::uint32_t> offsets_;  // box bins + 1 prefix sums
   std::vector<std::uint32_t> sorted_;   // particle indices grouped by bin, ascending within a bin
   double binningSeconds_ = 0;

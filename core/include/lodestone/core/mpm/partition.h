@@ -64,13 +64,15 @@ class MpmPartition {
   /// migrate hands them back to their owners.
   virtual void gatherToRoot(MpmParticles& particles) = 0;
 
-  /// `window` holds one MpmNode per window node (x fastest); afterwards every
-  /// entry is the sum over the processes of what they deposited there.
-  virtual void sumNodes(std::vector<MpmNode>& window) = 0;
+  /// `window` holds one MpmNode per window node (x fastest; `count` of them);
+  /// afterwards every entry is the sum over the processes of what they
+  /// deposited there.
+  virtual void sumNodes(MpmNode* window, std::size_t count) = 0;
 
-  /// `window` holds one value per window node; afterwards every entry is the
-  /// sum over the processes (the colour field of surface tension).
-  virtual void sumScalars(std::vector<double>& window) = 0;
+  /// `window` holds one value per window node (`count` of them); afterwards
+  /// every entry is the sum over the processes (the colour field of surface
+  /// tension).
+  virtual void sumScalars(double* window, std::size_t count) = 0;
 
   /// One line: how the grid is split and what this process holds.
   virtual std::string describe() const = 0;
