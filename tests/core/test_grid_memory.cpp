@@ -54,7 +54,9 @@ TEST(PageArray, MemoryFollowsThePagesWrittenAndGoesBackWhenZeroed) {
   double sum = 0;
   for (std::size_t i = 0; i < n; i += n / 64) sum += a[i];  // reading costs nothing
   EXPECT_EQ(sum, 0.0);
-  if (kResidentSetMeasures) EXPECT_LT(residentMiB() - r0, 8.0);
+  if (kResidentSetMeasures) {
+    EXPECT_LT(residentMiB() - r0, 8.0);
+  }
   const std::size_t first = n / 3, count = std::size_t(96 * kMiB) / sizeof(double);  // 96 MiB in the middle
   std::fill(a.begin() + first, a.begin() + first + count, 1.5);
   const double written = residentMiB() - r0;
@@ -85,7 +87,9 @@ TEST(MpmGridMemory, ABallCrossingAHugeBoxCostsItsOwnBoxAndNoMore) {
   const GridSpec g{{0.0, 0.0, 0.0}, 0.01, {641, 641, 641}};
   const double r0 = residentMiB();
   MpmGrid grid(g);
-  if (kResidentSetMeasures) EXPECT_LT(residentMiB() - r0, 8.0) << "constructing the grid takes no memory";
+  if (kResidentSetMeasures) {
+    EXPECT_LT(residentMiB() - r0, 8.0) << "constructing the grid takes no memory";
+  }
   MpmParticles p;
   const double h = g.dx / 2;
   const Vec3d c0{0.2, 0.2, 0.2};
