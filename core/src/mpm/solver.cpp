@@ -655,12 +655,21 @@ void MpmSolver::checkFiniteGrid(const char* where) const {
   const PageArray<Vec3d>& vel = grid_.velocity();
   const Vec3d* fmag =
       !partition_ && sameGrid_ && haveMagneticForce_ && !magneticForce_.empty() ? magneticForce_.data() : nullptr;
-  const std::size_t nn = std::min(nodes.size(), vel.size());
-  const std::size_t n = firstBad(nn, [&](std::size_t i) {
+  // The active box only: nodes outside it are zero (mpm/grid.h).
+  const Index3 lo = grid_.activeLo(), hi = grid_.activeHi();
+  if (lo.i >= hi.i || lo.j >= hi.j || lo.k >= hi.k) return;
+  const std::size_t bi = std::size_t(hi.i - lo.i), bj = std::size_t(hi.j - lo.j);
+  const std::size_t boxNodes = bi * bj * std::size_t(hi.k - lo.k);
+  const auto node = [&](std::size_t b) {
+    return g.index(lo.i + int(b % bi), lo.j + int((b / bi) % bj), lo.k + int(b / (bi * bj)));
+  };
+  const std::size_t b = firstBad(boxNodes, [&](std::size_t q) {
+    const std::size_t i = node(q);
     return !std::isfinite(nodes[i].mass) || !isFinite(nodes[i].momentum) || !isFinite(vel[i]) ||
            (fmag && !isFinite(fmag[i]));
   });
-  if (n == nn) return;
+  if (b == boxNodes) return;
+  const std::size_t n = node(b);
   const char* what = !std::isfinite(nodes[n].mass)      ? "mass (kg)"
                      : !isFinite(nodes[n].momentum)      ? "momentum (kg m/s)"
                      : !isFinite(vel[n])                 ? "velocity (m/s)"
