@@ -96,3 +96,33 @@ ax2.legend(fontsize=7)
 ax2.grid(True, alpha=0.3)
 fig.tight_layout()
 fig.savefig(os.path.join(here, "images", "dist_mpm_scaling.png"))
+
+# The MPM grid's memory and time (docs/benchmarks.md, docs/data/scaling.csv):
+# peak resident memory and ms per substep against the domain's nodes at 1e6
+# particles, the current binary (memory where the material is) beside the
+# previous one (the whole box held), measured in one run.
+sc = rows("scaling.csv")
+fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(9, 3.8), dpi=110)
+for binary, style in (("current", "o-"), ("previous", "s--")):
+    rs = [r for r in sc if r["binary"] == binary and r["series"] == "domain" and r["particles_target"] == "1e6"]
+    if not rs:
+        continue
+    nodes = [float(r["grid_nodes"]) for r in rs]
+    label = {"current": "memory where the material is", "previous": "whole box held (previous binary)"}[binary]
+    ax1.loglog(nodes, [float(r["peak_bytes"]) / 1e9 for r in rs], style, label=label)
+    ax2.semilogx(nodes, [float(r["ms_per_substep"]) for r in rs], style, label=label)
+ax1.axhline(23.5 * 1.0737, color="r", lw=0.8, ls=":")
+ax1.text(2.5e6, 23.5 * 1.0737 * 0.8, "this machine's memory", color="r", fontsize=8, va="top")
+ax1.set_xlabel("grid nodes (129^3 to 1027^3)")
+ax1.set_ylabel("peak resident memory, GB")
+ax1.set_title("1e6 particles: memory against the box")
+ax1.legend(fontsize=7, loc="upper left")
+ax1.grid(True, which="both", alpha=0.3)
+ax2.set_xlabel("grid nodes (129^3 to 1027^3)")
+ax2.set_ylabel("ms per substep")
+ax2.set_ylim(bottom=0)
+ax2.set_title("1e6 particles: time against the box")
+ax2.legend(fontsize=7, loc="lower left")
+ax2.grid(True, which="both", alpha=0.3)
+fig.tight_layout()
+fig.savefig(os.path.join(here, "images", "grid_memory_scaling.png"))
