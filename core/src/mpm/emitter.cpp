@@ -264,12 +264,6 @@ EmitReport emitParticles(MpmParticles& particles, const EmitterShape& shape, con
   EmitReport rep;
   rep.spacing = (lattice.spacing.x + lattice.spacing.y + lattice.spacing.z) / 3;
   const Vec3d& w = settings.angularVelocity;
-  // Room for the points kept, made once: growing the arrays point by point
-  // would hold up to twice their size (and three times while moving).
-  std::size_t kept = lattice.points.size();
-  if (keep) kept = std::size_t(std::count_if(lattice.points.begin(), lattice.points.end(),
-                                             [&](const Vec3d& xb) { return keep(shape.pose.toWorld(xb)); }));
-  particles.reserve(particles.size() + kept);
   for (const Vec3d& xb : lattice.points) {
     const Vec3d x = shape.pose.toWorld(xb);
     rep.volume += point.volume;
