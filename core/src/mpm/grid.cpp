@@ -571,7 +571,7 @@ void MpmGrid::bin(const MpmParticles& particles, std::size_t materialCount) {
             const std::uint32_t n = sizes[i].load(std::memory_order_relaxed);
             if (isFinal) {
               off[i] = sum;
-              sizes[i].store(0, std::memory_order_relaxed);
+              if (n != 0) sizes[i].store(0, std::memory_order_relaxed);  // empty bins' pages stay unwritten
             }
             sum += n;
           }
