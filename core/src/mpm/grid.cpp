@@ -648,9 +648,15 @@ void MpmGrid::particleToGrid(const MpmParticles& particles, const std::vector<Mp
 
   // Zero the new active box and hand back what the previous one held outside
   // it: everything outside the active box stays zero, and the memory follows
-  // the box.
-  zeroBox(activeLo_, activeHi_);
-  releaseOutside(prevLo, prevHi, activeLo_, activeHi_);
+  // the box. A grid whose caller writes it whole after each P2G (a
+  // partition's sums) is zeroed whole and keeps its pages.
+  if (wholeGrid_) {
+    zeroBox({0, 0, 0}, spec_.dims);
+    wholeGrid_ = false;
+  } else {
+    zeroBox(activeLo_, activeHi_);
+    releaseOutside(prevLo, prevHi, activeLo_, activeHi_);
+  }
   if (particles.empty()) {
     // The colour sum is collective: a process without particles adds zeros.
     const bool surfaceTension =

@@ -135,6 +135,7 @@ class MpmGrid {
   void activateWholeGrid() {
     activeLo_ = {0, 0, 0};
     activeHi_ = spec_.dims;
+    wholeGrid_ = true;
   }
 
   /// The particle indices of the last P2G grouped by stencil bin (bins in
@@ -170,6 +171,7 @@ class MpmGrid {
   std::vector<Mat3d> capillary_;  // surface tension: capillary Cauchy stress per particle, Pa
   std::function<void(double*, std::size_t)> colourSum_;  // setColourSum
   Index3 activeLo_{0, 0, 0}, activeHi_{0, 0, 0};
+  bool wholeGrid_ = false;  // activateWholeGrid since the last P2G: the caller writes the whole grid
   // Binning scratch. Bins are stencil base nodes; only the box of bins in
   // use, [binLo_, binLo_ + binDims_), gets offsets.
   std::size_t boxKey(std::uint64_t packed) const {
