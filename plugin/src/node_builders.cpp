@@ -15,6 +15,7 @@
 #include "lodestone/core/base/error.h"
 #include "lodestone/core/base/number_text.h"
 #include "lodestone/core/field/material.h"
+#include "lodestone/core/mpm/grid.h"
 #include "lodestone/core/sources/cuboid_magnet.h"
 #include "lodestone/core/sources/cylinder_magnet.h"
 #include "lodestone/core/sources/point_dipole.h"
@@ -255,7 +256,6 @@ MagneticStageSettings solveSettingsFrom(const ParamSet& p, const std::string& pr
 
 namespace {
 constexpr double kMaxNodesPerAxis = 1 << 20;
-constexpr double kMaxMpmBins = 4294967295.0;  // 2^32 - 1 (core's MpmGrid)
 constexpr double kGiB = 1024.0 * 1024.0 * 1024.0;
 
 /// A count as a whole number while doubles hold it exactly (2.14748e+09 says too little).
@@ -277,7 +277,7 @@ void requireFitsInMemory(const std::string& what, const double nodes[3], double 
   // The MPM grid bins particles by the base node of their stencil (dims - 2
   // per axis) with 32-bit offsets.
   const double bins = (nodes[0] - 2) * (nodes[1] - 2) * (nodes[2] - 2);
-  const bool tooManyBins = use != GridUse::FieldSolve && bins >= kMaxMpmBins;
+  const bool tooManyBins = use != GridUse::FieldSolve && bins >= double(kMpmGridCountLimit);
   if (need <= limit && !axisTooLong && !tooManyBins) return;
   std::string subject;
   if (nodeCount > 0)
@@ -288,7 +288,7 @@ void requireFitsInMemory(const std::string& what, const double nodes[3], double 
                           " nodes on an axis; needs about ", numberText(need / kGiB, 3), " GiB)"));
   if (tooManyBins)
     throw TooLarge(concat(what, ": ", subject, " is too large for the MPM grid (", countText(bins),
-                          " stencil bins, at most ", countText(kMaxMpmBins - 1), ")"));
+                          " stencil bins, at most ", countText(double(kMpmGridCountLimit - 1)), ")"));
   if (particles > 0) subject += concat(subject.empty() ? "" : " and ", countText(particles), " particles");
   const std::string perNode = nodeBytes > 0 ? concat(nodeBytes, " B a node and ") : std::string();
   throw TooLarge(concat(what, ": ", subject, nodeCount > 0 ? " is too large" : " are too many",

@@ -1,12 +1,12 @@
 #include "lodestone/plugin/scene.h"
 
 #include <algorithm>
-#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <limits>
 #include <utility>
 
+#include "lodestone/core/base/bspline.h"
 #include "lodestone/core/base/error.h"
 #include "lodestone/core/base/hash.h"
 #include "lodestone/core/planner/accuracy_preset.h"
@@ -383,9 +383,9 @@ double mpmBoxNodes(const GridSpec& g, const Vec3d& lo, const Vec3d& hi) {
   double nodes = 1;
   const int dims[3] = {g.dims.i, g.dims.j, g.dims.k};
   for (int a = 0; a < 3; ++a) {
-    // Stencil bases floor(u - 1/2), each reaching 3 nodes.
-    const double u0 = std::floor((lo[a] - g.origin[a]) / g.dx - 0.5);
-    const double u1 = std::floor((hi[a] - g.origin[a]) / g.dx - 0.5) + 3;
+    // The stencils' base nodes, each reaching 3 nodes.
+    const double u0 = quadraticBaseFloor((lo[a] - g.origin[a]) / g.dx);
+    const double u1 = quadraticBaseFloor((hi[a] - g.origin[a]) / g.dx) + 3;
     nodes *= std::max(0.0, std::min(double(dims[a]), u1) - std::max(0.0, u0));
   }
   return nodes;

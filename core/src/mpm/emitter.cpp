@@ -1,8 +1,8 @@
 #include "lodestone/core/mpm/emitter.h"
 
 #include <algorithm>
-#include <limits>
 #include <cmath>
+#include <limits>
 
 #include "lodestone/core/base/constants.h"
 #include "lodestone/core/base/error.h"

@@ -101,7 +101,7 @@ void runKernel(const Kernel& kernel, Args&&... args) {
 
 using Clock = std::chrono::steady_clock;
 constexpr std::size_t kNone = std::numeric_limits<std::size_t>::max();
-constexpr std::uint32_t kBadKey = std::numeric_limits<std::uint32_t>::max();
+constexpr std::uint32_t kBadKey = std::uint32_t(kMpmGridCountLimit);
 constexpr std::uint64_t kBadBase = std::numeric_limits<std::uint64_t>::max();
 
 void atomicMin(std::atomic<std::size_t>& a, std::size_t v) {
@@ -425,9 +425,8 @@ bool emptyBox(Index3 lo, Index3 hi) { return lo.i >= hi.i || lo.j >= hi.j || lo.
 
 // Zeroes the elements of box [lo, hi) that lie outside box [keepLo, keepHi)
 // in an array over a grid of `dims` (x fastest). Contiguous runs are merged,
-// so that the whole pages among them go back to the system.
-// Elements outside the box to keep are zero or about to be, so the pages
-// holding nothing of that box go back to the system whole.
+// and since every element outside the box to keep is zero or about to be, a
+// page holding nothing of that box goes back to the system whole.
 template <typename T>
 void zeroOutside(PageArray<T>& a, Index3 dims, Index3 lo, Index3 hi, Index3 keepLo, Index3 keepHi) {
   if (a.empty() || emptyBox(lo, hi)) return;

@@ -82,6 +82,10 @@ struct GridToParticleReport {
   std::size_t nonFinite = 0;  ///< particles whose position, velocity or J became non-finite (left as they are)
 };
 
+/// An MpmGrid holds fewer stencil bins (base nodes: dims - 2 per axis) than
+/// this, and fewer particles: its binning counts them in 32 bits.
+constexpr std::uint64_t kMpmGridCountLimit = 0xFFFFFFFFu;  // 2^32 - 1
+
 class MpmGrid {
  public:
   MpmGrid() = default;
