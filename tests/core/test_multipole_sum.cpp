@@ -95,3 +95,40 @@ TEST(MultipoleSum, FarAndNearDistancesOutsideTheFastRange) {
     EXPECT_NEAR(got, ref, 1e-12 * std::fabs(ref)) << "scale " << scale;
   }
 }
+
+TEST(MultipoleField, IsMinusTheGradientOfThePotential) {
+  // Central differences of potential() (error ~ h^2 phi''' ~ 1e-9 relative
+  // at h = 1e-4 r) against field(), for random blocks with nonsymmetric N.
+  const Blocks b = randomBlocks(5, 0.1, 11);
+  std::mt19937 rng(12);
+  std::uniform_real_distribution<double> U(-1, 1);
+  double worst = 0;
+  for (const Multipole& m : b.list)
+    for (int p = 0; p < 20; ++p) {
+      const Vec3d x = m.centre + 0.5 * Vec3d{U(rng), U(rng), U(rng)} + Vec3d{0.3, 0, 0};
+      const double h = 1e-4 * norm(x - m.centre);
+      Vec3d fd;
+      for (int a = 0; a < 3; ++a) {
+        Vec3d e;
+        e[a] = h;
+        fd[a] = -(m.potential(x + e) - m.potential(x - e)) / (2 * h);
+      }
+      worst = std::max(worst, norm(m.field(x) - fd) / norm(fd));
+    }
+  EXPECT_LT(worst, 1e-6);
+}
+
+TEST(MultipoleField, OfAUniformlyMagnetizedSphereIsItsDipoleField) {
+  // Outside a sphere of uniform M the field is exactly that of m = M V
+  // (Jackson 5.10); a quadrupole about the centre is zero.
+  const double R = 0.02, M = 3e5;
+  Multipole m;
+  m.centre = {0.1, -0.2, 0.3};
+  m.dipole = {0, 0, M * 4.0 / 3.0 * kPi * R * R * R};
+  // On the axis at distance d: H = 2 m / (4 pi d^3); on the equator: -m / (4 pi d^3).
+  const double d = 0.05;
+  EXPECT_NEAR(m.field(m.centre + Vec3d{0, 0, d}).z, 2 * m.dipole.z / (4 * kPi * d * d * d), 1e-12 * M);
+  EXPECT_NEAR(m.field(m.centre + Vec3d{d, 0, 0}).z, -m.dipole.z / (4 * kPi * d * d * d), 1e-12 * M);
+  EXPECT_NEAR(m.field(m.centre + Vec3d{d, 0, 0}).x, 0.0, 1e-12 * M);
+  EXPECT_EQ(norm(m.field(m.centre)), 0.0);
+}

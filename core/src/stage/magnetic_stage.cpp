@@ -211,6 +211,12 @@ MagneticStageReport MagneticForceStage::solveAndForce(const FieldSource& sources
   return rep;
 }
 
+std::vector<Multipole> MagneticForceStage::materialMultipoles() {
+  if (!problem_) return {};
+  std::vector<double> residual(grid_.nodeCount());
+  return problem_->evaluate(phi_.data(), residual.data(), false).multipoles;
+}
+
 MagnetWrench MagneticForceStage::reactionOn(const FieldSource& source, const FieldSource& allSources,
                                             const Vec3d& centre, double time) const {
   DenseGrid<Vec3d> material(grid_);

@@ -1,6 +1,7 @@
 #pragma once
 // Dipole + quadrupole expansion of the scalar potential of a magnetization
-// distribution, used as the far-field (open) boundary value of the field solve.
+// distribution, used as the far-field (open) boundary value of the field solve
+// and as the field one patch of material applies to another (magnetic_patches.h).
 //   phi(x) = 1/(4 pi) [ m.r / r^3 + sum_ij N_ij (3 r_i r_j / r^5 - delta_ij / r^3) ],
 //   r = x - centre, m = int M dV (A m^2), N_ij = int M_i (y - centre)_j dV (A m^3),
 // so that H = -grad phi is the field of M seen from far away.
@@ -32,6 +33,28 @@ struct Multipole {
       for (int j = 0; j < 3; ++j)
         q += quadrupole[i][j] * (3.0 * r[i] * r[j] * inv5 - (i == j ? inv3 : 0.0));
     return (dot(dipole, r) * inv3 + q) / (4.0 * kPi);
+  }
+
+  /// Field H = -grad phi (A/m) at x (m); 0 at the centre itself:
+  ///   4 pi H = 3 r (m.r) / r^5 - m / r^3
+  ///          - 3 (N + N^T) r / r^5 + 15 (r^T N r) r / r^7 - 3 tr(N) r / r^5.
+  Vec3d field(const Vec3d& x) const {
+    const Vec3d r = x - centre;
+    const double r2 = norm2(r);
+    if (!(r2 > 0)) return {};
+    const double inv2 = 1.0 / r2, inv3 = inv2 / std::sqrt(r2), inv5 = inv3 * inv2, inv7 = inv5 * inv2;
+    Vec3d sym;  // (N + N^T) r
+    double rNr = 0, trace = 0;
+    for (int i = 0; i < 3; ++i) {
+      trace += quadrupole[i][i];
+      for (int j = 0; j < 3; ++j) {
+        sym[i] += (quadrupole[i][j] + quadrupole[j][i]) * r[j];
+        rNr += r[i] * quadrupole[i][j] * r[j];
+      }
+    }
+    const Vec3d h = (3.0 * dot(dipole, r) * inv5 + 15.0 * rNr * inv7 - 3.0 * trace * inv5) * r - inv3 * dipole -
+                    (3.0 * inv5) * sym;
+    return h / (4.0 * kPi);
   }
 
   Multipole& operator+=(const Multipole& o) {

@@ -20,6 +20,7 @@
 #include "lodestone/core/base/grid.h"
 #include "lodestone/core/stage/magnetic_force.h"
 #include "lodestone/core/field/material.h"
+#include "lodestone/core/field/multipole.h"
 #include "lodestone/core/stage/transfer.h"
 
 namespace lodestone {
@@ -103,6 +104,13 @@ class MagneticForceStage {
   TransferReport sampleForceDensity(const Vec3d* positions, std::size_t count, Vec3d* out) const;
   /// H (A/m) at particle positions (quadratic B-spline interpolation).
   TransferReport sampleField(const Vec3d* positions, std::size_t count, Vec3d* out) const;
+
+  /// The material's far field after the last run: the block multipoles
+  /// (dipole + quadrupole about each block's centre, Multipole::field) of
+  /// its magnetization at the last run's potential, the expansion the open
+  /// wall's values are summed from. Evaluates the material's Gauss points
+  /// once. Empty before the first run.
+  std::vector<Multipole> materialMultipoles();
 
   void setProgress(SolveProgress progress) { progress_ = std::move(progress); }
   /// Forget the warm start (next solve starts from phi = 0).

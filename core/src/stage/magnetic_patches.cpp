@@ -1,0 +1,204 @@
+#include "lodestone/core/stage/magnetic_patches.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <sstream>
+
+#include "lodestone/core/base/error.h"
+#include "lodestone/core/base/stopwatch.h"
+
+namespace lodestone {
+inline namespace stage {
+
+namespace {
+using Clock = std::chrono::steady_clock;
+
+/// The far field (A/m) of the block multipoles of every patch but `self` at x.
+Vec3d farFieldOf(const std::vector<std::vector<Multipole>>& moments, std::size_t self, const Vec3d& x) {
+  Vec3d h;
+  for (std::size_t q = 0; q < moments.size(); ++q)
+    if (q != self)
+      for (const Multipole& m : moments[q]) h += m.field(x);
+  return h;
+}
+
+/// The scene's sources plus the far field of the other patches: what one
+/// patch's stage takes as its applied field. The other patches lie outside
+/// this patch's grid, so their field is smooth on it; inside magnets the
+/// base's continuation and magnetization are passed on unchanged.
+class CoupledSource final : public FieldSource {
+ public:
+  CoupledSource(const FieldSource& base, const std::vector<std::vector<Multipole>>& moments, std::size_t self)
+      : base_(base), moments_(moments), self_(self) {}
+  Vec3d field(const Vec3d& x, double t) const override { return base_.field(x, t) + farFieldOf(moments_, self_, x); }
+  Vec3d magnetization(const Vec3d& x, double t) const override { return base_.magnetization(x, t); }
+  Vec3d exteriorContinuation(const Vec3d& x, double t) const override { return base_.exteriorContinuation(x, t); }
+  void accumulateField(const Vec3d* x, std::size_t count, double t, Vec3d* out) const override {
+    base_.accumulateField(x, count, t, out);
+    for (std::size_t n = 0; n < count; ++n) out[n] += farFieldOf(moments_, self_, x[n]);
+  }
+  std::string describe() const override {
+    return concat(base_.describe(), " + the far field of ", moments_.size() - 1, " other patch(es) of material");
+  }
+  std::unique_ptr<FieldSource> clone() const override { return std::make_unique<CoupledSource>(*this); }
+
+ private:
+  const FieldSource& base_;
+  const std::vector<std::vector<Multipole>>& moments_;
+  std::size_t self_;
+};
+
+bool shareANode(const GridSpec& a, const GridSpec& b) {
+  for (int k = 0; k < 3; ++k) {
+    const double aLo = a.origin[k], aHi = aLo + a.dx * (a.dims[k] - 1);
+    const double bLo = b.origin[k], bHi = bLo + b.dx * (b.dims[k] - 1);
+    const double eps = 1e-9 * a.dx;
+    if (aHi < bLo - eps || bHi < aLo - eps) return false;
+  }
+  return true;
+}
+}  // namespace
+
+void MagneticPatchSettings::validate() const {
+  require(couplingTolerance > 0 && couplingTolerance < 1,
+          "magnetic patches: couplingTolerance must be in (0, 1), got ", couplingTolerance);
+  require(maxRounds >= 1 && maxRounds <= 100, "magnetic patches: maxRounds must be 1..100, got ", maxRounds);
+}
+
+bool MagneticPatchReport::converged() const {
+  if (!couplingConverged) return false;
+  for (const MagneticStageReport& r : patches)
+    if (!r.converged()) return false;
+  return true;
+}
+
+std::string MagneticPatchReport::summary() const {
+  std::ostringstream os;
+  os.precision(4);
+  os << patches.size() << " patches, " << rounds << " round(s), far-field change " << couplingChange
+     << (couplingConverged ? " (converged)" : " (NOT converged)") << ", coupling " << secondsCoupling << " s, total "
+     << secondsTotal << " s\n";
+  for (std::size_t p = 0; p < patches.size(); ++p) os << "patch " << p << ":\n" << patches[p].summary();
+  return os.str();
+}
+
+MagneticPatches::MagneticPatches(std::vector<GridSpec> grids, const MagneticMaterial& material,
+                                 const MagneticStageSettings& settings, const MagneticPatchSettings& patchSettings)
+    : patchSettings_(patchSettings) {
+  patchSettings_.validate();
+  require(!grids.empty(), "magnetic patches: no patch grid given");
+  require(settings.boundary == BoundaryKind::Open,
+          "magnetic patches: the boundary must be open (far field); the shield wall is one box around everything");
+  for (std::size_t p = 0; p < grids.size(); ++p) {
+    grids[p].validate("magnetic patch grid");
+    require(grids[p].dx == grids[0].dx, "magnetic patches: patch ", p, " has dx = ", grids[p].dx,
+            " m, patch 0 has ", grids[0].dx, " m");
+    for (std::size_t q = 0; q < p; ++q)
+      require(!shareANode(grids[q], grids[p]), "magnetic patches: patches ", q, " and ", p,
+              " overlap (patches must lie apart)");
+  }
+  for (const GridSpec& g : grids) stages_.push_back(std::make_unique<MagneticForceStage>(g, material, settings));
+}
+
+MagneticPatchReport MagneticPatches::run(const std::vector<ParticleView>& points, const FieldSource& sources,
+                                         double time) {
+  const auto t0 = Clock::now();
+  require(points.size() == stages_.size(), "magnetic patches: ", points.size(), " point sets for ", stages_.size(),
+          " patches");
+  const std::size_t n = stages_.size();
+  MagneticPatchReport rep;
+  rep.patches.resize(n);
+  if (moments_.size() != n) moments_.assign(n, {});
+  std::vector<std::vector<double>> density(n);
+  for (int round = 1; round <= patchSettings_.maxRounds; ++round) {
+    rep.rounds = round;
+    for (std::size_t p = 0; p < n; ++p) {
+      const CoupledSource coupled(sources, moments_, p);
+      MagneticForceStage& stage = *stages_[p];
+      if (round == 1) {
+        rep.patches[p] = stage.run(points[p], coupled, time);
+        const GridView<const double> d = stage.density();
+        density[p].assign(d.data, d.data + stage.grid().nodeCount());
+      } else {
+        const MagneticStageReport transfer = rep.patches[p];
+        rep.patches[p] = stage.runOnDensity({density[p].data(), stage.grid()}, coupled, time);
+        rep.patches[p].transfer = transfer.transfer;
+        rep.patches[p].secondsTransfer = transfer.secondsTransfer;
+      }
+    }
+    if (n == 1) {
+      rep.couplingConverged = true;
+      moments_[0] = stages_[0]->materialMultipoles();
+      break;
+    }
+    // The new far fields, compared with those the round used at the centres
+    // of each patch's own material blocks.
+    const auto tc = Clock::now();
+    std::vector<std::vector<Multipole>> next(n);
+    for (std::size_t p = 0; p < n; ++p) next[p] = stages_[p]->materialMultipoles();
+    double change = 0;
+    for (std::size_t p = 0; p < n; ++p) {
+      double diff = 0, scale = 0;
+      for (const Multipole& own : next[p]) {
+        if (own.dipole == Vec3d{}) continue;  // an empty block
+        const Vec3d before = farFieldOf(moments_, p, own.centre), after = farFieldOf(next, p, own.centre);
+        diff = std::max(diff, norm(after - before));
+        scale = std::max(scale, norm(sources.field(own.centre, time) + after));
+      }
+      if (diff > 0) change = std::max(change, scale > 0 ? diff / scale : 1.0);
+    }
+    moments_ = std::move(next);
+    rep.secondsCoupling += secondsSince(tc);
+    rep.couplingChange = change;
+    if (change <= patchSettings_.couplingTolerance) {
+      rep.couplingConverged = true;
+      break;
+    }
+  }
+  for (const MagneticStageReport& r : rep.patches) rep.totalForce += r.totalForce;
+  if (!rep.couplingConverged)
+    for (MagneticStageReport& r : rep.patches)
+      r.warnings.push_back(concat("patch coupling: the far fields still changed by ", rep.couplingChange,
+                                  " (relative) after ", rep.rounds, " rounds"));
+  rep.secondsTotal = secondsSince(t0);
+  return rep;
+}
+
+Vec3d MagneticPatches::farField(std::size_t p, const Vec3d& x) const {
+  require(p < stages_.size(), "magnetic patches: no patch ", p, " (", stages_.size(), " patches)");
+  return moments_.size() == stages_.size() ? farFieldOf(moments_, p, x) : Vec3d{};
+}
+
+TransferReport MagneticPatches::particleForces(std::size_t p, const ParticleView& points, Vec3d* out) const {
+  require(p < stages_.size(), "magnetic patches: no patch ", p, " (", stages_.size(), " patches)");
+  return stages_[p]->particleForces(points, out);
+}
+
+MagnetWrench MagneticPatches::reactionOn(const FieldSource& source, const FieldSource& allSources,
+                                         const Vec3d& centre, double time) const {
+  MagnetWrench sum;
+  for (const auto& stage : stages_) {
+    const MagnetWrench w = stage->reactionOn(source, allSources, centre, time);
+    sum.force += w.force;
+    sum.torque += w.torque;
+  }
+  return sum;
+}
+
+void MagneticPatches::setSettings(const MagneticStageSettings& settings) {
+  require(settings.boundary == BoundaryKind::Open,
+          "magnetic patches: the boundary must be open (far field); the shield wall is one box around everything");
+  for (const auto& stage : stages_) stage->setSettings(settings);
+}
+
+void MagneticPatches::setMaterial(const MagneticMaterial& material) {
+  for (const auto& stage : stages_) stage->setMaterial(material);
+}
+
+void MagneticPatches::setProgress(SolveProgress progress) {
+  for (const auto& stage : stages_) stage->setProgress(progress);
+}
+
+}  // namespace stage
+}  // namespace lodestone
