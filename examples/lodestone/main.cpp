@@ -732,16 +732,24 @@ int run(const Args& a) {
   if (first < scene.startFrame || first > scene.lastFrame())
     usageError(concat("--frames starts at ", first, " but ", sceneRange));
   if (last > scene.lastFrame()) usageError(concat("--frames ends at ", last, " but ", sceneRange));
+  OutputSelection outputs =
+      a.outputs.empty() ? OutputSelection::sceneDefault(scene.output) : OutputSelection::parse(a.outputs);
+  if (!a.png) outputs.remove("png");
+  if (!a.ply) outputs.remove("particles");
+  // The fields files, the lines of B and the surface's magnetization read
+  // one magnetic grid: the planner's patches (one grid per separate group
+  // of material) stay off when they are written.
+  const bool oneFieldGrid = outputs.has("fields") || outputs.has("field_lines") || outputs.rendersSurface();
+  if (oneFieldGrid && scene.settings.planner.enabled && scene.settings.planner.patches == PlannerToggle::Auto) {
+    scene.settings.planner.patches = PlannerToggle::Off;
+    std::printf("planner: patches off (the fields, field_lines and surface outputs read one magnetic grid)\n");
+  }
   // Several processes: each builds its part of the scene.
   auto solver = buildSolver(scene, job.partitionOf(scene.settings.grid));
   printSceneSummary(scene, *solver);
   if (const MpmPartition* split = solver->partition())
     std::printf("distributed: %s (figures below per process)\n", split->describe().c_str());
   printPlan(scene, *solver, stdout);
-  OutputSelection outputs =
-      a.outputs.empty() ? OutputSelection::sceneDefault(scene.output) : OutputSelection::parse(a.outputs);
-  if (!a.png) outputs.remove("png");
-  if (!a.ply) outputs.remove("particles");
   const MemoryEstimate memory = printMemoryEstimate(scene, *solver, loadedBytes, outputs, stdout);
   requireFitsInMemory(concat("scene '", scene.name, "'"), memory);
   checkSubsteps(a, scene, *solver);

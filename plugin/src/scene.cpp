@@ -10,6 +10,7 @@
 #include "lodestone/core/base/error.h"
 #include "lodestone/core/base/hash.h"
 #include "lodestone/core/planner/accuracy_preset.h"
+#include "lodestone/core/planner/effects_planner.h"
 #include "lodestone/plugin/json_reader.h"
 #include "lodestone/plugin/node_builders.h"
 #include "lodestone/plugin/node_registry.h"
@@ -135,6 +136,7 @@ Scene sceneFromJson(const nlohmann::json& doc, const std::string& sourceName, co
     ps.appliedFieldOnly = parsePlannerToggle(pl.string("applied_field_only", toggles, "auto"));
     ps.fieldReuse = parsePlannerToggle(pl.string("field_reuse", toggles, "auto"));
     ps.activeRegion = parsePlannerToggle(pl.string("active_region", toggles, "auto"));
+    ps.patches = parsePlannerToggle(pl.string("patches", toggles, "auto"));
     pl.finish();
   }
 
@@ -454,8 +456,40 @@ MemoryCounts sceneMemory(const Scene& scene, const MpmSolver* solver) {
   }
   const bool sources = !scene.fields.empty() || !scene.magnets.empty();
   if (magnetic && sources) {
+    // The field solve's nodes: the planner's patches or active region around
+    // the magnetic material when it would choose them
+    // (planner/effects_planner.h), the whole magnetic grid otherwise or when
+    // emitters add magnetic material.
     const GridSpec& mg = scene.settings.magneticGrid ? *scene.settings.magneticGrid : scene.settings.grid;
-    c.fieldNodes = double(mg.nodeCount());
+    // Points where the magnetic material is: the particles, or before a run
+    // a lattice over each magnetic body's bounds (spacing at most 4 cells
+    // where 64 points an axis allow, so that a body stays one group).
+    std::vector<Vec3d> at;
+    bool magneticEmitters = false;
+    if (solver) {
+      const MpmParticles& p = solver->particles();
+      for (std::size_t i = 0; i < p.size(); ++i)
+        if (solver->materials()[p.material[i]].isMagnetic()) at.push_back(p.x[i]);
+      for (std::size_t e = 0; e < solver->emitterCount(); ++e)
+        magneticEmitters = magneticEmitters || solver->materials()[solver->emitter(e).materialIndex()].isMagnetic();
+    } else {
+      for (const SceneBody& b : scene.bodies) {
+        if (!scene.materials[b.material].isMagnetic()) continue;
+        Vec3d blo, bhi;
+        b.shape.worldBounds(blo, bhi);
+        int n[3];
+        for (int k = 0; k < 3; ++k) n[k] = std::clamp(int(std::ceil((bhi[k] - blo[k]) / (4 * mg.dx))), 1, 64);
+        for (int k = 0; k <= n[2]; ++k)
+          for (int j = 0; j <= n[1]; ++j)
+            for (int i = 0; i <= n[0]; ++i) {
+              const double u[3] = {double(i) / n[0], double(j) / n[1], double(k) / n[2]};
+              at.push_back({blo.x + u[0] * (bhi.x - blo.x), blo.y + u[1] * (bhi.y - blo.y), blo.z + u[2] * (bhi.z - blo.z)});
+            }
+      }
+      for (const SceneEmitter& e : scene.emitters) magneticEmitters = magneticEmitters || scene.materials[e.material].isMagnetic();
+    }
+    const bool placeKnown = !magneticEmitters && !at.empty() && !split;
+    c.fieldNodes = placeKnown ? plannedSolveNodes(scene.settings.planner, mg, at.data(), at.size()) : double(mg.nodeCount());
   } else {
     c.magneticParticles = 0;  // no stage runs: no transfer weights
   }

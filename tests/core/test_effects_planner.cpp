@@ -214,3 +214,78 @@ TEST(EffectsPlanner, ReuseFollowsTheBudget) {
   EXPECT_EQ(t.reused, 0);
   EXPECT_EQ(t.solves, t.substeps);
 }
+
+TEST(EffectsPlanner, SeparateBodiesAreSolvedAsPatchesWithTheOneBoxesForces) {
+  // Two magnetic cubes at the two ends of a long domain, each above a
+  // magnet of its own: the active region's one box holds the air between
+  // them, the patches only the cubes' surroundings. The forces on each
+  // cube and the motion over a frame against the one-box solve.
+  struct Result {
+    Vec3d force[2];  // summed particle forces per cube, N
+    double moved[2] = {0, 0};
+    MagneticPlan plan;
+    std::size_t solveNodes = 0;
+  };
+  const auto simulate = [](PlannerToggle patches) {
+    MpmSettings ms;
+    ms.grid.dx = kDx;
+    ms.grid.dims = {96, 28, 28};
+    ms.fixedDt = 1e-4;
+    ms.magneticSolveInterval = 1;
+    ms.magnetic.solve.tolerance = 1e-8;
+    ms.planner.enabled = true;
+    ms.planner.budget = 0.02;  // a share of 0.5%: 4 free cells, pad 7
+    ms.planner.patches = patches;
+    MpmSolver solver(ms);
+    const std::uint32_t mat = solver.addMaterial(neoHookeanSolid(1e5, 0.3, 2500, paperMaterial()));
+    const double c = 13.5 * kDx, xs[2] = {16.2 * kDx, 79.7 * kDx};
+    for (double x : xs) {
+      solver.addMagnet(SphereMagnet(Pose::at({x, c, c - 0.045}), 0.02, {0, 0, magnetizationFromRemanence(1.2)}));
+      solver.emit(EmitterShape::box(Pose::at({x, c, c}), {2 * kDx, 2 * kDx, 2 * kDx}), mat, {});
+    }
+    const double mid = 48 * kDx;
+    const auto centres = [&](double out[2]) {
+      double n[2] = {0, 0};
+      out[0] = out[1] = 0;
+      for (std::size_t p = 0; p < solver.particles().size(); ++p) {
+        const int b = solver.particles().x[p].x > mid;
+        out[b] += solver.particles().x[p].z;
+        n[b] += 1;
+      }
+      out[0] /= n[0];
+      out[1] /= n[1];
+    };
+    double z0[2];
+    centres(z0);
+    Result r;
+    solver.advanceFrame(0.001);  // 10 substeps, a solve each
+    for (std::size_t p = 0; p < solver.particles().size(); ++p)
+      r.force[solver.particles().x[p].x > mid] += solver.particles().magneticForce[p];
+    double z1[2];
+    centres(z1);
+    for (int b = 0; b < 2; ++b) r.moved[b] = z0[b] - z1[b];
+    r.plan = solver.lastMagneticPlan();
+    if (const MagneticPatches* p = solver.magneticPatches()) {
+      for (std::size_t q = 0; q < p->size(); ++q) r.solveNodes += p->grid(q).nodeCount();
+    } else {
+      r.solveNodes = solver.magneticStage()->grid().nodeCount();
+    }
+    return r;
+  };
+  const Result box = simulate(PlannerToggle::Off), patched = simulate(PlannerToggle::Auto);
+  ASSERT_TRUE(box.plan.activeRegion);
+  EXPECT_TRUE(box.plan.patches.empty());
+  ASSERT_EQ(patched.plan.patches.size(), 2u) << patched.plan.summary();
+  EXPECT_NE(patched.plan.summary().find("patches: on (2 patches)"), std::string::npos) << patched.plan.summary();
+  std::printf("%s", patched.plan.summary().c_str());
+  std::printf("solve nodes: one box %zu, patches %zu\n", box.solveNodes, patched.solveNodes);
+  EXPECT_LT(double(patched.solveNodes), 0.7 * double(box.solveNodes));
+  for (int b = 0; b < 2; ++b) {
+    std::printf("cube %d: force z %.6g N (one box %.6g N, relative %.2e), moved %.4g m (one box %.4g m)\n", b,
+                patched.force[b].z, box.force[b].z, norm(patched.force[b] - box.force[b]) / norm(box.force[b]),
+                patched.moved[b], box.moved[b]);
+    EXPECT_LT(box.force[b].z, 0.0);  // pulled down onto its magnet
+    EXPECT_LT(norm(patched.force[b] - box.force[b]), 0.005 * norm(box.force[b]));
+    EXPECT_NEAR(patched.moved[b], box.moved[b], 0.005 * std::fabs(box.moved[b]));
+  }
+}

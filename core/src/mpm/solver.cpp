@@ -474,11 +474,15 @@ void MpmSolver::solveMagnetic(MpmStepReport& rep) {
   if (index.empty() || !law || scene_->empty()) return;
 
   poseMagnetsAt(time_);
+  bool usePatches = false;
   if (settings_.planner.enabled) {
     // The planner picks the law, whether to solve at all, and the solve grid.
     lastPlan_ = planMagnetic(settings_.planner, plannerInputs(positions, *law));
+    usePatches = lastPlan_.patches.size() >= 2 && settings_.magnetic.boundary == BoundaryKind::Open;
     GridSpec solveGrid = magneticGrid_;
-    if (lastPlan_.activeRegion) {
+    if (usePatches) {
+      stage_.reset();
+    } else if (lastPlan_.activeRegion) {
       // Keep the current region while it holds the material's; otherwise a
       // new one with 4 cells of slack (clipped to the full grid).
       const GridSpec& r = lastPlan_.region;
@@ -502,13 +506,19 @@ void MpmSolver::solveMagnetic(MpmStepReport& rep) {
         solveGrid.dims = {hi[0] - lo[0] + 1, hi[1] - lo[1] + 1, hi[2] - lo[2] + 1};
       }
     }
-    if (!stage_ || !(stage_->grid() == solveGrid)) stage_ = std::make_unique<MagneticForceStage>(solveGrid, *law, settings_.magnetic);
-    MagneticStageSettings st = settings_.magnetic;
-    st.appliedFieldOnly = lastPlan_.appliedFieldOnly;
-    stage_->setSettings(st);
-    stage_->setMaterial(lastPlan_.linearLaw ? linearized(*law) : *law);
-    sameGrid_ = solveGrid == settings_.grid;
+    if (!usePatches) {
+      patches_.reset();
+      if (!stage_ || !(stage_->grid() == solveGrid))
+        stage_ = std::make_unique<MagneticForceStage>(solveGrid, *law, settings_.magnetic);
+      MagneticStageSettings st = settings_.magnetic;
+      st.appliedFieldOnly = lastPlan_.appliedFieldOnly;
+      stage_->setSettings(st);
+      stage_->setMaterial(lastPlan_.linearLaw ? linearized(*law) : *law);
+    }
+    sameGrid_ = !usePatches && solveGrid == settings_.grid;
     if (sameGrid_ && !(magneticForce_.spec() == settings_.grid)) magneticForce_.reset(settings_.grid, Vec3d{});
+  } else {
+    patches_.reset();
   }
   // What the reuse test and the automatic solve frequency compare against.
   if (partition_) {
@@ -518,6 +528,15 @@ void MpmSolver::solveMagnetic(MpmStepReport& rep) {
     solvedIds_ = points.id;
   } else {
     reuse_.record(particles_.x, index, *scene_, time_);
+  }
+  if (usePatches) {
+    solvePatches(points, lastPlan_.linearLaw ? linearized(*law) : *law, rep);
+    for (std::size_t m = 0; m < magnets_.size(); ++m)
+      if (magnetCollider_[m] != kNoCollider && colliders_[magnetCollider_[m]].isDynamic())
+        magnetReaction_[m] = patches_->reactionOn(*magnets_[m], *scene_, magnets_[m]->pose().position, time_);
+    haveMagneticForce_ = true;
+    rep.secondsMagnetic = secondsSince(t0);
+    return;
   }
   if (!stage_) stage_ = std::make_unique<MagneticForceStage>(magneticGrid_, *law, settings_.magnetic);
   const ParticleView view{positions.data(), counts.data(), positions.size()};
@@ -548,6 +567,103 @@ void MpmSolver::solveMagnetic(MpmStepReport& rep) {
       magnetReaction_[m] = stage_->reactionOn(*magnets_[m], *scene_, magnets_[m]->pose().position, time_);
   haveMagneticForce_ = true;
   rep.secondsMagnetic = secondsSince(t0);
+}
+
+void MpmSolver::solvePatches(const MagneticPoints& points, const MagneticMaterial& law, MpmStepReport& rep) {
+  // Keep the patches while each new one lies inside the kept one of its
+  // rank (their warm starts stay); otherwise new ones with 4 cells of slack
+  // where that keeps them apart.
+  const std::vector<GridSpec>& planned = lastPlan_.patches;
+  const auto contains = [](const GridSpec& outer, const GridSpec& inner) {
+    for (int a = 0; a < 3; ++a) {
+      const double lo = (inner.origin[a] - outer.origin[a]) / outer.dx;
+      if (lo < -1e-9 || lo + inner.dims[a] - 1 > outer.dims[a] - 1 + 1e-9) return false;
+    }
+    return true;
+  };
+  bool keep = patches_ && patches_->size() == planned.size();
+  for (std::size_t p = 0; keep && p < planned.size(); ++p) keep = contains(patches_->grid(p), planned[p]);
+  if (!keep) {
+    const auto widened = [&](const GridSpec& g, int slack) {
+      int lo[3], hi[3];
+      for (int a = 0; a < 3; ++a) {
+        const int first = int(std::lround((g.origin[a] - magneticGrid_.origin[a]) / magneticGrid_.dx));
+        lo[a] = std::max(0, first - slack);
+        hi[a] = std::min(magneticGrid_.dims[a] - 1, first + g.dims[a] - 1 + slack);
+      }
+      GridSpec w = g;
+      w.origin = magneticGrid_.nodePosition(lo[0], lo[1], lo[2]);
+      w.dims = {hi[0] - lo[0] + 1, hi[1] - lo[1] + 1, hi[2] - lo[2] + 1};
+      return w;
+    };
+    std::vector<GridSpec> grids;
+    for (const GridSpec& g : planned) grids.push_back(widened(g, 4));
+    const auto meet = [](const GridSpec& a, const GridSpec& b) {
+      for (int k = 0; k < 3; ++k) {
+        const double aLo = a.origin[k], aHi = aLo + a.dx * (a.dims[k] - 1);
+        const double bLo = b.origin[k], bHi = bLo + b.dx * (b.dims[k] - 1);
+        if (aHi < bLo - 1e-9 * a.dx || bHi < aLo - 1e-9 * a.dx) return false;
+      }
+      return true;
+    };
+    bool apart = true;
+    for (std::size_t a = 0; a < grids.size(); ++a)
+      for (std::size_t b = a + 1; b < grids.size(); ++b) apart = apart && !meet(grids[a], grids[b]);
+    if (!apart) grids = planned;  // no slack: the planned grids lie apart
+    MagneticPatchSettings ps;
+    ps.couplingTolerance = std::min(1e-3, std::max(1e-6, settings_.magnetic.solve.tolerance));
+    patches_ = std::make_unique<MagneticPatches>(grids, law, settings_.magnetic, ps);
+  }
+  MagneticStageSettings st = settings_.magnetic;
+  st.appliedFieldOnly = lastPlan_.appliedFieldOnly;
+  patches_->setSettings(st);
+  patches_->setMaterial(law);
+  patches_->setProgress(fieldSolveProgress_);
+  // Each point to the patch whose grid holds its stencil.
+  const std::size_t n = patches_->size(), count = points.x.size();
+  std::vector<std::vector<Vec3d>> x(n);
+  std::vector<std::vector<double>> c(n);
+  std::vector<std::vector<std::size_t>> which(n);
+  for (std::size_t q = 0; q < count; ++q) {
+    std::size_t home = n;
+    for (std::size_t p = 0; p < n && home == n; ++p) {
+      const GridSpec& g = patches_->grid(p);
+      bool inside = true;
+      for (int a = 0; a < 3 && inside; ++a) {
+        const double u = (points.x[q][a] - g.origin[a]) / g.dx;
+        inside = u >= 1 && u <= g.dims[a] - 2;
+      }
+      if (inside) home = p;
+    }
+    require(home < n, "MPM magnetic patches: magnetic point ", q, " at (", points.x[q].x, ", ", points.x[q].y, ", ",
+            points.x[q].z, ") m lies in none of the ", n, " patches");
+    x[home].push_back(points.x[q]);
+    c[home].push_back(points.count[q]);
+    which[home].push_back(q);
+  }
+  std::vector<ParticleView> views;
+  for (std::size_t p = 0; p < n; ++p) views.push_back({x[p].data(), c[p].data(), x[p].size()});
+  const MagneticPatchReport pr = patches_->run(views, *scene_, time_);
+  rep.magnetic = pr.combined();
+  rep.magneticSolved = true;
+  for (std::size_t p = 0; p < n; ++p) {
+    if (settings_.checkFinite) {
+      const MagneticForceStage& stage = patches_->stage(p);
+      const GridView<const Vec3d> H = stage.field(), f = stage.nodalForce();
+      const std::size_t nn = stage.grid().nodeCount();
+      const std::size_t bad = firstBad(nn, [&](std::size_t i) { return !isFinite(H.data[i]) || !isFinite(f.data[i]); });
+      if (bad < nn)
+        throw Error(concat("MPM finite check: non-finite magnetic ", isFinite(H.data[bad]) ? "nodal force (N)" : "field H (A/m)",
+                           " at node index ", bad, " of magnetic patch ", p, " after the field solve in substep ",
+                           substeps_ + 1, " at t = ", time_, " s (", rep.magnetic.solve.message, ")"));
+    }
+    std::vector<Vec3d> forces(x[p].size());
+    patches_->particleForces(p, views[p], forces.data());
+    for (std::size_t m = 0; m < forces.size(); ++m) {
+      const std::uint32_t i = points.index[which[p][m]];
+      if (i != MagneticPoints::kElsewhere) particles_.magneticForce[i] = forces[m];
+    }
+  }
 }
 
 // ---------------------------------------------------------------------------
@@ -684,6 +800,7 @@ void MpmSolver::checkFiniteGrid(const char* where) const {
 
 void MpmSolver::resetMagneticWarmStart() {
   if (stage_) stage_->resetWarmStart();
+  patches_.reset();  // a fresh start: the patches' potentials and far fields go too
 }
 
 // ---------------------------------------------------------------------------

@@ -6,6 +6,7 @@
 
 #include "lodestone/core/base/error.h"
 #include "lodestone/core/field/magnetization_law.h"
+#include "lodestone/core/planner/material_patches.h"
 
 namespace lodestone {
 inline namespace planner {
@@ -16,6 +17,7 @@ constexpr double kForcePerCellMoved = 0.2; // relative force change per cell of 
 constexpr double kMaxReuseCells = 0.5;     // never reuse past half a cell of motion
 constexpr int kStencilCells = 3;           // B-spline stencil and force mask around the material
 constexpr double kMinRegionGain = 0.7;     // a region must have at most this fraction of the grid's nodes
+constexpr std::size_t kMaxPatches = 8;     // more groups than this: one box (the coupling costs patches^2)
 
 std::string fmt(double v) {
   std::ostringstream os;
@@ -73,6 +75,70 @@ double relativeFieldChange(const std::vector<Vec3d>& a, const std::vector<Vec3d>
   return scale > 0 ? diff / scale : (diff > 0 ? 1.0 : 0.0);
 }
 
+int activeRegionMargin(const PlannerSettings& settings) {
+  const double share = kShare * settings.budget;
+  return share >= 0.005 ? 4 : (share >= 0.001 ? 8 : 0);
+}
+
+GridSpec activeRegionGrid(const GridSpec& grid, const Vec3d& lo, const Vec3d& hi, int margin) {
+  const int pad = kStencilCells + std::max(margin, 4);
+  int a[3], b[3];
+  for (int ax = 0; ax < 3; ++ax) {
+    const double l = (lo[ax] - grid.origin[ax]) / grid.dx, h = (hi[ax] - grid.origin[ax]) / grid.dx;
+    a[ax] = std::max(0, int(std::floor(std::max(l, -1e9))) - pad);
+    b[ax] = std::min(grid.dims[ax] - 1, int(std::ceil(std::min(h, 1e9))) + pad);
+  }
+  GridSpec r;
+  r.dx = grid.dx;
+  r.origin = grid.nodePosition(a[0], a[1], a[2]);
+  r.dims = {b[0] - a[0] + 1, b[1] - a[1] + 1, b[2] - a[2] + 1};
+  return r;
+}
+
+namespace {
+// The solve's grids for material at x[0..count): the active region's box
+// and whether the planner takes it, then the patches within it.
+struct SolveGrids {
+  int margin = 0, pad = 0;
+  GridSpec box;           // the active region's box
+  double fraction = 1;    // its share of the grid's nodes
+  bool region = false;    // the active region is taken
+  std::size_t groups = 0; // separate groups of material (0: not looked for)
+  double patchNodes = 0;  // their grids' nodes
+  double patchGain = 1;   // patchNodes over the box's nodes
+  std::vector<GridSpec> patches;  // taken: two or more
+};
+
+SolveGrids chooseSolveGrids(const PlannerSettings& settings, const GridSpec& grid, const Vec3d* x, std::size_t count) {
+  SolveGrids sg;
+  Vec3d lo = x[0], hi = x[0];
+  for (std::size_t m = 1; m < count; ++m)
+    for (int ax = 0; ax < 3; ++ax) {
+      lo[ax] = std::min(lo[ax], x[m][ax]);
+      hi[ax] = std::max(hi[ax], x[m][ax]);
+    }
+  sg.margin = activeRegionMargin(settings);
+  sg.pad = kStencilCells + std::max(sg.margin, 4);
+  sg.box = activeRegionGrid(grid, lo, hi, sg.margin);
+  sg.fraction = double(sg.box.nodeCount()) / double(grid.nodeCount());
+  sg.region = decide(settings.activeRegion, sg.margin > 0 && sg.fraction <= kMinRegionGain) && sg.fraction < 1;
+  if (!sg.region || settings.patches == PlannerToggle::Off) return sg;
+  MaterialPatches found = findMaterialPatches(grid, x, count, sg.pad);
+  for (const GridSpec& g : found.grids) sg.patchNodes += double(g.nodeCount());
+  sg.groups = found.grids.size();
+  sg.patchGain = sg.patchNodes / double(sg.box.nodeCount());
+  if (sg.groups >= 2 && sg.groups <= kMaxPatches && decide(settings.patches, sg.patchGain <= kMinRegionGain))
+    sg.patches = std::move(found.grids);
+  return sg;
+}
+}  // namespace
+
+double plannedSolveNodes(const PlannerSettings& settings, const GridSpec& grid, const Vec3d* x, std::size_t count) {
+  if (!settings.enabled || count == 0) return double(grid.nodeCount());
+  const SolveGrids sg = chooseSolveGrids(settings, grid, x, count);
+  return !sg.patches.empty() ? sg.patchNodes : double((sg.region ? sg.box : grid).nodeCount());
+}
+
 MagneticPlan planMagnetic(const PlannerSettings& settings, const PlannerInputs& in) {
   settings.validate();
   MagneticPlan plan;
@@ -103,49 +169,47 @@ MagneticPlan planMagnetic(const PlannerSettings& settings, const PlannerInputs& 
     return plan;
   }
 
-  // Active region (decided first: it sets the solve's size and cost).
+  // Active region (decided first: it sets the solve's size and cost), and
+  // patches within it.
   {
-    int margin = 0;
-    double err = 0;
-    if (share >= 0.005) {
-      margin = 4;
-      err = 0.005;
-    } else if (share >= 0.001) {
-      margin = 8;
-      err = 0.001;
-    }
-    Vec3d lo = in.positions[0], hi = in.positions[0];
-    for (std::size_t m = 1; m < in.count; ++m)
-      for (int ax = 0; ax < 3; ++ax) {
-        lo[ax] = std::min(lo[ax], in.positions[m][ax]);
-        hi[ax] = std::max(hi[ax], in.positions[m][ax]);
-      }
-    const int pad = kStencilCells + std::max(margin, 4);
-    int a[3], b[3];
-    for (int ax = 0; ax < 3; ++ax) {
-      const double l = (lo[ax] - in.grid.origin[ax]) / in.grid.dx, h = (hi[ax] - in.grid.origin[ax]) / in.grid.dx;
-      a[ax] = std::max(0, int(std::floor(l)) - pad);
-      b[ax] = std::min(in.grid.dims[ax] - 1, int(std::ceil(h)) + pad);
-    }
-    GridSpec r;
-    r.dx = in.grid.dx;
-    r.origin = in.grid.nodePosition(a[0], a[1], a[2]);
-    r.dims = {b[0] - a[0] + 1, b[1] - a[1] + 1, b[2] - a[2] + 1};
-    const double fraction = double(r.nodeCount()) / double(in.grid.nodeCount());
-    const bool fits = margin > 0 && fraction <= kMinRegionGain;
+    SolveGrids sg = chooseSolveGrids(settings, in.grid, in.positions, in.count);
+    const GridSpec& r = sg.box;
+    const int margin = sg.margin;
+    const double err = margin == 4 ? 0.005 : (margin == 8 ? 0.001 : 0.0);
     const std::string why =
         margin == 0 ? concat("the budget share ", percent(share), " is below the 0.1% a truncated domain costs")
-        : fraction > kMinRegionGain
-            ? concat("the material's box plus ", margin, " cells is ", percent(fraction), " of the grid: no gain")
+        : sg.fraction > kMinRegionGain
+            ? concat("the material's box plus ", margin, " cells is ", percent(sg.fraction), " of the grid: no gain")
             : concat("material box plus ", margin, " free cells: ", r.dims.i, "x", r.dims.j, "x", r.dims.k,
                      " nodes instead of ", in.grid.dims.i, "x", in.grid.dims.j, "x", in.grid.dims.k);
-    plan.activeRegion = decide(settings.activeRegion, fits) && fraction < 1;
+    plan.activeRegion = sg.region;
     if (plan.activeRegion) plan.region = r;
     plan.decisions.push_back({"active region", true, plan.activeRegion ? "material box" : "full grid",
                               because(settings.activeRegion, why), plan.activeRegion ? err : 0,
                               in.secondsPerNodeSolve * double(plan.region.nodeCount())});
+    if (sg.groups > 0) {
+      const std::size_t groups = sg.groups;
+      const std::string patchWhy =
+          groups < 2 ? std::string("the material is one group")
+          : groups > kMaxPatches
+              ? concat(groups, " groups of material, more than the ", kMaxPatches, " patches coupled pairwise")
+          : sg.patchGain > kMinRegionGain
+              ? concat(groups, " groups of material whose grids hold ", percent(sg.patchGain), " of the box's nodes: no gain")
+              : concat(groups, " groups of material more than ", 2 * sg.pad, " cells apart: ",
+                       std::size_t(sg.patchNodes), " nodes instead of the box's ", r.nodeCount());
+      const bool on = !sg.patches.empty();
+      plan.patches = std::move(sg.patches);
+      plan.decisions.push_back({"patches", true, on ? concat(groups, " patches") : "one grid",
+                                because(settings.patches, patchWhy), 0,
+                                on ? in.secondsPerNodeSolve * sg.patchNodes : 0});
+    }
   }
-  const double solveSeconds = in.secondsPerNodeSolve * double(plan.region.nodeCount());
+  double solveNodes = double(plan.region.nodeCount());
+  if (!plan.patches.empty()) {
+    solveNodes = 0;
+    for (const GridSpec& g : plan.patches) solveNodes += double(g.nodeCount());
+  }
+  const double solveSeconds = in.secondsPerNodeSolve * solveNodes;
 
   // Applied field only: no solve when the material barely changes H.
   {

@@ -73,6 +73,47 @@ bool MagneticPatchReport::converged() const {
   return true;
 }
 
+MagneticStageReport MagneticPatchReport::combined() const {
+  MagneticStageReport c;
+  c.solve.status = SolveStatus::Trivial;
+  for (std::size_t p = 0; p < patches.size(); ++p) {
+    const MagneticStageReport& r = patches[p];
+    c.transfer.particles += r.transfer.particles;
+    c.transfer.skipped += r.transfer.skipped;
+    c.transfer.totalCount += r.transfer.totalCount;
+    c.transfer.seconds += r.transfer.seconds;
+    c.totalCount += r.totalCount;
+    c.totalForce += r.totalForce;
+    c.secondsTransfer += r.secondsTransfer;
+    c.secondsAppliedField += r.secondsAppliedField;
+    c.secondsSolve += r.secondsSolve;
+    c.secondsFields += r.secondsFields;
+    c.secondsForce += r.secondsForce;
+    c.appliedFieldReused = p == 0 ? r.appliedFieldReused : c.appliedFieldReused && r.appliedFieldReused;
+    FieldSolveReport& s = c.solve;
+    if (s.converged() && (!r.solve.converged() || s.status == SolveStatus::Trivial)) {
+      s.status = r.solve.status;
+      s.message = r.solve.message;
+      s.preconditioner = r.solve.preconditioner;
+      s.backend = r.solve.backend;
+    }
+    s.newtonIterations += r.solve.newtonIterations;
+    s.cgIterations += r.solve.cgIterations;
+    s.lineSearchCuts += r.solve.lineSearchCuts;
+    s.relativeResidual = std::max(s.relativeResidual, r.solve.relativeResidual);
+    s.materialEnergy += r.solve.materialEnergy;
+    s.seconds += r.solve.seconds;
+    s.materialCells += r.solve.materialCells;
+    s.multigridLevels = std::max(s.multigridLevels, r.solve.multigridLevels);
+    for (const std::string& w : r.warnings) c.warnings.push_back(concat("patch ", p, ": ", w));
+  }
+  if (!couplingConverged && c.solve.converged()) c.solve.status = SolveStatus::IterationCap;  // the rounds' cap
+  c.solve.message = concat(patches.size(), " patches, ", rounds, " round(s), far-field change ", couplingChange,
+                           c.solve.message.empty() ? "" : "; ", c.solve.message);
+  c.secondsTotal = secondsTotal;
+  return c;
+}
+
 std::string MagneticPatchReport::summary() const {
   std::ostringstream os;
   os.precision(4);

@@ -75,6 +75,7 @@
 #include "lodestone/core/base/grid.h"
 #include "lodestone/core/sources/magnet_source.h"
 #include "lodestone/core/stage/magnetic_stage.h"
+#include "lodestone/core/stage/magnetic_patches.h"
 #include "lodestone/core/mpm/collider.h"
 #include "lodestone/core/mpm/emitter.h"
 #include "lodestone/core/mpm/field_reuse.h"
@@ -375,8 +376,12 @@ class MpmSolver {
   Vec3d domainLower() const;
   Vec3d domainUpper() const;
   const MpmGrid& grid() const { return grid_; }
-  /// The magnetic stage (null before the first field solve).
+  /// The magnetic stage (null before the first field solve, and while the
+  /// planner solves separate patches of material: magneticPatches()).
   const MagneticForceStage* magneticStage() const { return stage_.get(); }
+  /// The patches of the last field solve when the planner chose several
+  /// (PlannerSettings::patches); null otherwise.
+  const MagneticPatches* magneticPatches() const { return patches_.get(); }
   /// Called after each Newton iteration of the field solves this solver
   /// runs: a host's point of cancellation inside a substep (advanceFrame's
   /// callback runs only between substeps). Returning false stops that solve:
@@ -515,6 +520,9 @@ class MpmSolver {
   std::unique_ptr<SceneField> scene_;
   MpmGrid grid_;
   std::unique_ptr<MagneticForceStage> stage_;
+  std::unique_ptr<MagneticPatches> patches_;  // instead of stage_ when the planner chose patches
+  // The field solve on the planner's patches (solveMagnetic's part for them).
+  void solvePatches(const MagneticPoints& points, const MagneticMaterial& law, MpmStepReport& rep);
   SolveProgress fieldSolveProgress_;  // setFieldSolveProgress
   DenseGrid<Vec3d> magneticForce_;  // on the MPM grid (same-grid coupling)
   Vec3d magneticDropped_;

@@ -54,6 +54,10 @@ struct PlannerSettings {
   PlannerToggle appliedFieldOnly = PlannerToggle::Auto;
   PlannerToggle fieldReuse = PlannerToggle::Auto;
   PlannerToggle activeRegion = PlannerToggle::Auto;
+  /// Separate groups of material solved on grids of their own, coupled
+  /// through their far fields (stage/magnetic_patches.h), when their grids
+  /// hold fewer nodes than the active region's one box. Needs the active region.
+  PlannerToggle patches = PlannerToggle::Auto;
 
   /// Throws InvalidArgument naming the first bad value.
   void validate() const;
@@ -76,6 +80,10 @@ struct MagneticPlan {
   bool appliedFieldOnly = false; ///< skip the solve: H = H_ext
   bool activeRegion = false;     ///< solve on `region` instead of the full magnetic grid
   GridSpec region;               ///< the solve grid (the full grid when !activeRegion)
+  /// Two or more: solve on these grids instead, one a group of material
+  /// (planner/material_patches.h), coupled through their far fields; each
+  /// lies inside `region`. Empty: one grid.
+  std::vector<GridSpec> patches;
   double reuseDistance = 0;      ///< m: reuse the solve while points moved less (0: re-solve when due)
   double reuseFieldChange = 0;   ///< relative change of H_ext at the points that forces a re-solve
   double predictedError = 0;     ///< sum of the decisions' predicted errors
@@ -97,6 +105,20 @@ struct PlannerInputs {
   GridSpec grid;                     ///< the full magnetic grid
   double secondsPerNodeSolve = 3e-7; ///< field-solve cost per grid node, s (docs/benchmarks.md: 2 cores, 1e-6, cold and warm)
 };
+
+/// The active region's margin of free cells around the material that the
+/// budget allows: 4 cells (< 0.5% of the force) from a decision share of
+/// 0.5%, 8 cells (< 0.1%) from 0.1%, 0 below (no active region).
+int activeRegionMargin(const PlannerSettings& settings);
+/// The active region's grid: the nodes of `grid` over the material's box
+/// [lo, hi] (m) plus the stencil's 3 cells and max(margin, 4) free cells,
+/// clipped to `grid`.
+GridSpec activeRegionGrid(const GridSpec& grid, const Vec3d& lo, const Vec3d& hi, int margin);
+/// The nodes a field solve of material at x[0..count) (m) takes under
+/// `settings` on `grid`: the patches' or the active region's when the
+/// planner would choose them, else the grid's. What the memory estimate
+/// counts before a run (from points sampled over the bodies).
+double plannedSolveNodes(const PlannerSettings& settings, const GridSpec& grid, const Vec3d* x, std::size_t count);
 
 /// Decides the magnetic stages for the state `in` (see the header comment).
 MagneticPlan planMagnetic(const PlannerSettings& settings, const PlannerInputs& in);

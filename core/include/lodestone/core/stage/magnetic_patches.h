@@ -54,6 +54,11 @@ struct MagneticPatchReport {
 
   /// Every patch's solve converged and so did the coupling.
   bool converged() const;
+  /// The patches' last rounds as one stage report: particles, counts,
+  /// iterations, material cells, times (all rounds) and forces summed; the
+  /// largest relative residual; the first status that is not converged (or
+  /// the coupling's failure); each warning prefixed with its patch.
+  MagneticStageReport combined() const;
   /// Multi-line summary with units: rounds, coupling change, per-patch solves.
   std::string summary() const;
 };
