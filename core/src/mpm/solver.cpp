@@ -27,6 +27,15 @@ inline namespace mpm {
 namespace {
 using Clock = std::chrono::steady_clock;
 
+// Whether every node of `inner` is a node of `outer` (same lattice).
+bool gridContains(const GridSpec& outer, const GridSpec& inner) {
+  for (int a = 0; a < 3; ++a) {
+    const double lo = (inner.origin[a] - outer.origin[a]) / outer.dx;
+    if (lo < -1e-9 || lo + inner.dims[a] - 1 > outer.dims[a] - 1 + 1e-9) return false;
+  }
+  return true;
+}
+
 bool sameLaw(const MagnetizationLaw<double>& a, const MagnetizationLaw<double>& b) {
   return a.kind == b.kind && a.moment == b.moment && a.k2 == b.k2 && a.chiPerDensity == b.chiPerDensity;
 }
@@ -484,26 +493,12 @@ void MpmSolver::solveMagnetic(MpmStepReport& rep) {
       stage_.reset();
     } else if (lastPlan_.activeRegion) {
       // Keep the current region while it holds the material's; otherwise a
-      // new one with 4 cells of slack (clipped to the full grid).
+      // new one with kActiveRegionSlackCells of slack (clipped to the full grid).
       const GridSpec& r = lastPlan_.region;
-      const auto contains = [](const GridSpec& outer, const GridSpec& inner) {
-        for (int a = 0; a < 3; ++a) {
-          const double lo = (inner.origin[a] - outer.origin[a]) / outer.dx;
-          if (lo < -1e-9 || lo + inner.dims[a] - 1 > outer.dims[a] - 1 + 1e-9) return false;
-        }
-        return true;
-      };
-      if (stage_ && !(stage_->grid() == magneticGrid_) && contains(stage_->grid(), r)) {
+      if (stage_ && !(stage_->grid() == magneticGrid_) && gridContains(stage_->grid(), r)) {
         solveGrid = stage_->grid();
       } else {
-        int lo[3], hi[3];
-        for (int a = 0; a < 3; ++a) {
-          const int first = int(std::lround((r.origin[a] - magneticGrid_.origin[a]) / magneticGrid_.dx));
-          lo[a] = std::max(0, first - 4);
-          hi[a] = std::min(magneticGrid_.dims[a] - 1, first + r.dims[a] - 1 + 4);
-        }
-        solveGrid.origin = magneticGrid_.nodePosition(lo[0], lo[1], lo[2]);
-        solveGrid.dims = {hi[0] - lo[0] + 1, hi[1] - lo[1] + 1, hi[2] - lo[2] + 1};
+        solveGrid = widenedRegion(r, magneticGrid_, kActiveRegionSlackCells);
       }
     }
     if (!usePatches) {
@@ -571,33 +566,14 @@ void MpmSolver::solveMagnetic(MpmStepReport& rep) {
 
 void MpmSolver::solvePatches(const MagneticPoints& points, const MagneticMaterial& law, MpmStepReport& rep) {
   // Keep the patches while each new one lies inside the kept one of its
-  // rank (their warm starts stay); otherwise new ones with 4 cells of slack
-  // where that keeps them apart.
+  // rank (their warm starts stay); otherwise new ones with
+  // kActiveRegionSlackCells of slack where that keeps them apart.
   const std::vector<GridSpec>& planned = lastPlan_.patches;
-  const auto contains = [](const GridSpec& outer, const GridSpec& inner) {
-    for (int a = 0; a < 3; ++a) {
-      const double lo = (inner.origin[a] - outer.origin[a]) / outer.dx;
-      if (lo < -1e-9 || lo + inner.dims[a] - 1 > outer.dims[a] - 1 + 1e-9) return false;
-    }
-    return true;
-  };
   bool keep = patches_ && patches_->size() == planned.size();
-  for (std::size_t p = 0; keep && p < planned.size(); ++p) keep = contains(patches_->grid(p), planned[p]);
+  for (std::size_t p = 0; keep && p < planned.size(); ++p) keep = gridContains(patches_->grid(p), planned[p]);
   if (!keep) {
-    const auto widened = [&](const GridSpec& g, int slack) {
-      int lo[3], hi[3];
-      for (int a = 0; a < 3; ++a) {
-        const int first = int(std::lround((g.origin[a] - magneticGrid_.origin[a]) / magneticGrid_.dx));
-        lo[a] = std::max(0, first - slack);
-        hi[a] = std::min(magneticGrid_.dims[a] - 1, first + g.dims[a] - 1 + slack);
-      }
-      GridSpec w = g;
-      w.origin = magneticGrid_.nodePosition(lo[0], lo[1], lo[2]);
-      w.dims = {hi[0] - lo[0] + 1, hi[1] - lo[1] + 1, hi[2] - lo[2] + 1};
-      return w;
-    };
     std::vector<GridSpec> grids;
-    for (const GridSpec& g : planned) grids.push_back(widened(g, 4));
+    for (const GridSpec& g : planned) grids.push_back(widenedRegion(g, magneticGrid_, kActiveRegionSlackCells));
     const auto meet = [](const GridSpec& a, const GridSpec& b) {
       for (int k = 0; k < 3; ++k) {
         const double aLo = a.origin[k], aHi = aLo + a.dx * (a.dims[k] - 1);

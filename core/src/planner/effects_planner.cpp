@@ -133,10 +133,27 @@ SolveGrids chooseSolveGrids(const PlannerSettings& settings, const GridSpec& gri
 }
 }  // namespace
 
+GridSpec widenedRegion(const GridSpec& region, const GridSpec& grid, int cells) {
+  int lo[3], hi[3];
+  for (int a = 0; a < 3; ++a) {
+    const int first = int(std::lround((region.origin[a] - grid.origin[a]) / grid.dx));
+    lo[a] = std::max(0, first - cells);
+    hi[a] = std::min(grid.dims[a] - 1, first + region.dims[a] - 1 + cells);
+  }
+  GridSpec w = region;
+  w.origin = grid.nodePosition(lo[0], lo[1], lo[2]);
+  w.dims = {hi[0] - lo[0] + 1, hi[1] - lo[1] + 1, hi[2] - lo[2] + 1};
+  return w;
+}
+
 double plannedSolveNodes(const PlannerSettings& settings, const GridSpec& grid, const Vec3d* x, std::size_t count) {
   if (!settings.enabled || count == 0) return double(grid.nodeCount());
   const SolveGrids sg = chooseSolveGrids(settings, grid, x, count);
-  return !sg.patches.empty() ? sg.patchNodes : double((sg.region ? sg.box : grid).nodeCount());
+  if (!sg.region) return double(grid.nodeCount());
+  if (sg.patches.empty()) return double(widenedRegion(sg.box, grid, kActiveRegionSlackCells).nodeCount());
+  double nodes = 0;
+  for (const GridSpec& g : sg.patches) nodes += double(widenedRegion(g, grid, kActiveRegionSlackCells).nodeCount());
+  return nodes;
 }
 
 MagneticPlan planMagnetic(const PlannerSettings& settings, const PlannerInputs& in) {

@@ -114,9 +114,17 @@ int activeRegionMargin(const PlannerSettings& settings);
 /// [lo, hi] (m) plus the stencil's 3 cells and max(margin, 4) free cells,
 /// clipped to `grid`.
 GridSpec activeRegionGrid(const GridSpec& grid, const Vec3d& lo, const Vec3d& hi, int margin);
+/// Cells of slack the MPM solver adds around an active region or patch it
+/// builds, so that it keeps it while the material moves less than that.
+inline constexpr int kActiveRegionSlackCells = 4;
+/// `region` (nodes on `grid`'s lattice) widened by `cells` on every side,
+/// clipped to `grid`.
+GridSpec widenedRegion(const GridSpec& region, const GridSpec& grid, int cells);
+
 /// The nodes a field solve of material at x[0..count) (m) takes under
 /// `settings` on `grid`: the patches' or the active region's when the
-/// planner would choose them, else the grid's. What the memory estimate
+/// planner would choose them, with the solver's slack
+/// (kActiveRegionSlackCells), else the grid's. What the memory estimate
 /// counts before a run (from points sampled over the bodies).
 double plannedSolveNodes(const PlannerSettings& settings, const GridSpec& grid, const Vec3d* x, std::size_t count);
 
