@@ -4,6 +4,9 @@
 #include <cmath>
 #include <sstream>
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
 #include "lodestone/core/base/error.h"
 #include "lodestone/core/field/magnetization_law.h"
 #include "lodestone/core/planner/material_patches.h"
@@ -173,7 +176,9 @@ MagneticPlan planMagnetic(const PlannerSettings& settings, const PlannerInputs& 
 
   // Applied field at the magnetic points (the planner's only field evaluation).
   std::vector<Vec3d> H(in.count);
-  for (std::size_t m = 0; m < in.count; ++m) H[m] = in.applied->field(in.positions[m], in.time);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, in.count, 1024), [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t m = r.begin(); m != r.end(); ++m) H[m] = in.applied->field(in.positions[m], in.time);
+  });
   double hMax = 0;
   for (const Vec3d& h : H) hMax = std::max(hMax, norm(h));
   plan.peakAppliedField = hMax;

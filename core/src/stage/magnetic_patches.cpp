@@ -1,6 +1,9 @@
 #include "lodestone/core/stage/magnetic_patches.h"
 
 #include <algorithm>
+#include <array>
+#include <limits>
+#include <map>
 #include <chrono>
 #include <cmath>
 #include <sstream>
@@ -14,13 +17,86 @@ inline namespace stage {
 namespace {
 using Clock = std::chrono::steady_clock;
 
-/// The far field (A/m) of the block multipoles of every patch but `self` at x.
-Vec3d farFieldOf(const std::vector<std::vector<Multipole>>& moments, std::size_t self, const Vec3d& x) {
+/// The far field (A/m) of `blocks` at x.
+Vec3d farFieldOf(const std::vector<Multipole>& blocks, const Vec3d& x) {
   Vec3d h;
-  for (std::size_t q = 0; q < moments.size(); ++q)
-    if (q != self)
-      for (const Multipole& m : moments[q]) h += m.field(x);
+  for (const Multipole& m : blocks) h += m.field(x);
   return h;
+}
+
+bool emptyMoment(const Multipole& m) {
+  if (!(m.dipole == Vec3d{})) return false;
+  for (const auto& row : m.quadrupole)
+    for (double v : row)
+      if (v != 0) return false;
+  return true;
+}
+
+/// Distance (m) from grid g's box to the box of the centres of `blocks`.
+double distanceTo(const GridSpec& g, const std::vector<Multipole>& blocks) {
+  const double inf = std::numeric_limits<double>::infinity();
+  Vec3d lo{inf, inf, inf}, hi{-inf, -inf, -inf};
+  for (const Multipole& m : blocks)
+    for (int a = 0; a < 3; ++a) {
+      lo[a] = std::min(lo[a], m.centre[a]);
+      hi[a] = std::max(hi[a], m.centre[a]);
+    }
+  if (!(lo.x <= hi.x)) return inf;
+  const Vec3d gHi = g.maxCorner();
+  double d2 = 0;
+  for (int a = 0; a < 3; ++a) {
+    const double gap = std::max({0.0, lo[a] - gHi[a], g.origin[a] - hi[a]});
+    d2 += gap * gap;
+  }
+  return std::sqrt(d2);
+}
+
+/// `blocks` merged into clusters of edge `edge` (m): each cluster's moments
+/// about the mean of its blocks' centres (N_ij + m_i (c_b - c)_j), clusters
+/// in the order of their cells.
+std::vector<Multipole> clustered(const std::vector<Multipole>& blocks, double edge) {
+  std::map<std::array<long, 3>, std::vector<const Multipole*>> cells;
+  for (const Multipole& m : blocks)
+    if (!emptyMoment(m))
+      cells[{long(std::floor(m.centre.x / edge)), long(std::floor(m.centre.y / edge)), long(std::floor(m.centre.z / edge))}]
+          .push_back(&m);
+  std::vector<Multipole> out;
+  for (const auto& [cell, members] : cells) {
+    Multipole c;
+    for (const Multipole* m : members) c.centre += m->centre;
+    c.centre = c.centre / double(members.size());
+    for (const Multipole* m : members) {
+      const Vec3d shift = m->centre - c.centre;
+      c.dipole += m->dipole;
+      for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j) c.quadrupole[i][j] += m->quadrupole[i][j] + m->dipole[i] * shift[j];
+    }
+    out.push_back(c);
+  }
+  return out;
+}
+
+/// What patch `self` (grid g) sees of the others: each other patch's
+/// blocks, merged into clusters of edge d/4 when that exceeds 16 cells
+/// (d the distance from g to the patch's blocks), so that a cluster's
+/// half-diagonal stays below a quarter of its distance (truncation ~1%
+/// of its far field, as the blocks' own at the nearest) while a distant
+/// patch costs a handful of expansions instead of one per block.
+std::vector<Multipole> farBlocks(const std::vector<std::vector<Multipole>>& moments, std::size_t self,
+                                 const GridSpec& g) {
+  std::vector<Multipole> out;
+  for (std::size_t q = 0; q < moments.size(); ++q) {
+    if (q == self) continue;
+    const double edge = distanceTo(g, moments[q]) / 4;
+    if (edge > 16 * g.dx) {
+      const std::vector<Multipole> c = clustered(moments[q], edge);
+      out.insert(out.end(), c.begin(), c.end());
+    } else {
+      for (const Multipole& m : moments[q])
+        if (!emptyMoment(m)) out.push_back(m);
+    }
+  }
+  return out;
 }
 
 /// The scene's sources plus the far field of the other patches: what one
@@ -29,24 +105,24 @@ Vec3d farFieldOf(const std::vector<std::vector<Multipole>>& moments, std::size_t
 /// base's continuation and magnetization are passed on unchanged.
 class CoupledSource final : public FieldSource {
  public:
-  CoupledSource(const FieldSource& base, const std::vector<std::vector<Multipole>>& moments, std::size_t self)
-      : base_(base), moments_(moments), self_(self) {}
-  Vec3d field(const Vec3d& x, double t) const override { return base_.field(x, t) + farFieldOf(moments_, self_, x); }
+  CoupledSource(const FieldSource& base, std::vector<Multipole> far, std::size_t others)
+      : base_(base), far_(std::move(far)), others_(others) {}
+  Vec3d field(const Vec3d& x, double t) const override { return base_.field(x, t) + farFieldOf(far_, x); }
   Vec3d magnetization(const Vec3d& x, double t) const override { return base_.magnetization(x, t); }
   Vec3d exteriorContinuation(const Vec3d& x, double t) const override { return base_.exteriorContinuation(x, t); }
   void accumulateField(const Vec3d* x, std::size_t count, double t, Vec3d* out) const override {
     base_.accumulateField(x, count, t, out);
-    for (std::size_t n = 0; n < count; ++n) out[n] += farFieldOf(moments_, self_, x[n]);
+    for (std::size_t n = 0; n < count; ++n) out[n] += farFieldOf(far_, x[n]);
   }
   std::string describe() const override {
-    return concat(base_.describe(), " + the far field of ", moments_.size() - 1, " other patch(es) of material");
+    return concat(base_.describe(), " + the far field of ", others_, " other patch(es) of material");
   }
   std::unique_ptr<FieldSource> clone() const override { return std::make_unique<CoupledSource>(*this); }
 
  private:
   const FieldSource& base_;
-  const std::vector<std::vector<Multipole>>& moments_;
-  std::size_t self_;
+  std::vector<Multipole> far_;
+  std::size_t others_;
 };
 
 bool shareANode(const GridSpec& a, const GridSpec& b) {
@@ -155,7 +231,7 @@ MagneticPatchReport MagneticPatches::run(const std::vector<ParticleView>& points
   for (int round = 1; round <= patchSettings_.maxRounds; ++round) {
     rep.rounds = round;
     for (std::size_t p = 0; p < n; ++p) {
-      const CoupledSource coupled(sources, moments_, p);
+      const CoupledSource coupled(sources, farBlocks(moments_, p, stages_[p]->grid()), n - 1);
       MagneticForceStage& stage = *stages_[p];
       if (round == 1) {
         rep.patches[p] = stage.run(points[p], coupled, time);
@@ -181,9 +257,11 @@ MagneticPatchReport MagneticPatches::run(const std::vector<ParticleView>& points
     double change = 0;
     for (std::size_t p = 0; p < n; ++p) {
       double diff = 0, scale = 0;
+      const GridSpec& g = stages_[p]->grid();
+      const std::vector<Multipole> farBefore = farBlocks(moments_, p, g), farAfter = farBlocks(next, p, g);
       for (const Multipole& own : next[p]) {
-        if (own.dipole == Vec3d{}) continue;  // an empty block
-        const Vec3d before = farFieldOf(moments_, p, own.centre), after = farFieldOf(next, p, own.centre);
+        if (emptyMoment(own)) continue;
+        const Vec3d before = farFieldOf(farBefore, own.centre), after = farFieldOf(farAfter, own.centre);
         diff = std::max(diff, norm(after - before));
         scale = std::max(scale, norm(sources.field(own.centre, time) + after));
       }
@@ -208,7 +286,7 @@ MagneticPatchReport MagneticPatches::run(const std::vector<ParticleView>& points
 
 Vec3d MagneticPatches::farField(std::size_t p, const Vec3d& x) const {
   require(p < stages_.size(), "magnetic patches: no patch ", p, " (", stages_.size(), " patches)");
-  return moments_.size() == stages_.size() ? farFieldOf(moments_, p, x) : Vec3d{};
+  return moments_.size() == stages_.size() ? farFieldOf(farBlocks(moments_, p, stages_[p]->grid()), x) : Vec3d{};
 }
 
 TransferReport MagneticPatches::particleForces(std::size_t p, const ParticleView& points, Vec3d* out) const {
