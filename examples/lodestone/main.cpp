@@ -440,13 +440,16 @@ void mpmGridData(const MpmSolver& solver, DenseGrid<double>& mass, DenseGrid<Vec
   if (g.nodes().size() != s.nodeCount() || g.velocity().size() != s.nodeCount()) return;
   const Index3 lo = g.activeLo(), hi = g.activeHi();
   for (int k = lo.k; k < hi.k; ++k)
-    for (int j = lo.j; j < hi.j; ++j)
-      for (int i = lo.i; i < hi.i; ++i) {
+    for (int j = lo.j; j < hi.j; ++j) {
+      int first = 0, end = 0;  // every node outside the row's run is zero
+      g.activeRun(j, k, first, end);
+      for (int i = first; i < end; ++i) {
         const std::size_t n = s.index(i, j, k);
         if (!(g.nodes()[n].mass > 0)) continue;
         mass(i, j, k) = g.nodes()[n].mass;
         velocity(i, j, k) = g.velocity()[n];
       }
+    }
 }
 #endif
 

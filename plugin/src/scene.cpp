@@ -378,18 +378,37 @@ std::unique_ptr<MpmSolver> buildSolver(const Scene& scene, std::shared_ptr<MpmPa
 
 namespace {
 
-// Nodes of the MPM grid's box that the material's stencils reach when it
-// spans [lo, hi] (m); the whole grid when lo > hi (unknown).
-double mpmBoxNodes(const GridSpec& g, const Vec3d& lo, const Vec3d& hi) {
-  if (!(lo.x <= hi.x && lo.y <= hi.y && lo.z <= hi.z)) return double(g.nodeCount());
-  double nodes = 1;
-  const int dims[3] = {g.dims.i, g.dims.j, g.dims.k};
-  for (int a = 0; a < 3; ++a) {
-    // The stencils' base nodes, each reaching 3 nodes.
-    const double u0 = quadraticBaseFloor((lo[a] - g.origin[a]) / g.dx);
-    const double u1 = quadraticBaseFloor((hi[a] - g.origin[a]) / g.dx) + 3;
-    nodes *= std::max(0.0, std::min(double(dims[a]), u1) - std::max(0.0, u0));
+// Nodes of the MPM grid's runs (mpm/grid.h: per x-row, from the first to
+// the last node a stencil reaches) for material in the boxes [lo, hi] (m,
+// a point's box is the point): the stencil bases of each box fill their
+// rows of bins, whose node runs mpmNodeRuns gives as the grid takes them.
+double mpmRunNodes(const GridSpec& g, const std::vector<std::pair<Vec3d, Vec3d>>& boxes) {
+  const int bd[3] = {g.dims.i - 2, g.dims.j - 2, g.dims.k - 2};
+  const auto base = [&](double x, int a) {
+    return int(std::clamp(quadraticBaseFloor((x - g.origin[a]) / g.dx), 0.0, double(bd[a] - 1)));
+  };
+  int lo[3] = {bd[0], bd[1], bd[2]}, hi[3] = {-1, -1, -1};
+  for (const auto& [blo, bhi] : boxes)
+    for (int a = 0; a < 3; ++a) {
+      lo[a] = std::min(lo[a], base(blo[a], a));
+      hi[a] = std::max(hi[a], base(bhi[a], a));
+    }
+  if (hi[0] < lo[0]) return 0;
+  const int nbj = hi[1] - lo[1] + 1, nbk = hi[2] - lo[2] + 1;
+  std::vector<std::uint32_t> first(std::size_t(nbj) * std::size_t(nbk), std::uint32_t(bd[0])), end(first.size(), 0);
+  for (const auto& [blo, bhi] : boxes) {
+    const int i0 = base(blo.x, 0), i1 = base(bhi.x, 0) + 1;
+    for (int k = base(blo.z, 2); k <= base(bhi.z, 2); ++k)
+      for (int j = base(blo.y, 1); j <= base(bhi.y, 1); ++j) {
+        const std::size_t row = std::size_t(j - lo[1]) + std::size_t(nbj) * std::size_t(k - lo[2]);
+        first[row] = std::min(first[row], std::uint32_t(i0));
+        end[row] = std::max(end[row], std::uint32_t(i1));
+      }
   }
+  std::vector<std::int32_t> runFirst(std::size_t(nbj + 2) * std::size_t(nbk + 2)), runEnd(runFirst.size());
+  mpmNodeRuns(first.data(), end.data(), nbj, nbk, runFirst.data(), runEnd.data());
+  double nodes = 0;
+  for (std::size_t q = 0; q < runFirst.size(); ++q) nodes += double(runEnd[q] - runFirst[q]);
   return nodes;
 }
 
@@ -397,28 +416,21 @@ double mpmBoxNodes(const GridSpec& g, const Vec3d& lo, const Vec3d& hi) {
 
 MemoryCounts sceneMemory(const Scene& scene, const MpmSolver* solver) {
   MemoryCounts c;
-  // The MPM grid holds memory for the box the material's stencils reach
-  // (mpm/grid.h): the material's box now (the bodies, or the solver's
-  // particles), the whole grid when emitters will add material.
-  const double inf = std::numeric_limits<double>::infinity();
-  Vec3d lo{inf, inf, inf}, hi{-inf, -inf, -inf};
-  const auto include = [&](const Vec3d& a, const Vec3d& b) {
-    for (int k = 0; k < 3; ++k) {
-      lo[k] = std::min(lo[k], a[k]);
-      hi[k] = std::max(hi[k], b[k]);
-    }
-  };
+  // The MPM grid holds memory for the runs of nodes the material's stencils
+  // reach (mpm/grid.h): of the material now (the bodies' boxes, or the
+  // solver's particles), the whole grid when emitters will add material.
+  std::vector<std::pair<Vec3d, Vec3d>> material;
   if (solver) {
-    for (const Vec3d& x : solver->particles().x) include(x, x);
+    for (const Vec3d& x : solver->particles().x) material.emplace_back(x, x);
   } else {
     for (const SceneBody& b : scene.bodies) {
       Vec3d blo, bhi;
       b.shape.worldBounds(blo, bhi);
-      include(blo, bhi);
+      material.emplace_back(blo, bhi);
     }
   }
   const bool emitters = solver ? solver->emitterCount() > 0 : !scene.emitters.empty();
-  c.mpmNodes = emitters ? double(scene.settings.grid.nodeCount()) : mpmBoxNodes(scene.settings.grid, lo, hi);
+  c.mpmNodes = emitters ? double(scene.settings.grid.nodeCount()) : mpmRunNodes(scene.settings.grid, material);
   // With a partition: this process's part (its window of the grid, which the
   // sums over the processes write whole, and its particles).
   const MpmPartition* split = solver ? solver->partition() : nullptr;

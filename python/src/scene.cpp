@@ -65,7 +65,7 @@ void bindScene(py::module_& m) {
           },
           "The memory a run of the scene needs at its largest, bytes, by part (docs/cli.md, \"Memory\"): "
           "total_bytes, mpm_grid_bytes, field_solve_bytes, particles_bytes, previews_bytes (frame previews), "
-          "the counts behind them (mpm_nodes: the MPM grid's nodes in the box the material reaches; "
+          "the counts behind them (mpm_nodes: the MPM grid's nodes in the runs of each x-row the material reaches; "
           "field_solve_nodes; particles: with all that emitters add by the last frame) and limit_bytes (this machine's memory, a lower control-group limit, or "
           "LODESTONE_MEMORY_LIMIT_GIB). Without what this process already holds; builds the solver to count.")
       .def("build_solver", [](const Scene& s) { return std::shared_ptr<MpmSolver>(plugin::buildSolver(s)); },

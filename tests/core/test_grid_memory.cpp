@@ -1,6 +1,6 @@
 // Grid memory follows what is written: PageArray takes memory only for the
 // pages written and hands them back when zeroed, and the MPM grid's memory
-// follows the box its particles reach, not the domain's box. Measured on the
+// follows the rows of nodes its particles reach, not the domain's box. Measured on the
 // process's resident set (/proc/self/statm), which pages only read do not
 // enter. The MPM solver's whole substep is checked the same way.
 #include <gtest/gtest.h>
@@ -166,4 +166,63 @@ TEST(MpmGridMemory, AJellyBallFlyingThroughALargeDomainKeepsItsMemory) {
   if (!kResidentSetMeasures) return;
   EXPECT_LT(highest, atTen + 4.0) << "memory grew as the ball moved";
   EXPECT_LT(highest, 60.0);
+}
+
+TEST(MpmGridMemory, TwoBallsFarApartCostTheirOwnRowsAndDepositAsAlone) {
+  LODESTONE_SKIP_UNDER_STRICT_OVERCOMMIT();
+  // Two balls of 4,224 particles at opposite corners of a 641^3 grid: their
+  // box is the whole grid (15 GiB of node, velocity and bin arrays), but
+  // each x-row holds memory only for its run of nodes (mpm/grid.h). The
+  // node data match those of each ball deposited alone on its own grid,
+  // value for value, and nothing between the balls is written.
+  const GridSpec g{{0.0, 0.0, 0.0}, 0.01, {641, 641, 641}};
+  const std::vector<MpmMaterial> mats = {viscousFluid(0.1, 1e5, 1000.0)};
+  const auto ball = [](const Vec3d& c, MpmParticles& p) {
+    const double h = 0.005;
+    for (double z = -0.05; z < 0.05; z += h)
+      for (double y = -0.05; y < 0.05; y += h)
+        for (double x = -0.05; x < 0.05; x += h)
+          if (x * x + y * y + z * z < 0.05 * 0.05) p.add(c + Vec3d{x, y, z}, {0.1, -0.2, 0.3}, 1e-3, h * h * h, 0.0, 0);
+  };
+  const Vec3d a{0.2, 0.2, 0.2}, b{6.2, 6.2, 6.2};
+  const double r0 = residentMiB();
+  MpmGrid both(g);
+  MpmParticles p;
+  ball(a, p);
+  ball(b, p);
+  both.particleToGrid(p, mats, 1e-4);
+  const double used = residentMiB() - r0;
+  std::printf("two balls at opposite corners of a 641^3 grid: %.1f MiB\n", used);
+  EXPECT_LT(both.activeLo().i, 20);
+  EXPECT_GT(both.activeHi().i, 620);
+  int first = 0, end = 0;
+  both.activeRun(320, 320, first, end);  // a row between the balls
+  EXPECT_GE(first, end);
+  for (const Vec3d& c : {a, b}) {
+    MpmGrid alone(g);
+    MpmParticles q;
+    ball(c, q);
+    alone.particleToGrid(q, mats, 1e-4);
+    const Index3 lo = alone.activeLo(), hi = alone.activeHi();
+    std::size_t differ = 0;
+    for (int k = lo.k; k < hi.k; ++k)
+      for (int j = lo.j; j < hi.j; ++j) {
+        both.activeRun(j, k, first, end);
+        int f = 0, e = 0;
+        alone.activeRun(j, k, f, e);
+        EXPECT_EQ(first, f);
+        EXPECT_EQ(end, e);
+        for (int i = lo.i; i < hi.i; ++i) {
+          const std::size_t n = g.index(i, j, k);
+          differ += !(both.nodes()[n].mass == alone.nodes()[n].mass &&
+                      both.nodes()[n].momentum == alone.nodes()[n].momentum);
+        }
+      }
+    EXPECT_EQ(differ, 0u);
+  }
+  if (!kResidentSetMeasures) return;
+  // Each ball's 14^3 nodes lie on 14^2 rows of a page or two per array;
+  // the rest is the particles (3.4 MB) and the runs' bookkeeping, about 24
+  // bytes per row of the box (625^2 rows: 9 MB), against 15 GiB for the box.
+  EXPECT_LT(used, 30.0) << "the grid held the box between the balls";
 }

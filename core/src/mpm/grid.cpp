@@ -110,6 +110,12 @@ void atomicMin(std::atomic<std::size_t>& a, std::size_t v) {
   }
 }
 
+void atomicMax(std::atomic<std::uint32_t>& a, std::uint32_t v) {
+  std::uint32_t cur = a.load(std::memory_order_relaxed);
+  while (v > cur && !a.compare_exchange_weak(cur, v, std::memory_order_relaxed)) {
+  }
+}
+
 /// The constants of one material the kernels need.
 struct MaterialParams {
   bool fluid = false;
@@ -155,16 +161,18 @@ struct DepositKernel {
   const Vec3d* particleForces = nullptr;  // N per particle, or none
   MpmNode* nodes = nullptr;
   const std::uint32_t *sorted = nullptr, *offsets = nullptr;  // the binning
+  const std::uint32_t *rowFirst = nullptr, *rowEnd = nullptr;  // per row of bins of the box
+  const std::size_t* rowStart = nullptr;
   Index3 binLo, binDims;
 
   // Deposits the particles of the bins of row (bj, bk), bins in increasing
   // bi, each in increasing particle index. Inlined into each instruction-set
   // variant below.
   __attribute__((always_inline)) inline void operator()(int bj, int bk) const {
-    const std::size_t firstBin =
-        std::size_t(binDims.i) * (std::size_t(bj - binLo.j) + std::size_t(binDims.j) * std::size_t(bk - binLo.k));
-    for (int bi = binLo.i; bi < binLo.i + binDims.i; ++bi) {
-      const std::size_t bin = firstBin + std::size_t(bi - binLo.i);
+    const std::size_t row = std::size_t(bj - binLo.j) + std::size_t(binDims.j) * std::size_t(bk - binLo.k);
+    const int first = int(rowFirst[row]), last = int(rowEnd[row]);
+    for (int bi = first; bi < last; ++bi) {
+      const std::size_t bin = rowStart[row] + std::size_t(bi - first);
       const std::uint32_t* it = sorted + offsets[bin];
       const std::uint32_t* end = sorted + offsets[bin + 1];
       if (it == end) continue;
@@ -336,16 +344,37 @@ struct BinKernel {
   std::uint64_t* key = nullptr;
   std::uint32_t* rank = nullptr;
   std::atomic<std::uint32_t>* binSize = nullptr;
+  std::atomic<std::uint32_t>*rowLow = nullptr, *rowHigh = nullptr;  // per row of bins: bd.i - first, end
   std::atomic<std::size_t>* firstBad = nullptr;
 
-  // Bases, bin slots and the box of bases of particles [begin, end). Inlined
-  // into each instruction-set variant (runKernel).
+  // Bases, bin slots, each row's extent of bins and the box of bases of
+  // particles [begin, end). Inlined into each instruction-set variant
+  // (runKernel).
   __attribute__((always_inline)) inline void operator()(std::size_t begin, std::size_t end, BaseBox& acc) const {
     std::size_t runFlat = 0, runStart = 0, runLength = 0;
+    std::size_t extentRow = kNone;
+    std::uint32_t extentLo = 0, extentHi = 0;  // bins [extentLo, extentHi) of row extentRow
+    auto endExtent = [&] {
+      if (extentRow == kNone) return;
+      atomicMax(rowLow[extentRow], std::uint32_t(bd.i) - extentLo);
+      atomicMax(rowHigh[extentRow], extentHi);
+      extentRow = kNone;
+    };
     auto endRun = [&] {
       if (runLength == 0) return;
       const std::uint32_t first = binSize[runFlat].fetch_add(std::uint32_t(runLength), std::memory_order_relaxed);
       for (std::size_t q = 0; q < runLength; ++q) rank[runStart + q] = first + std::uint32_t(q);
+      const std::size_t row = runFlat / std::size_t(bd.i);
+      const std::uint32_t bi = std::uint32_t(runFlat % std::size_t(bd.i));
+      if (row != extentRow) {
+        endExtent();
+        extentRow = row;
+        extentLo = bi;
+        extentHi = bi + 1;
+      } else {
+        extentLo = std::min(extentLo, bi);
+        extentHi = std::max(extentHi, bi + 1);
+      }
       runLength = 0;
     };
     for (std::size_t p = begin; p != end; ++p) {
@@ -372,10 +401,34 @@ struct BinKernel {
       acc.add(bi, bj, bk);
     }
     endRun();
+    endExtent();
   }
 };
 
 }  // namespace
+
+void mpmNodeRuns(const std::uint32_t* rowFirst, const std::uint32_t* rowEnd, int nbj, int nbk, std::int32_t* runFirst,
+                 std::int32_t* runEnd) {
+  const int nj = nbj + 2, nk = nbk + 2;
+  const std::size_t nodeRows = std::size_t(nj) * std::size_t(nk);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nodeRows, 256), [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t q = r.begin(); q != r.end(); ++q) {
+      const int jj = int(q % std::size_t(nj)), kk = int(q / std::size_t(nj));
+      int lo = std::numeric_limits<int>::max(), hi = std::numeric_limits<int>::min();
+      for (int dk = 0; dk < 3; ++dk)
+        for (int dj = 0; dj < 3; ++dj) {
+          const int bj = jj - dj, bk = kk - dk;
+          if (bj < 0 || bj >= nbj || bk < 0 || bk >= nbk) continue;
+          const std::size_t row = std::size_t(bj) + std::size_t(nbj) * std::size_t(bk);
+          if (rowEnd[row] <= rowFirst[row]) continue;
+          lo = std::min(lo, int(rowFirst[row]));
+          hi = std::max(hi, int(rowEnd[row]) + 2);
+        }
+      runFirst[q] = lo < hi ? lo : 0;
+      runEnd[q] = lo < hi ? hi : 0;
+    }
+  });
+}
 
 MpmGrid::MpmGrid(const GridSpec& spec) : spec_(spec) {
   spec_.validate("MPM grid");
@@ -391,6 +444,8 @@ MpmGrid::MpmGrid(const GridSpec& spec) : spec_(spec) {
   nodes_ = PageArray<MpmNode>(spec_.nodeCount());
   velocity_ = PageArray<Vec3d>(spec_.nodeCount());
   binSize_ = PageArray<std::uint32_t>(nb);
+  rowLow_ = PageArray<std::uint32_t>(std::size_t(baseDims_.j) * std::size_t(baseDims_.k));
+  rowHigh_ = PageArray<std::uint32_t>(std::size_t(baseDims_.j) * std::size_t(baseDims_.k));
 }
 
 static_assert(sizeof(std::atomic<std::uint32_t>) == sizeof(std::uint32_t) &&
@@ -423,25 +478,25 @@ namespace {
 
 bool emptyBox(Index3 lo, Index3 hi) { return lo.i >= hi.i || lo.j >= hi.j || lo.k >= hi.k; }
 
-// Zeroes the elements of box [lo, hi) that lie outside box [keepLo, keepHi)
-// in an array over a grid of `dims` (x fastest). Contiguous runs are merged,
-// and since every element outside the box to keep is zero or about to be, a
-// page holding nothing of that box goes back to the system whole.
-template <typename T>
-void zeroOutside(PageArray<T>& a, Index3 dims, Index3 lo, Index3 hi, Index3 keepLo, Index3 keepHi) {
+// Zeroes the pieces [i0, i1) of each row (j, k) of box [lo, hi) that
+// `zeroRow(j, k, zero)` passes to zero(i0, i1), in an array over a grid of
+// `dims` (x fastest); `keep(j, k, f, e)` gives the run [f, e) of row (j, k)
+// whose pages must stay. Contiguous runs are merged, and since every element
+// outside what is kept is zero or about to be, a page holding nothing kept
+// goes back to the system whole.
+template <typename T, typename ZeroRow, typename Keep>
+void zeroRowPieces(PageArray<T>& a, Index3 dims, Index3 lo, Index3 hi, const ZeroRow& zeroRow, const Keep& keep) {
   if (a.empty() || emptyBox(lo, hi)) return;
-  const bool keep = !emptyBox(keepLo, keepHi);
   const std::size_t rowLength = std::size_t(dims.i), plane = rowLength * std::size_t(dims.j);
-  // Whether elements [e0, e1) all lie outside the box to keep.
+  // Whether elements [e0, e1) all lie outside what is kept.
   const auto outsideKeep = [&](std::size_t e0, std::size_t e1) {
-    if (!keep) return true;
     for (std::size_t e = e0; e < e1;) {
       const std::size_t i = e % rowLength, j = (e / rowLength) % std::size_t(dims.j), k = e / plane;
       const std::size_t rowEnd = std::min(e1, e - i + rowLength);
       const std::size_t iEnd = i + (rowEnd - e);
-      if (int(j) >= keepLo.j && int(j) < keepHi.j && int(k) >= keepLo.k && int(k) < keepHi.k &&
-          int(i) < keepHi.i && int(iEnd) > keepLo.i)
-        return false;
+      int f = 0, l = 0;
+      keep(int(j), int(k), f, l);
+      if (f < l && int(i) < l && int(iEnd) > f) return false;
       e = rowEnd;
     }
     return true;
@@ -458,33 +513,81 @@ void zeroOutside(PageArray<T>& a, Index3 dims, Index3 lo, Index3 hi, Index3 keep
     runStart = first;
     runEnd = first + count;
   };
-  const auto at = [&](int i, int j, int k) {
-    return std::size_t(i) + std::size_t(dims.i) * (std::size_t(j) + std::size_t(dims.j) * std::size_t(k));
-  };
   for (int k = lo.k; k < hi.k; ++k)
     for (int j = lo.j; j < hi.j; ++j) {
-      const bool rowKept = keep && j >= keepLo.j && j < keepHi.j && k >= keepLo.k && k < keepHi.k;
-      if (!rowKept) {
-        zero(at(lo.i, j, k), std::size_t(hi.i - lo.i));
-        continue;
-      }
-      const int a0 = std::min(hi.i, std::max(lo.i, keepLo.i)), a1 = std::max(lo.i, std::min(hi.i, keepHi.i));
-      zero(at(lo.i, j, k), std::size_t(a0 - lo.i));
-      zero(at(a1, j, k), std::size_t(hi.i - a1));
+      const std::size_t row = std::size_t(j) * rowLength + std::size_t(k) * plane;
+      zeroRow(j, k, [&](int i0, int i1) {
+        if (i1 > i0) zero(row + std::size_t(i0), std::size_t(i1 - i0));
+      });
     }
   flush();
 }
 
 }  // namespace
 
-void MpmGrid::releaseOutside(Index3 lo, Index3 hi, Index3 keepLo, Index3 keepHi) {
-  if (emptyBox(lo, hi) || (lo == keepLo && hi == keepHi)) return;
-  zeroOutside(nodes_, spec_.dims, lo, hi, keepLo, keepHi);
-  zeroOutside(velocity_, spec_.dims, lo, hi, keepLo, keepHi);
-  zeroOutside(colour_, spec_.dims, lo, hi, keepLo, keepHi);
-  // The bins: base nodes [lo, hi - 2) of each box (all zero between calls).
-  const auto less2 = [](Index3 a) { return Index3{a.i - 2, a.j - 2, a.k - 2}; };
-  zeroOutside(binSize_, baseDims_, lo, less2(hi), keepLo, emptyBox(keepLo, keepHi) ? keepLo : less2(keepHi));
+void MpmGrid::zeroRuns() {
+  const Index3 lo = activeLo_, hi = activeHi_;
+  if (emptyBox(lo, hi)) return;
+  const int nj = hi.j - lo.j;
+  const std::size_t rows = std::size_t(nj) * std::size_t(hi.k - lo.k);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, rows, 16), [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t row = r.begin(); row != r.end(); ++row) {
+      const int first = runFirst_[row], end = runEnd_[row];
+      if (first >= end) continue;
+      const std::size_t at = spec_.index(first, lo.j + int(row % std::size_t(nj)), lo.k + int(row / std::size_t(nj)));
+      std::fill(nodes_.begin() + std::ptrdiff_t(at), nodes_.begin() + std::ptrdiff_t(at + std::size_t(end - first)),
+                MpmNode{});
+      std::fill(velocity_.begin() + std::ptrdiff_t(at),
+                velocity_.begin() + std::ptrdiff_t(at + std::size_t(end - first)), Vec3d{});
+    }
+  });
+}
+
+void MpmGrid::releaseOutsideRuns(Index3 lo, Index3 hi, const std::vector<std::int32_t>& first,
+                                 const std::vector<std::int32_t>& end) {
+  if (emptyBox(lo, hi)) return;
+  const int nj = hi.j - lo.j;
+  const auto keep = [&](int j, int k, int& f, int& e) { activeRun(j, k, f, e); };
+  // The previous run of each row less the current one (up to two pieces).
+  const auto zeroRow = [&](int j, int k, const auto& zero) {
+    const std::size_t row = std::size_t(j - lo.j) + std::size_t(nj) * std::size_t(k - lo.k);
+    const int a = first[row], b = end[row];
+    if (a >= b) return;
+    int c = 0, d = 0;
+    activeRun(j, k, c, d);
+    if (c >= d) {
+      zero(a, b);
+      return;
+    }
+    zero(a, std::min(b, c));
+    zero(std::max(a, d), b);
+  };
+  zeroRowPieces(nodes_, spec_.dims, lo, hi, zeroRow, keep);
+  zeroRowPieces(velocity_, spec_.dims, lo, hi, zeroRow, keep);
+  zeroRowPieces(colour_, spec_.dims, lo, hi, zeroRow, keep);
+}
+
+void MpmGrid::releaseBinsOutside(Index3 lo, Index3 hi, Index3 keepLo, Index3 keepHi) {
+  // Every bin size is zero between calls: only pages go back.
+  const bool kept = !emptyBox(keepLo, keepHi);
+  const auto keep = [&](int j, int k, int& f, int& e) {
+    f = e = 0;
+    if (kept && j >= keepLo.j && j < keepHi.j && k >= keepLo.k && k < keepHi.k) {
+      f = keepLo.i;
+      e = keepHi.i;
+    }
+  };
+  const auto zeroRow = [&](int j, int k, const auto& zero) {
+    int c = 0, d = 0;
+    keep(j, k, c, d);
+    if (c >= d) {
+      zero(lo.i, hi.i);
+      return;
+    }
+    zero(lo.i, std::min(hi.i, c));
+    zero(std::max(lo.i, d), hi.i);
+  };
+  zeroRowPieces(binSize_, baseDims_, lo, hi, zeroRow, keep);
 }
 
 void MpmGrid::bin(const MpmParticles& particles, std::size_t materialCount) {
@@ -493,8 +596,15 @@ void MpmGrid::bin(const MpmParticles& particles, std::size_t materialCount) {
   // Invariant: every bin size is zero between calls (pass 2 resets the
   // ones it used), so only the bins of the active box are ever touched.
   std::atomic<std::uint32_t>* binSize = binSizes();
+  std::atomic<std::uint32_t>* rowLow = reinterpret_cast<std::atomic<std::uint32_t>*>(rowLow_.data());
+  std::atomic<std::uint32_t>* rowHigh = reinterpret_cast<std::atomic<std::uint32_t>*>(rowHigh_.data());
   key_.resize(np);
   rank_.resize(np);
+  // The runs of the previous P2G, which particleToGrid hands back where the new ones do not reach.
+  prevRunFirst_.swap(runFirst_);
+  prevRunEnd_.swap(runEnd_);
+  runFirst_.clear();
+  runEnd_.clear();
 
   const Vec3d* X = particles.x.data();
   const std::uint32_t* mat = particles.material.data();
@@ -508,7 +618,8 @@ void MpmGrid::bin(const MpmParticles& particles, std::size_t materialCount) {
   // (min/max are exact, so the reduction is deterministic). A run of
   // consecutive particles in one bin (the usual case once the particles are
   // ordered by cell) takes its slots with one atomic addition.
-  const BinKernel kernel{X, mat, materialCount, o, invDx, bd, key_.data(), rank_.data(), binSize, &firstBad};
+  const BinKernel kernel{X,         mat,         materialCount, o,      invDx,  bd, key_.data(), rank_.data(),
+                        binSize,   rowLow,      rowHigh,       &firstBad};
   const BaseBox box = tbb::parallel_reduce(
       tbb::blocked_range<std::size_t>(0, np, 2048), BaseBox{},
       [&](const tbb::blocked_range<std::size_t>& r, BaseBox acc) {
@@ -521,9 +632,17 @@ void MpmGrid::bin(const MpmParticles& particles, std::size_t materialCount) {
       });
 
   if (const std::size_t bad = firstBad.load(); bad != kNone) {
-    // Restore the invariant before throwing.
+    // Restore the invariants before throwing: bin sizes and row extents
+    // zero, and every node zero (no runs).
     binSize_.clear();
+    rowLow_.clear();
+    rowHigh_.clear();
+    nodes_.clear();
+    velocity_.clear();
+    colour_.clear();
     key_.clear();
+    prevRunFirst_.clear();
+    prevRunEnd_.clear();
     activeLo_ = activeHi_ = binLo_ = binDims_ = {0, 0, 0};
     const Vec3d x = X[bad];
     if (mat[bad] >= materialCount)
@@ -551,25 +670,48 @@ void MpmGrid::bin(const MpmParticles& particles, std::size_t materialCount) {
   activeLo_ = binLo_;
   activeHi_ = {box.hi[0] + 3, box.hi[1] + 3, box.hi[2] + 3};
 
-  // Pass 2: offsets of the bins of the box, x-rows in order (integer prefix
-  // sums: order-free); the final pass also resets the sizes it read.
-  const std::size_t nbx = std::size_t(binDims_.i);
+  // Each row's extent of bins (pass 1's atomics, reset here: zero between
+  // calls) and the first offset slot of its bins.
   const std::size_t rows = std::size_t(binDims_.j) * std::size_t(binDims_.k);
-  const std::size_t nbBox = nbx * rows;
-  offsets_.resize(nbBox + 1);
+  rowFirst_.resize(rows);
+  rowEnd_.resize(rows);
+  rowStart_.resize(rows + 1);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, rows, 256), [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t row = r.begin(); row != r.end(); ++row) {
+      const std::size_t bj = std::size_t(binLo_.j) + row % std::size_t(binDims_.j);
+      const std::size_t bk = std::size_t(binLo_.k) + row / std::size_t(binDims_.j);
+      const std::size_t at = bj + std::size_t(bd.j) * bk;
+      const std::uint32_t low = rowLow[at].load(std::memory_order_relaxed), high = rowHigh[at].load(std::memory_order_relaxed);
+      rowFirst_[row] = high > 0 ? std::uint32_t(bd.i) - low : 0;
+      rowEnd_[row] = high;
+      if (high > 0) {
+        rowLow[at].store(0, std::memory_order_relaxed);
+        rowHigh[at].store(0, std::memory_order_relaxed);
+      }
+    }
+  });
+  std::size_t slots = 0;
+  for (std::size_t row = 0; row < rows; ++row) {
+    rowStart_[row] = slots;
+    slots += rowEnd_[row] - rowFirst_[row];
+  }
+  rowStart_[rows] = slots;
+
+  // Pass 2: offsets of the rows' bins, x-rows in order (integer prefix
+  // sums: order-free); the final pass also resets the sizes it read.
+  offsets_.resize(slots + 1);
   tbb::parallel_scan(
       tbb::blocked_range<std::size_t>(0, rows, 64), std::uint32_t(0),
       [&](const tbb::blocked_range<std::size_t>& r, std::uint32_t sum, bool isFinal) {
         for (std::size_t row = r.begin(); row != r.end(); ++row) {
           const std::size_t bj = std::size_t(binLo_.j) + row % std::size_t(binDims_.j);
           const std::size_t bk = std::size_t(binLo_.k) + row / std::size_t(binDims_.j);
-          std::atomic<std::uint32_t>* sizes =
-              binSize + std::size_t(binLo_.i) + std::size_t(bd.i) * (bj + std::size_t(bd.j) * bk);
-          std::uint32_t* off = offsets_.data() + row * nbx;
-          for (std::size_t i = 0; i < nbx; ++i) {
+          std::atomic<std::uint32_t>* sizes = binSize + std::size_t(bd.i) * (bj + std::size_t(bd.j) * bk);
+          std::uint32_t* off = offsets_.data() + rowStart_[row];
+          for (std::size_t i = rowFirst_[row]; i < rowEnd_[row]; ++i) {
             const std::uint32_t n = sizes[i].load(std::memory_order_relaxed);
             if (isFinal) {
-              off[i] = sum;
+              off[i - rowFirst_[row]] = sum;
               if (n != 0) sizes[i].store(0, std::memory_order_relaxed);  // empty bins' pages stay unwritten
             }
             sum += n;
@@ -578,17 +720,22 @@ void MpmGrid::bin(const MpmParticles& particles, std::size_t materialCount) {
         return sum;
       },
       std::plus<std::uint32_t>());
-  offsets_[nbBox] = std::uint32_t(np);
+  offsets_[slots] = std::uint32_t(np);
+
+  // The node runs of the active box's rows.
+  runFirst_.assign(std::size_t(binDims_.j + 2) * std::size_t(binDims_.k + 2), 0);
+  runEnd_.assign(runFirst_.size(), 0);
+  mpmNodeRuns(rowFirst_.data(), rowEnd_.data(), binDims_.j, binDims_.k, runFirst_.data(), runEnd_.data());
 
   // Pass 3: scatter indices into their bins.
   sorted_.resize(np);
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, np, 8192), [&](const tbb::blocked_range<std::size_t>& r) {
-    for (std::size_t p = r.begin(); p != r.end(); ++p) sorted_[offsets_[boxKey(key_[p])] + rank_[p]] = std::uint32_t(p);
+    for (std::size_t p = r.begin(); p != r.end(); ++p) sorted_[offsets_[binIndex(key_[p])] + rank_[p]] = std::uint32_t(p);
   });
 
   // Pass 4: ascending particle index within each bin (bins are small:
   // insertion sort; std::sort for crowded ones).
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nbBox, 4096), [&](const tbb::blocked_range<std::size_t>& r) {
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, slots, 4096), [&](const tbb::blocked_range<std::size_t>& r) {
     for (std::size_t b = r.begin(); b != r.end(); ++b) {
       std::uint32_t* first = sorted_.data() + offsets_[b];
       std::uint32_t* last = sorted_.data() + offsets_[b + 1];
@@ -642,19 +789,23 @@ void MpmGrid::particleToGrid(const MpmParticles& particles, const std::vector<Mp
   particles.checkSizes();
   const auto t0 = Clock::now();
   const Index3 prevLo = activeLo_, prevHi = activeHi_;
+  const Index3 prevBinLo = binLo_, prevBinHi{binLo_.i + binDims_.i, binLo_.j + binDims_.j, binLo_.k + binDims_.k};
+  const bool wasWhole = wholeGrid_;
+  wholeGrid_ = false;
   bin(particles, materials.size());
   binningSeconds_ = std::chrono::duration<double>(Clock::now() - t0).count();
 
-  // Zero the new active box and hand back what the previous one held outside
-  // it: everything outside the active box stays zero, and the memory follows
-  // the box. A grid whose caller writes it whole after each P2G (a
-  // partition's sums) is zeroed whole and keeps its pages.
-  if (wholeGrid_) {
+  // Zero the new runs and hand back what the previous ones held outside
+  // them: every node outside the runs stays zero, and the memory follows
+  // the material row by row. A grid whose caller wrote it whole after the
+  // last P2G (a partition's sums) is zeroed whole and keeps its pages.
+  if (wasWhole) {
     zeroBox({0, 0, 0}, spec_.dims);
-    wholeGrid_ = false;
   } else {
-    zeroBox(activeLo_, activeHi_);
-    releaseOutside(prevLo, prevHi, activeLo_, activeHi_);
+    zeroRuns();
+    releaseOutsideRuns(prevLo, prevHi, prevRunFirst_, prevRunEnd_);
+    releaseBinsOutside(prevBinLo, prevBinHi, binLo_,
+                       {binLo_.i + binDims_.i, binLo_.j + binDims_.j, binLo_.k + binDims_.k});
   }
   if (particles.empty()) {
     // The colour sum is collective: a process without particles adds zeros.
@@ -724,6 +875,9 @@ void MpmGrid::particleToGrid(const MpmParticles& particles, const std::vector<Mp
   kernel.nodes = nodes;
   kernel.sorted = sorted_.data();
   kernel.offsets = offsets_.data();
+  kernel.rowFirst = rowFirst_.data();
+  kernel.rowEnd = rowEnd_.data();
+  kernel.rowStart = rowStart_.data();
   kernel.binLo = binLo_;
   kernel.binDims = binDims_;
   forEachRow([&](int bj, int bk) { runKernel(kernel, bj, bk); });
@@ -749,21 +903,22 @@ void MpmGrid::computeCapillaryStress(const MpmParticles& particles, const std::v
   if (colourSum_) {
     std::fill(colour_.begin(), colour_.end(), 0.0);
   } else {
-    const int nj = activeHi_.j - activeLo_.j, ni = activeHi_.i - activeLo_.i;
+    const int nj = activeHi_.j - activeLo_.j;
     const std::size_t rows = std::size_t(nj) * std::size_t(activeHi_.k - activeLo_.k);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, rows, 16), [&](const tbb::blocked_range<std::size_t>& r) {
       for (std::size_t row = r.begin(); row != r.end(); ++row) {
         const int j = activeLo_.j + int(row % std::size_t(nj));
         const int k = activeLo_.k + int(row / std::size_t(nj));
-        std::fill_n(colour + spec_.index(activeLo_.i, j, k), ni, 0.0);
+        if (runEnd_[row] > runFirst_[row])
+          std::fill_n(colour + spec_.index(runFirst_[row], j, k), runEnd_[row] - runFirst_[row], 0.0);
       }
     });
   }
   forEachRow([&](int bj, int bk) {
-    const std::size_t firstBin =
-        std::size_t(binDims_.i) * (std::size_t(bj - binLo_.j) + std::size_t(binDims_.j) * std::size_t(bk - binLo_.k));
-    for (int bi = binLo_.i; bi < binLo_.i + binDims_.i; ++bi) {
-      const std::size_t bin = firstBin + std::size_t(bi - binLo_.i);
+    const std::size_t row = std::size_t(bj - binLo_.j) + std::size_t(binDims_.j) * std::size_t(bk - binLo_.k);
+    const int first = int(rowFirst_[row]), last = int(rowEnd_[row]);
+    for (int bi = first; bi < last; ++bi) {
+      const std::size_t bin = rowStart_[row] + std::size_t(bi - first);
       double* corner = colour + spec_.index(bi, bj, bk);
       for (std::uint32_t s = offsets_[bin]; s != offsets_[bin + 1]; ++s) {
         const std::size_t p = sorted_[s];

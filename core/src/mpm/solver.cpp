@@ -28,6 +28,8 @@ namespace {
 using Clock = std::chrono::steady_clock;
 
 // Whether every node of `inner` is a node of `outer` (same lattice).
+constexpr std::size_t kNoNode = ~std::size_t(0);
+
 bool gridContains(const GridSpec& outer, const GridSpec& inner) {
   for (int a = 0; a < 3; ++a) {
     const double lo = (inner.origin[a] - outer.origin[a]) / outer.dx;
@@ -678,7 +680,9 @@ void MpmSolver::gridUpdate(double dt, MpmStepReport& rep) {
       const int j = lo.j + int(row % std::size_t(nj));
       const int k = lo.k + int(row / std::size_t(nj));
       Vec3d impulse{};
-      for (int i = lo.i; i < hi.i; ++i) {
+      int first = 0, end = 0;  // the row's run: every other node is zero (mpm/grid.h)
+      grid_.activeRun(j, k, first, end);
+      for (int i = first; i < end; ++i) {
         const std::size_t n = w.index(i, j, k);
         const double m = nodes[n].mass;
         if (!(m > 0)) {
@@ -747,21 +751,26 @@ void MpmSolver::checkFiniteGrid(const char* where) const {
   const PageArray<Vec3d>& vel = grid_.velocity();
   const Vec3d* fmag =
       !partition_ && sameGrid_ && haveMagneticForce_ && !magneticForce_.empty() ? magneticForce_.data() : nullptr;
-  // The active box only: nodes outside it are zero (mpm/grid.h).
+  // The runs of the active box only: every other node is zero (mpm/grid.h).
   const Index3 lo = grid_.activeLo(), hi = grid_.activeHi();
   if (lo.i >= hi.i || lo.j >= hi.j || lo.k >= hi.k) return;
-  const std::size_t bi = std::size_t(hi.i - lo.i), bj = std::size_t(hi.j - lo.j);
-  const std::size_t boxNodes = bi * bj * std::size_t(hi.k - lo.k);
-  const auto node = [&](std::size_t b) {
-    return g.index(lo.i + int(b % bi), lo.j + int((b / bi) % bj), lo.k + int(b / (bi * bj)));
-  };
-  const std::size_t b = firstBad(boxNodes, [&](std::size_t q) {
-    const std::size_t i = node(q);
+  const std::size_t nj = std::size_t(hi.j - lo.j), rows = nj * std::size_t(hi.k - lo.k);
+  const auto bad = [&](std::size_t i) {
     return !std::isfinite(nodes[i].mass) || !isFinite(nodes[i].momentum) || !isFinite(vel[i]) ||
            (fmag && !isFinite(fmag[i]));
-  });
-  if (b == boxNodes) return;
-  const std::size_t n = node(b);
+  };
+  // The first bad node of a row (its index), or none.
+  const auto firstInRow = [&](std::size_t row) -> std::size_t {
+    const int j = lo.j + int(row % nj), k = lo.k + int(row / nj);
+    int first = 0, end = 0;
+    grid_.activeRun(j, k, first, end);
+    for (int i = first; i < end; ++i)
+      if (bad(g.index(i, j, k))) return g.index(i, j, k);
+    return kNoNode;
+  };
+  const std::size_t row = firstBad(rows, [&](std::size_t r) { return firstInRow(r) != kNoNode; });
+  if (row == rows) return;
+  const std::size_t n = firstInRow(row);
   const char* what = !std::isfinite(nodes[n].mass)      ? "mass (kg)"
                      : !isFinite(nodes[n].momentum)      ? "momentum (kg m/s)"
                      : !isFinite(vel[n])                 ? "velocity (m/s)"

@@ -86,6 +86,15 @@ struct GridToParticleReport {
 /// this, and fewer particles: its binning counts them in 32 bits.
 constexpr std::uint64_t kMpmGridCountLimit = 0xFFFFFFFFu;  // 2^32 - 1
 
+/// The node runs of rows of stencil bins (MpmGrid::activeRun): the bins
+/// [rowFirst, rowEnd) of bin row (bj, bk) (entry bj + nbj bk; none when
+/// end <= first; bi in grid indices) reach nodes [first, end + 2) of node
+/// rows bj .. bj + 2 and bk .. bk + 2, and node row (j, k) (entry
+/// j + (nbj + 2) k of (nbj + 2) x (nbk + 2), counted from the first bin row)
+/// gets the union's extent [runFirst, runEnd) (0, 0 when none).
+void mpmNodeRuns(const std::uint32_t* rowFirst, const std::uint32_t* rowEnd, int nbj, int nbk, std::int32_t* runFirst,
+                 std::int32_t* runEnd);
+
 class MpmGrid {
  public:
   MpmGrid() = default;
@@ -101,8 +110,8 @@ class MpmGrid {
   /// stress impulse over dt (s) and, when particleForces is given, dt times
   /// those forces (N, one per particle)). Throws InvalidArgument naming the
   /// lowest offending particle for a non-finite position, a stencil outside
-  /// the grid or a material index out of range. Nodes outside activeLo() ..
-  /// activeHi() are zero afterwards.
+  /// the grid or a material index out of range. Nodes outside the runs
+  /// (activeRun) are zero afterwards, and their pages are handed back.
   void particleToGrid(const MpmParticles& particles, const std::vector<MpmMaterial>& materials, double dt,
                       const Vec3d* particleForces = nullptr);
 
@@ -126,6 +135,22 @@ class MpmGrid {
   /// axis (empty when there were no particles).
   Index3 activeLo() const { return activeLo_; }
   Index3 activeHi() const { return activeHi_; }
+  /// The nodes of x-row (j, k) the last P2G could touch: [first, end) (first
+  /// >= end: none). Within the active box each row holds one run, from the
+  /// first to the last stencil that reaches it; every node outside the runs
+  /// is zero, and only the runs' pages hold memory. After
+  /// activateWholeGrid(), whole rows.
+  void activeRun(int j, int k, int& first, int& end) const {
+    first = end = 0;
+    if (wholeGrid_) {
+      end = spec_.dims.i;
+      return;
+    }
+    if (j < activeLo_.j || j >= activeHi_.j || k < activeLo_.k || k >= activeHi_.k) return;
+    const std::size_t row = std::size_t(j - activeLo_.j) + std::size_t(activeHi_.j - activeLo_.j) * std::size_t(k - activeLo_.k);
+    first = runFirst_[row];
+    end = runEnd_[row];
+  }
 
   /// A sum of the colour field over processes (mpm/partition.h): called
   /// after the colour scatter with the field on the whole grid (zero outside
@@ -157,8 +182,14 @@ class MpmGrid {
  private:
   void bin(const MpmParticles& particles, std::size_t materialCount);
   void zeroBox(Index3 lo, Index3 hi);
-  // Hands back the node data of box [lo, hi) outside the box [keepLo, keepHi).
-  void releaseOutside(Index3 lo, Index3 hi, Index3 keepLo, Index3 keepHi);
+  // Zeroes the node data of the runs (activeRun) of the active box.
+  void zeroRuns();
+  // Zeroes the node data of the previous runs (of box [lo, hi)) outside the
+  // current ones and hands back the pages that hold nothing of those.
+  void releaseOutsideRuns(Index3 lo, Index3 hi, const std::vector<std::int32_t>& first,
+                          const std::vector<std::int32_t>& end);
+  // Hands back the bin sizes' pages of base box [lo, hi) outside base box [keepLo, keepHi).
+  void releaseBinsOutside(Index3 lo, Index3 hi, Index3 keepLo, Index3 keepHi);
   // Runs rowFn(bj, bk) on every row of bins of the active box, in the nine
   // colours of disjoint nodes (grid.cpp).
   template <typename RowFn>
@@ -176,22 +207,34 @@ class MpmGrid {
   std::function<void(double*, std::size_t)> colourSum_;  // setColourSum
   Index3 activeLo_{0, 0, 0}, activeHi_{0, 0, 0};
   bool wholeGrid_ = false;  // activateWholeGrid since the last P2G: the caller writes the whole grid
-  // Binning scratch. Bins are stencil base nodes; only the box of bins in
-  // use, [binLo_, binLo_ + binDims_), gets offsets.
-  std::size_t boxKey(std::uint64_t packed) const {
-    const std::size_t bi = std::size_t(packed & 0x1FFFFF) - std::size_t(binLo_.i);
+  // The node runs of the active box's rows (activeRun), and those of the
+  // previous P2G (handed back where the new ones do not reach).
+  std::vector<std::int32_t> runFirst_, runEnd_, prevRunFirst_, prevRunEnd_;
+  // Binning scratch. Bins are stencil base nodes; each row of bins of the
+  // box in use, [binLo_, binLo_ + binDims_), gets offsets for its bins from
+  // the first to the last holding particles: bins [rowFirst_, rowEnd_) of
+  // row r (bi, grid indices) are offsets_[rowStart_[r] ...].
+  std::size_t binIndex(std::uint64_t packed) const {
+    const std::size_t bi = std::size_t(packed & 0x1FFFFF);
     const std::size_t bj = std::size_t((packed >> 21) & 0x1FFFFF) - std::size_t(binLo_.j);
     const std::size_t bk = std::size_t(packed >> 42) - std::size_t(binLo_.k);
-    return bi + std::size_t(binDims_.i) * (bj + std::size_t(binDims_.j) * bk);
+    const std::size_t row = bj + std::size_t(binDims_.j) * bk;
+    return rowStart_[row] + (bi - rowFirst_[row]);
   }
   Index3 binLo_{0, 0, 0}, binDims_{0, 0, 0};
+  std::vector<std::uint32_t> rowFirst_, rowEnd_;  // per row of bins of the box
+  std::vector<std::size_t> rowStart_;             // per row + 1: first offset slot
+  // Per row of bins of the whole grid (baseDims_ j x k), filled by pass 1:
+  // baseDims_.i - first and end of the bins holding particles (0: none);
+  // zero between calls (read back and reset within the box), used as atomics.
+  PageArray<std::uint32_t> rowLow_, rowHigh_;
   std::vector<std::uint64_t> key_;   // per particle: base node, 21 bits per axis
   std::vector<std::uint32_t> rank_;  // per particle: slot in its bin (scheduling-dependent, re-sorted)
   // Per base node (dims - 2 per axis): the particles in each bin, zero between
   // calls; used as std::atomic<std::uint32_t> (binSizes()).
   PageArray<std::uint32_t> binSize_;
   std::atomic<std::uint32_t>* binSizes() { return reinterpret_cast<std::atomic<std::uint32_t>*>(binSize_.data()); }
-  std::vector<std::uint32_t> offsets_;  // box bins + 1 prefix sums
+  std::vector<std::uint32_t> offsets_;  // the rows' bins + 1 prefix sums
   std::vector<std::uint32_t> sorted_;   // particle indices grouped by bin, ascending within a bin
   double binningSeconds_ = 0;
 };
