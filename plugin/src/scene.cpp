@@ -379,24 +379,30 @@ std::unique_ptr<MpmSolver> buildSolver(const Scene& scene, std::shared_ptr<MpmPa
 namespace {
 
 // Nodes of the MPM grid's runs (mpm/grid.h: per x-row, from the first to
-// the last node a stencil reaches) for material in the boxes [lo, hi] (m,
-// a point's box is the point): the stencil bases of each box fill their
-// rows of bins, whose node runs mpmNodeRuns gives as the grid takes them.
-double mpmRunNodes(const GridSpec& g, const std::vector<std::pair<Vec3d, Vec3d>>& boxes) {
+// the last node a stencil reaches) for material in `count` boxes [lo, hi]
+// (m; boxOf(b, lo, hi) gives box b, a point's box is the point): the
+// stencil bases of each box fill their rows of bins, whose node runs
+// mpmNodeRuns gives as the grid takes them.
+template <typename BoxOf>
+double mpmRunNodes(const GridSpec& g, std::size_t count, const BoxOf& boxOf) {
   const int bd[3] = {g.dims.i - 2, g.dims.j - 2, g.dims.k - 2};
   const auto base = [&](double x, int a) {
     return int(std::clamp(quadraticBaseFloor((x - g.origin[a]) / g.dx), 0.0, double(bd[a] - 1)));
   };
   int lo[3] = {bd[0], bd[1], bd[2]}, hi[3] = {-1, -1, -1};
-  for (const auto& [blo, bhi] : boxes)
+  Vec3d blo, bhi;
+  for (std::size_t b = 0; b < count; ++b) {
+    boxOf(b, blo, bhi);
     for (int a = 0; a < 3; ++a) {
       lo[a] = std::min(lo[a], base(blo[a], a));
       hi[a] = std::max(hi[a], base(bhi[a], a));
     }
+  }
   if (hi[0] < lo[0]) return 0;
   const int nbj = hi[1] - lo[1] + 1, nbk = hi[2] - lo[2] + 1;
   std::vector<std::uint32_t> first(std::size_t(nbj) * std::size_t(nbk), std::uint32_t(bd[0])), end(first.size(), 0);
-  for (const auto& [blo, bhi] : boxes) {
+  for (std::size_t b = 0; b < count; ++b) {
+    boxOf(b, blo, bhi);
     const int i0 = base(blo.x, 0), i1 = base(bhi.x, 0) + 1;
     for (int k = base(blo.z, 2); k <= base(bhi.z, 2); ++k)
       for (int j = base(blo.y, 1); j <= base(bhi.y, 1); ++j) {
@@ -419,18 +425,17 @@ MemoryCounts sceneMemory(const Scene& scene, const MpmSolver* solver) {
   // The MPM grid holds memory for the runs of nodes the material's stencils
   // reach (mpm/grid.h): of the material now (the bodies' boxes, or the
   // solver's particles), the whole grid when emitters will add material.
-  std::vector<std::pair<Vec3d, Vec3d>> material;
-  if (solver) {
-    for (const Vec3d& x : solver->particles().x) material.emplace_back(x, x);
-  } else {
-    for (const SceneBody& b : scene.bodies) {
-      Vec3d blo, bhi;
-      b.shape.worldBounds(blo, bhi);
-      material.emplace_back(blo, bhi);
-    }
-  }
   const bool emitters = solver ? solver->emitterCount() > 0 : !scene.emitters.empty();
-  c.mpmNodes = emitters ? double(scene.settings.grid.nodeCount()) : mpmRunNodes(scene.settings.grid, material);
+  const GridSpec& grid = scene.settings.grid;
+  if (emitters) {
+    c.mpmNodes = double(grid.nodeCount());
+  } else if (solver) {
+    const std::vector<Vec3d>& x = solver->particles().x;
+    c.mpmNodes = mpmRunNodes(grid, x.size(), [&](std::size_t p, Vec3d& lo, Vec3d& hi) { lo = hi = x[p]; });
+  } else {
+    c.mpmNodes = mpmRunNodes(grid, scene.bodies.size(),
+                             [&](std::size_t b, Vec3d& lo, Vec3d& hi) { scene.bodies[b].shape.worldBounds(lo, hi); });
+  }
   // With a partition: this process's part (its window of the grid, which the
   // sums over the processes write whole, and its particles).
   const MpmPartition* split = solver ? solver->partition() : nullptr;

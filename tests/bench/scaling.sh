@@ -2,7 +2,8 @@
 # Memory and time per substep of the MPM grid against particle count (1e5 to
 # 1e7 particles on a 129^3 grid) and against domain size at fixed material
 # (1e6 particles in boxes of 129^3 to 1027^3 nodes; 1e7 particles in the
-# 1027^3 box), without magnetism: an elastic block (Neo-Hookean, 8 particles
+# 1027^3 box; 1e6 particles in two blocks at opposite corners of the 1027^3
+# box, series `apart`), without magnetism: an elastic block (Neo-Hookean, 8 particles
 # per cell, dx = 7.8 mm) falling for 25 substeps of 5e-5 s (one particle
 # reordering among them, as in any longer run). Each case is one
 # `lodestone run` of one frame; its stats.json gives the substep's phases and
@@ -27,21 +28,25 @@ domain 1e6 2.0
 domain 1e6 3.0
 domain 1e6 4.0
 domain 1e6 8.0
-domain 1e7 8.0"
+domain 1e7 8.0
+apart 1e6 8.0"
 binaries="current:$build"
 [ -n "$prev" ] && binaries="$binaries previous:$prev"
 echo "$cases" | while read -r series n side; do
-  python3 - "$n" "$side" > "$work/scene.json" <<'PY'
+  python3 - "$n" "$side" "$series" > "$work/scene.json" <<'PY'
 import json, sys
-n, side = float(sys.argv[1]), float(sys.argv[2])
+n, side, apart = float(sys.argv[1]), float(sys.argv[2]), sys.argv[3] == "apart"
 dx = side / round(side / 0.0078)
-half = 0.5 * dx * round((n / 8) ** (1 / 3))
+half = 0.5 * dx * round((n / (2 if apart else 1) / 8) ** (1 / 3))
+corners = [[0.5, 0.5, 0.1 + half + 2 * dx]]
+if apart:
+    corners = [[0.2 + half, 0.2 + half, 0.1 + half + 2 * dx], [side - 0.2 - half, side - 0.2 - half, side - 0.2 - half]]
 print(json.dumps({
     "name": "scaling", "domain": {"min": [0, 0, 0], "max": [side, side, side], "dx": dx},
     "time": {"frames": 1, "fps": 800, "dt": 5e-5},
     "materials": [{"name": "jelly", "model": "solid", "density": 1000, "youngs_modulus": 2e4, "poisson_ratio": 0.4}],
-    "bodies": [{"name": "block", "material": "jelly", "shape": "box",
-                "center": [0.5, 0.5, 0.1 + half + 2 * dx], "half_size": [half, half, half]}],
+    "bodies": [{"name": "block%d" % b, "material": "jelly", "shape": "box",
+                "center": c, "half_size": [half, half, half]} for b, c in enumerate(corners)],
     "output": {"png": False, "ply": False}}))
 PY
   for b in $binaries; do
