@@ -13,6 +13,7 @@
 # binary (column `binary`); a case a binary refuses is printed and left out.
 #   tests/bench/magnetic_scaling.sh BUILD_DIR [CSV] [THREADS] [PREV_BUILD_DIR]
 set -eu
+. "$(dirname "$0")/run_case.sh"
 build=${1:?usage: magnetic_scaling.sh BUILD_DIR [CSV] [THREADS] [PREV_BUILD_DIR]}
 csv=${2:-magnetic_scaling.csv}
 threads=${3:-2}
@@ -54,19 +55,7 @@ PY
   for b in $binaries; do
     bin=${b%%:*}
     dir=${b#*:}
-    rm -rf "$work/out"
-    if ! "$dir/examples/lodestone" run "$work/scene.json" --out "$work/out" --threads "$threads" > "$work/log" 2>&1; then
-      if grep -q "unknown key 'patches'" "$work/log"; then
-        echo "$bin $name $n: skipped: this binary has no planner.patches (it always solves one box)"
-        continue
-      fi
-      if grep -q "needs about\|too large" "$work/log"; then
-        echo "$bin $name $n: refused: $(grep -o 'needs about.*\|too large.*' "$work/log" | head -1)"
-        continue
-      fi
-      cat "$work/log" >&2
-      exit 1
-    fi
+    run_case "$dir" "$work/scene.json" "$work/out" "$work/log" "$threads" "$bin $name $n" || continue
     python3 - "$work/out/stats.json" "$work/log" "$bin" "$name" >> "$csv" <<'PY'
 import json, re, sys
 d = json.load(open(sys.argv[1]))
@@ -76,7 +65,6 @@ s, n = f["stages"], f["substeps"]
 mpm = 1e3 * (s["p2g_s"] + s["grid_update_s"] + s["g2p_s"]) / n
 solves = [x["stage_s"] for x in f["field_solves"]]
 warm = sum(solves[1:]) / max(1, len(solves) - 1)
-field = re.search(r"field solve ([0-9.e+-]+)", log)
 nodes = re.search(r"([0-9.e+]+) field-solve nodes", log)
 patches = re.search(r"patches: on \((\d+) patches\)", log)
 print(",".join([sys.argv[3], sys.argv[4], str(f["particles"]), str(g[0] * g[1] * g[2]),

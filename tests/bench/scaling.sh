@@ -12,6 +12,7 @@
 # printed and left out of the CSV. Prints a table and writes CSV.
 #   tests/bench/scaling.sh BUILD_DIR [CSV] [THREADS] [PREV_BUILD_DIR]
 set -eu
+. "$(dirname "$0")/run_case.sh"
 build=${1:?usage: scaling.sh BUILD_DIR [CSV] [THREADS] [PREV_BUILD_DIR]}
 csv=${2:-scaling.csv}
 threads=${3:-2}
@@ -52,15 +53,7 @@ PY
   for b in $binaries; do
     name=${b%%:*}
     dir=${b#*:}
-    rm -rf "$work/out"
-    if ! "$dir/examples/lodestone" run "$work/scene.json" --out "$work/out" --threads "$threads" > "$work/log" 2>&1; then
-      if grep -q "needs about" "$work/log"; then
-        echo "$name $series $n $side: refused: $(grep -o 'needs about.*' "$work/log" | head -1)"
-        continue
-      fi
-      cat "$work/log" >&2
-      exit 1
-    fi
+    run_case "$dir" "$work/scene.json" "$work/out" "$work/log" "$threads" "$name $series $n $side" || continue
     python3 - "$work/out/stats.json" "$name" "$series" "$n" >> "$csv" <<'PY'
 import json, sys
 d = json.load(open(sys.argv[1]))
