@@ -117,14 +117,15 @@ class MpmGrid {
 
   /// Steps 5-7: G2P (APIC), the MLS update of F (solids) or J (fluids) and
   /// advection, from the node velocities velocity() (m/s), which the grid
-  /// update must have set on the active box. Particles must be the ones of
+  /// update must have set on the runs (activeRun). Particles must be the ones of
   /// the last particleToGrid, unmoved.
   GridToParticleReport gridToParticle(MpmParticles& particles, const std::vector<MpmMaterial>& materials, double dt,
                                       const ParticleBounds* bounds = nullptr) const;
 
   /// Node data of the last P2G (one entry per node, x fastest). Memory is
-  /// taken only for the pages written (base/page_array.h): the active boxes
-  /// the particles have reached, and handed back when they leave a box.
+  /// taken only for the pages written (base/page_array.h): the runs of
+  /// nodes the particles reach on each x-row (activeRun), handed back when
+  /// the runs move off them.
   PageArray<MpmNode>& nodes() { return nodes_; }
   const PageArray<MpmNode>& nodes() const { return nodes_; }
   /// Node velocities (m/s) used by G2P; written by the grid update.

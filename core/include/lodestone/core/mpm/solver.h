@@ -133,7 +133,7 @@ struct MpmSettings {
   PlannerSettings planner;               ///< effects planner (off: every magnetic stage runs as configured)
 
   /// Scan every substep for NaN/Inf (particles' x, v, C, F, J, magnetic
-  /// force; the grid's mass, momentum and velocity on the active box; the
+  /// force; the grid's mass, momentum and velocity on the active runs; the
   /// magnetic nodal force) and throw lodestone::Error naming the quantity, the
   /// substep and the particle (index and id) or node. Off by default: the
   /// solver then removes non-finite particles and counts them. About one
