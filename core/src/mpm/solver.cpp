@@ -1,6 +1,8 @@
 // The reference MLS-MPM step (Section 4.3 of the paper); see mpm/solver.h.
 #include "lodestone/core/mpm/solver.h"
 
+#include "solver_internal.h"
+
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>
@@ -27,16 +29,7 @@ inline namespace mpm {
 namespace {
 using Clock = std::chrono::steady_clock;
 
-// Whether every node of `inner` is a node of `outer` (same lattice).
-constexpr std::size_t kNoNode = ~std::size_t(0);
-
-bool gridContains(const GridSpec& outer, const GridSpec& inner) {
-  for (int a = 0; a < 3; ++a) {
-    const double lo = (inner.origin[a] - outer.origin[a]) / outer.dx;
-    if (lo < -1e-9 || lo + inner.dims[a] - 1 > outer.dims[a] - 1 + 1e-9) return false;
-  }
-  return true;
-}
+constexpr std::size_t kNoNode = ~std::size_t(0);  // no node (checkFiniteGrid)
 
 bool sameLaw(const MagnetizationLaw<double>& a, const MagnetizationLaw<double>& b) {
   return a.kind == b.kind && a.moment == b.moment && a.k2 == b.k2 && a.chiPerDensity == b.chiPerDensity;
@@ -49,19 +42,6 @@ bool finiteMat(const Mat3d& m) {
   return true;
 }
 
-// The first index in [0, n) for which bad(i) holds, or n; deterministic.
-template <typename Bad>
-std::size_t firstBad(std::size_t n, const Bad& bad) {
-  return tbb::parallel_reduce(
-      tbb::blocked_range<std::size_t>(0, n, 4096), n,
-      [&](const tbb::blocked_range<std::size_t>& r, std::size_t found) {
-        for (std::size_t i = r.begin(); i != r.end() && i < found; ++i)
-          if (bad(i)) return i;
-        return found;
-      },
-      [](std::size_t a, std::size_t b) { return std::min(a, b); });
-}
-
 struct DomainCounts {
   std::size_t clamped = 0, remove = 0, nonFinite = 0;
   void join(const DomainCounts& o) {
@@ -72,55 +52,6 @@ struct DomainCounts {
 };
 }  // namespace
 
-// ---------------------------------------------------------------------------
-// The applied field the stage sees: the user's sources plus the magnets.
-
-class MpmSolver::SceneField final : public FieldSource {
- public:
-  SceneField(const FieldSourceSet& sources, const std::vector<std::unique_ptr<MagnetSource>>& magnets)
-      : sources_(sources), magnets_(magnets) {}
-
-  Vec3d field(const Vec3d& x, double t) const override {
-    Vec3d H = sources_.field(x, t);
-    for (const auto& m : magnets_) H += m->field(x, t);
-    return H;
-  }
-  Vec3d magnetization(const Vec3d& x, double t) const override {
-    Vec3d M = sources_.magnetization(x, t);
-    for (const auto& m : magnets_) M += m->magnetization(x, t);
-    return M;
-  }
-  Vec3d exteriorContinuation(const Vec3d& x, double t) const override {
-    Vec3d c = sources_.exteriorContinuation(x, t);
-    for (const auto& m : magnets_) c += m->exteriorContinuation(x, t);
-    return c;
-  }
-  void accumulateField(const Vec3d* x, std::size_t count, double t, Vec3d* out) const override {
-    sources_.accumulateField(x, count, t, out);
-    for (const auto& m : magnets_) m->accumulateField(x, count, t, out);
-  }
-  bool isUniform() const override { return magnets_.empty() && sources_.isUniform(); }
-  bool appendFieldSignature(double t, std::vector<double>& out) const override {
-    if (!sources_.appendFieldSignature(t, out)) return false;
-    out.push_back(double(magnets_.size()));
-    for (const auto& m : magnets_)
-      if (!m->appendFieldSignature(t, out)) return false;
-    return true;
-  }
-  std::string describe() const override {
-    return concat(sources_.describe(), "; plus ", magnets_.size(), " moving magnet(s)");
-  }
-  std::unique_ptr<FieldSource> clone() const override {
-    auto set = std::make_unique<FieldSourceSet>(sources_);
-    for (const auto& m : magnets_) set->add(*m);
-    return set;
-  }
-  bool empty() const { return sources_.empty() && magnets_.empty(); }
-
- private:
-  const FieldSourceSet& sources_;
-  const std::vector<std::unique_ptr<MagnetSource>>& magnets_;
-};
 
 // ---------------------------------------------------------------------------
 // Settings and reports
@@ -387,262 +318,6 @@ std::size_t MpmSolver::enforceDomain(std::size_t& removedOut, std::size_t& nonFi
 
 // ---------------------------------------------------------------------------
 // Magnetism
-
-bool MpmSolver::isMagneticPoint(std::size_t p) const {
-  const std::uint32_t mat = particles_.material[p];
-  return particles_.count[p] > 0 && mat < materials_.size() && materials_[mat].isMagnetic();
-}
-
-const MagneticMaterial* MpmSolver::magneticLaw() const {
-  for (const MpmMaterial& m : materials_)
-    if (m.isMagnetic()) return &m.magnetic;
-  return nullptr;
-}
-
-const ColliderMotion& MpmSolver::magnetMotion(std::size_t m) const {
-  return magnetCollider_[m] == kNoCollider ? magnetMotion_[m] : colliders_[magnetCollider_[m]].motion();
-}
-
-void MpmSolver::poseMagnetsAt(double t) const {
-  for (std::size_t m = 0; m < magnets_.size(); ++m) magnets_[m]->setPose(magnetMotion(m).poseAt(t));
-}
-
-bool MpmSolver::movedSinceSolve() const {
-  if (!(settings_.magneticSolveDistance > 0)) return false;
-  const double d = settings_.magneticSolveDistance * magneticGrid_.dx;
-  if (!magneticPointsWithin(d)) return true;
-  // Magnets: posed at the last solve (or the planner's last reuse test).
-  for (std::size_t m = 0; m < magnets_.size(); ++m) {
-    const Pose now = magnetMotion(m).poseAt(time_), & then = magnets_[m]->pose();
-    double turn = 0;  // Frobenius norm of the rotation's change
-    for (int r = 0; r < 3; ++r)
-      for (int c = 0; c < 3; ++c) turn += std::pow(now.rotation.m[r][c] - then.rotation.m[r][c], 2);
-    if (norm(now.position - then.position) + std::cbrt(magnets_[m]->volume()) * std::sqrt(turn) > d) return true;
-  }
-  return false;
-}
-
-bool MpmSolver::lastSolveHolds() {
-  // The planner's reuse (field_reuse.h): only with a force to keep and a
-  // plan that allows it; the applied field is compared only when no magnetic
-  // point moved too far, with the magnets where they are now.
-  if (!haveMagneticForce_ || !settings_.planner.enabled || !(lastPlan_.reuseDistance > 0)) return false;
-  if (!magneticPointsWithin(lastPlan_.reuseDistance)) return false;
-  poseMagnetsAt(time_);
-  return reuse_.fieldWithin(*scene_, time_, lastPlan_.reuseFieldChange);
-}
-
-MagneticPlan MpmSolver::planMagneticNow() const { return planMagneticAt(time_); }
-
-MagneticPlan MpmSolver::planMagneticAt(double t) const {
-  const std::vector<Vec3d> positions = magneticPoints().x;
-  const MagneticMaterial* law = magneticLaw();
-  poseMagnetsAt(t);
-  PlannerInputs in = plannerInputs(positions, law ? *law : nonMagneticMaterial());
-  in.time = t;
-  MagneticPlan plan = planMagnetic(settings_.planner, in);
-  poseMagnetsAt(time_);
-  return plan;
-}
-
-PlannerInputs MpmSolver::plannerInputs(const std::vector<Vec3d>& positions, const MagneticMaterial& law) const {
-  PlannerInputs in;
-  in.positions = positions.data();
-  in.count = positions.size();
-  in.material = law;
-  in.applied = scene_.get();
-  in.appliedEmpty = scene_->empty();
-  in.time = time_;
-  in.grid = magneticGrid_;
-  return in;
-}
-
-bool MpmSolver::anyMagneticParticles() const {
-  bool anyMaterial = false;
-  for (const MpmMaterial& m : materials_) anyMaterial = anyMaterial || m.isMagnetic();
-  if (!anyMaterial) return false;
-  bool any = false;
-  for (std::size_t p = 0; p < particles_.size() && !any; ++p) any = particles_.count[p] > 0;
-  return partition_ ? partition_->maxOverRanks(any ? 1.0 : 0.0) > 0 : any;
-}
-
-void MpmSolver::solveMagnetic(MpmStepReport& rep) {
-  const auto t0 = Clock::now();
-  // The magnetic points, handed to the stage as an external host would
-  // (with a partition: every process's, so that each runs the same solve).
-  const MagneticPoints points = magneticPoints();
-  const std::vector<std::uint32_t>& index = points.index;
-  const std::vector<Vec3d>& positions = points.x;
-  const std::vector<double>& counts = points.count;
-  const MagneticMaterial* law = magneticLaw();
-  std::fill(particles_.magneticForce.begin(), particles_.magneticForce.end(), Vec3d{});
-  if (sameGrid_ && !(magneticForce_.spec() == settings_.grid)) magneticForce_.reset(settings_.grid, Vec3d{});
-  if (sameGrid_) magneticForce_.fill(Vec3d{});
-  magneticDropped_ = {};
-  haveMagneticForce_ = false;
-  stepsSinceSolve_ = 0;
-  magnetReaction_.assign(magnets_.size(), MagnetWrench{});
-  if (index.empty() || !law || scene_->empty()) return;
-
-  poseMagnetsAt(time_);
-  bool usePatches = false;
-  if (settings_.planner.enabled) {
-    // The planner picks the law, whether to solve at all, and the solve grid.
-    lastPlan_ = planMagnetic(settings_.planner, plannerInputs(positions, *law));
-    usePatches = lastPlan_.patches.size() >= 2 && settings_.magnetic.boundary == BoundaryKind::Open;
-    GridSpec solveGrid = magneticGrid_;
-    if (usePatches) {
-      stage_.reset();
-    } else if (lastPlan_.activeRegion) {
-      // Keep the current region while it holds the material's; otherwise a
-      // new one with kActiveRegionSlackCells of slack (clipped to the full grid).
-      const GridSpec& r = lastPlan_.region;
-      if (stage_ && !(stage_->grid() == magneticGrid_) && gridContains(stage_->grid(), r)) {
-        solveGrid = stage_->grid();
-      } else {
-        solveGrid = widenedRegion(r, magneticGrid_, kActiveRegionSlackCells);
-      }
-    }
-    if (!usePatches) {
-      patches_.reset();
-      if (!stage_ || !(stage_->grid() == solveGrid))
-        stage_ = std::make_unique<MagneticForceStage>(solveGrid, *law, settings_.magnetic);
-      MagneticStageSettings st = settings_.magnetic;
-      st.appliedFieldOnly = lastPlan_.appliedFieldOnly;
-      stage_->setSettings(st);
-      stage_->setMaterial(lastPlan_.linearLaw ? linearized(*law) : *law);
-    }
-    sameGrid_ = !usePatches && solveGrid == settings_.grid;
-    if (sameGrid_ && !(magneticForce_.spec() == settings_.grid)) magneticForce_.reset(settings_.grid, Vec3d{});
-  } else {
-    patches_.reset();
-  }
-  // What the reuse test and the automatic solve frequency compare against.
-  if (partition_) {
-    std::vector<std::uint32_t> all(positions.size());
-    for (std::size_t q = 0; q < all.size(); ++q) all[q] = std::uint32_t(q);
-    reuse_.record(positions, all, *scene_, time_);
-    solvedIds_ = points.id;
-  } else {
-    reuse_.record(particles_.x, index, *scene_, time_);
-  }
-  if (usePatches) {
-    solvePatches(points, lastPlan_.linearLaw ? linearized(*law) : *law, rep);
-    for (std::size_t m = 0; m < magnets_.size(); ++m)
-      if (magnetCollider_[m] != kNoCollider && colliders_[magnetCollider_[m]].isDynamic())
-        magnetReaction_[m] = patches_->reactionOn(*magnets_[m], *scene_, magnets_[m]->pose().position, time_);
-    haveMagneticForce_ = true;
-    rep.secondsMagnetic = secondsSince(t0);
-    return;
-  }
-  if (!stage_) stage_ = std::make_unique<MagneticForceStage>(magneticGrid_, *law, settings_.magnetic);
-  const ParticleView view{positions.data(), counts.data(), positions.size()};
-  stage_->setProgress(fieldSolveProgress_);
-  rep.magnetic = stage_->run(view, *scene_, time_);
-  rep.magneticSolved = true;
-  if (settings_.checkFinite) {
-    const GridView<const Vec3d> H = stage_->field(), f = stage_->nodalForce();
-    const std::size_t nn = stage_->grid().nodeCount();  // the active region's, when the planner chose one
-    const std::size_t bad = firstBad(nn, [&](std::size_t i) { return !isFinite(H.data[i]) || !isFinite(f.data[i]); });
-    if (bad < nn)
-      throw Error(concat("MPM finite check: non-finite magnetic ", isFinite(H.data[bad]) ? "nodal force (N)" : "field H (A/m)",
-                         " at magnetic-stage node index ", bad, " after the field solve in substep ", substeps_ + 1,
-                         " at t = ", time_, " s (solve: ", toString(rep.magnetic.solve.status), ", ",
-                         rep.magnetic.solve.message, ")"));
-  }
-  if (sameGrid_) {
-    magneticDropped_ = gatherToSupport(stage_->nodalForce(), stage_->density(), magneticForce_.view());
-  } else {
-    std::vector<Vec3d> forces(positions.size());
-    stage_->particleForces(view, forces.data());
-    for (std::size_t q = 0; q < index.size(); ++q)
-      if (index[q] != MagneticPoints::kElsewhere) particles_.magneticForce[index[q]] = forces[q];
-  }
-  // The material's pull on the dynamic magnets (kept, like the force, until the next solve).
-  for (std::size_t m = 0; m < magnets_.size(); ++m)
-    if (magnetCollider_[m] != kNoCollider && colliders_[magnetCollider_[m]].isDynamic())
-      magnetReaction_[m] = stage_->reactionOn(*magnets_[m], *scene_, magnets_[m]->pose().position, time_);
-  haveMagneticForce_ = true;
-  rep.secondsMagnetic = secondsSince(t0);
-}
-
-void MpmSolver::solvePatches(const MagneticPoints& points, const MagneticMaterial& law, MpmStepReport& rep) {
-  // Keep the patches while each new one lies inside the kept one of its
-  // rank (their warm starts stay); otherwise new ones with
-  // kActiveRegionSlackCells of slack where that keeps them apart.
-  const std::vector<GridSpec>& planned = lastPlan_.patches;
-  bool keep = patches_ && patches_->size() == planned.size();
-  for (std::size_t p = 0; keep && p < planned.size(); ++p) keep = gridContains(patches_->grid(p), planned[p]);
-  if (!keep) {
-    std::vector<GridSpec> grids;
-    for (const GridSpec& g : planned) grids.push_back(widenedRegion(g, magneticGrid_, kActiveRegionSlackCells));
-    const auto meet = [](const GridSpec& a, const GridSpec& b) {
-      for (int k = 0; k < 3; ++k) {
-        const double aLo = a.origin[k], aHi = aLo + a.dx * (a.dims[k] - 1);
-        const double bLo = b.origin[k], bHi = bLo + b.dx * (b.dims[k] - 1);
-        if (aHi < bLo - 1e-9 * a.dx || bHi < aLo - 1e-9 * a.dx) return false;
-      }
-      return true;
-    };
-    bool apart = true;
-    for (std::size_t a = 0; a < grids.size(); ++a)
-      for (std::size_t b = a + 1; b < grids.size(); ++b) apart = apart && !meet(grids[a], grids[b]);
-    if (!apart) grids = planned;  // no slack: the planned grids lie apart
-    MagneticPatchSettings ps;
-    ps.couplingTolerance = std::min(1e-3, std::max(1e-6, settings_.magnetic.solve.tolerance));
-    patches_ = std::make_unique<MagneticPatches>(grids, law, settings_.magnetic, ps);
-  }
-  MagneticStageSettings st = settings_.magnetic;
-  st.appliedFieldOnly = lastPlan_.appliedFieldOnly;
-  patches_->setSettings(st);
-  patches_->setMaterial(law);
-  patches_->setProgress(fieldSolveProgress_);
-  // Each point to the patch whose grid holds its stencil.
-  const std::size_t n = patches_->size(), count = points.x.size();
-  std::vector<std::vector<Vec3d>> x(n);
-  std::vector<std::vector<double>> c(n);
-  std::vector<std::vector<std::size_t>> which(n);
-  for (std::size_t q = 0; q < count; ++q) {
-    std::size_t home = n;
-    for (std::size_t p = 0; p < n && home == n; ++p) {
-      const GridSpec& g = patches_->grid(p);
-      bool inside = true;
-      for (int a = 0; a < 3 && inside; ++a) {
-        const double u = (points.x[q][a] - g.origin[a]) / g.dx;
-        inside = u >= 1 && u <= g.dims[a] - 2;
-      }
-      if (inside) home = p;
-    }
-    require(home < n, "MPM magnetic patches: magnetic point ", q, " at (", points.x[q].x, ", ", points.x[q].y, ", ",
-            points.x[q].z, ") m lies in none of the ", n, " patches");
-    x[home].push_back(points.x[q]);
-    c[home].push_back(points.count[q]);
-    which[home].push_back(q);
-  }
-  std::vector<ParticleView> views;
-  for (std::size_t p = 0; p < n; ++p) views.push_back({x[p].data(), c[p].data(), x[p].size()});
-  const MagneticPatchReport pr = patches_->run(views, *scene_, time_);
-  rep.magnetic = pr.combined();
-  rep.magneticSolved = true;
-  for (std::size_t p = 0; p < n; ++p) {
-    if (settings_.checkFinite) {
-      const MagneticForceStage& stage = patches_->stage(p);
-      const GridView<const Vec3d> H = stage.field(), f = stage.nodalForce();
-      const std::size_t nn = stage.grid().nodeCount();
-      const std::size_t bad = firstBad(nn, [&](std::size_t i) { return !isFinite(H.data[i]) || !isFinite(f.data[i]); });
-      if (bad < nn)
-        throw Error(concat("MPM finite check: non-finite magnetic ", isFinite(H.data[bad]) ? "nodal force (N)" : "field H (A/m)",
-                           " at node index ", bad, " of magnetic patch ", p, " after the field solve in substep ",
-                           substeps_ + 1, " at t = ", time_, " s (", rep.magnetic.solve.message, ")"));
-    }
-    std::vector<Vec3d> forces(x[p].size());
-    patches_->particleForces(p, views[p], forces.data());
-    for (std::size_t m = 0; m < forces.size(); ++m) {
-      const std::uint32_t i = points.index[which[p][m]];
-      if (i != MagneticPoints::kElsewhere) particles_.magneticForce[i] = forces[m];
-    }
-  }
-}
 
 // ---------------------------------------------------------------------------
 // Grid update (step 4)
