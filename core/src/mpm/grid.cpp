@@ -9,6 +9,8 @@
 
 #include "lodestone/core/mpm/grid.h"
 
+#include "grid_kernels.h"
+
 #include "lodestone/core/mpm/apic_gather.h"
 
 #include <tbb/blocked_range.h>
@@ -30,10 +32,6 @@
 #include "lodestone/core/base/error.h"
 #include "lodestone/core/mpm/constitutive.h"
 #include "lodestone/core/mpm/surface_tension.h"
-
-#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
-#define LODESTONE_MPM_AVX2 1
-#endif
 
 namespace lodestone {
 inline namespace mpm {
@@ -72,50 +70,7 @@ inline Vec3d apicVec3<Lanes4>(const Lanes4& lanes) {
 
 namespace {
 
-// The kernels below (DepositKernel, G2PKernel, BinKernel) are compiled twice:
-// for any x86-64 CPU and for AVX2, chosen at run time. Without FMA the AVX2
-// variant does the same arithmetic, so the same bits.
-template <typename Kernel, typename... Args>
-void runPortable(const Kernel& kernel, Args&&... args) {
-  kernel(std::forward<Args>(args)...);
-}
-
-#if defined(LODESTONE_MPM_AVX2)
-template <typename Kernel, typename... Args>
-__attribute__((target("avx2"))) void runAvx2(const Kernel& kernel, Args&&... args) {
-  kernel(std::forward<Args>(args)...);
-}
-#endif
-
-/// kernel(args...) in the widest variant the CPU runs.
-template <typename Kernel, typename... Args>
-void runKernel(const Kernel& kernel, Args&&... args) {
-#if defined(LODESTONE_MPM_AVX2)
-  if (cpuHasAvx2Fma()) {
-    runAvx2(kernel, std::forward<Args>(args)...);
-    return;
-  }
-#endif
-  runPortable(kernel, std::forward<Args>(args)...);
-}
-
 using Clock = std::chrono::steady_clock;
-constexpr std::size_t kNone = std::numeric_limits<std::size_t>::max();
-constexpr std::uint32_t kBadKey = std::uint32_t(kMpmGridCountLimit);
-constexpr std::uint64_t kBadBase = std::numeric_limits<std::uint64_t>::max();
-
-void atomicMin(std::atomic<std::size_t>& a, std::size_t v) {
-  std::size_t cur = a.load(std::memory_order_relaxed);
-  while (v < cur && !a.compare_exchange_weak(cur, v, std::memory_order_relaxed)) {
-  }
-}
-
-void atomicMax(std::atomic<std::uint32_t>& a, std::uint32_t v) {
-  std::uint32_t cur = a.load(std::memory_order_relaxed);
-  while (v > cur && !a.compare_exchange_weak(cur, v, std::memory_order_relaxed)) {
-  }
-}
-
 /// The constants of one material the kernels need.
 struct MaterialParams {
   bool fluid = false;
@@ -313,122 +268,7 @@ struct G2PKernel {
   }
 };
 
-/// Box of base nodes touched: [lo, hi] inclusive, as a reduction value.
-struct BaseBox {
-  int lo[3] = {std::numeric_limits<int>::max(), std::numeric_limits<int>::max(), std::numeric_limits<int>::max()};
-  int hi[3] = {-1, -1, -1};
-  void add(int i, int j, int k) {
-    lo[0] = std::min(lo[0], i);
-    lo[1] = std::min(lo[1], j);
-    lo[2] = std::min(lo[2], k);
-    hi[0] = std::max(hi[0], i);
-    hi[1] = std::max(hi[1], j);
-    hi[2] = std::max(hi[2], k);
-  }
-  void join(const BaseBox& o) {
-    for (int a = 0; a < 3; ++a) {
-      lo[a] = std::min(lo[a], o.lo[a]);
-      hi[a] = std::max(hi[a], o.hi[a]);
-    }
-  }
-};
-
-/// What pass 1 of the binning reads and writes (MpmGrid::bin sets it up).
-struct BinKernel {
-  const Vec3d* X = nullptr;
-  const std::uint32_t* mat = nullptr;
-  std::size_t materialCount = 0;
-  Vec3d o;           // grid origin, m
-  double invDx = 0;  // 1/m
-  Index3 bd;         // stencil bases per axis
-  std::uint64_t* key = nullptr;
-  std::uint32_t* rank = nullptr;
-  std::atomic<std::uint32_t>* binSize = nullptr;
-  std::atomic<std::uint32_t>*rowLow = nullptr, *rowHigh = nullptr;  // per row of bins: bd.i - first, end
-  std::atomic<std::size_t>* firstBad = nullptr;
-
-  // Bases, bin slots, each row's extent of bins and the box of bases of
-  // particles [begin, end). Inlined into each instruction-set variant
-  // (runKernel).
-  __attribute__((always_inline)) inline void operator()(std::size_t begin, std::size_t end, BaseBox& acc) const {
-    std::size_t runFlat = 0, runStart = 0, runLength = 0;
-    std::size_t extentRow = kNone;
-    std::uint32_t extentLo = 0, extentHi = 0;  // bins [extentLo, extentHi) of row extentRow
-    auto endExtent = [&] {
-      if (extentRow == kNone) return;
-      atomicMax(rowLow[extentRow], std::uint32_t(bd.i) - extentLo);
-      atomicMax(rowHigh[extentRow], extentHi);
-      extentRow = kNone;
-    };
-    auto endRun = [&] {
-      if (runLength == 0) return;
-      const std::uint32_t first = binSize[runFlat].fetch_add(std::uint32_t(runLength), std::memory_order_relaxed);
-      for (std::size_t q = 0; q < runLength; ++q) rank[runStart + q] = first + std::uint32_t(q);
-      const std::size_t row = runFlat / std::size_t(bd.i);
-      const std::uint32_t bi = std::uint32_t(runFlat % std::size_t(bd.i));
-      if (row != extentRow) {
-        endExtent();
-        extentRow = row;
-        extentLo = bi;
-        extentHi = bi + 1;
-      } else {
-        extentLo = std::min(extentLo, bi);
-        extentHi = std::max(extentHi, bi + 1);
-      }
-      runLength = 0;
-    };
-    for (std::size_t p = begin; p != end; ++p) {
-      const Vec3d u{(X[p].x - o.x) * invDx, (X[p].y - o.y) * invDx, (X[p].z - o.z) * invDx};
-      const double fx = quadraticBaseFloor(u.x), fy = quadraticBaseFloor(u.y), fz = quadraticBaseFloor(u.z);
-      // The comparisons are false for NaN, so non-finite positions land here too.
-      if (!(fx >= 0 && fx <= bd.i - 1 && fy >= 0 && fy <= bd.j - 1 && fz >= 0 && fz <= bd.k - 1) ||
-          mat[p] >= materialCount) {
-        endRun();
-        key[p] = kBadBase;
-        atomicMin(*firstBad, p);
-        continue;
-      }
-      const int bi = int(fx), bj = int(fy), bk = int(fz);
-      key[p] = std::uint64_t(bi) | (std::uint64_t(bj) << 21) | (std::uint64_t(bk) << 42);
-      const std::size_t flat =
-          std::size_t(bi) + std::size_t(bd.i) * (std::size_t(bj) + std::size_t(bd.j) * std::size_t(bk));
-      if (runLength != 0 && flat != runFlat) endRun();
-      if (runLength == 0) {
-        runFlat = flat;
-        runStart = p;
-      }
-      ++runLength;
-      acc.add(bi, bj, bk);
-    }
-    endRun();
-    endExtent();
-  }
-};
-
 }  // namespace
-
-void mpmNodeRuns(const std::uint32_t* rowFirst, const std::uint32_t* rowEnd, int nbj, int nbk, std::int32_t* runFirst,
-                 std::int32_t* runEnd) {
-  const int nj = nbj + 2, nk = nbk + 2;
-  const std::size_t nodeRows = std::size_t(nj) * std::size_t(nk);
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, nodeRows, 256), [&](const tbb::blocked_range<std::size_t>& r) {
-    for (std::size_t q = r.begin(); q != r.end(); ++q) {
-      const int jj = int(q % std::size_t(nj)), kk = int(q / std::size_t(nj));
-      int lo = std::numeric_limits<int>::max(), hi = std::numeric_limits<int>::min();
-      for (int dk = 0; dk < 3; ++dk)
-        for (int dj = 0; dj < 3; ++dj) {
-          const int bj = jj - dj, bk = kk - dk;
-          if (bj < 0 || bj >= nbj || bk < 0 || bk >= nbk) continue;
-          const std::size_t row = std::size_t(bj) + std::size_t(nbj) * std::size_t(bk);
-          if (rowEnd[row] <= rowFirst[row]) continue;
-          lo = std::min(lo, int(rowFirst[row]));
-          hi = std::max(hi, int(rowEnd[row]) + 2);
-        }
-      runFirst[q] = lo < hi ? lo : 0;
-      runEnd[q] = lo < hi ? hi : 0;
-    }
-  });
-}
 
 MpmGrid::MpmGrid(const GridSpec& spec) : spec_(spec) {
   spec_.validate("MPM grid");
@@ -588,173 +428,6 @@ void MpmGrid::releaseBinsOutside(Index3 lo, Index3 hi, Index3 keepLo, Index3 kee
     zero(std::max(lo.i, d), hi.i);
   };
   zeroRowPieces(binSize_, baseDims_, lo, hi, zeroRow, keep);
-}
-
-void MpmGrid::bin(const MpmParticles& particles, std::size_t materialCount) {
-  const std::size_t np = particles.size();
-  require(np < std::size_t(kBadKey), "MPM grid: at most 2^32 - 2 particles are supported, got ", np);
-  // Invariant: every bin size is zero between calls (pass 2 resets the
-  // ones it used), so only the bins of the active box are ever touched.
-  std::atomic<std::uint32_t>* binSize = binSizes();
-  std::atomic<std::uint32_t>* rowLow = reinterpret_cast<std::atomic<std::uint32_t>*>(rowLow_.data());
-  std::atomic<std::uint32_t>* rowHigh = reinterpret_cast<std::atomic<std::uint32_t>*>(rowHigh_.data());
-  key_.resize(np);
-  rank_.resize(np);
-  // The runs of the previous P2G, which particleToGrid hands back where the new ones do not reach.
-  prevRunFirst_.swap(runFirst_);
-  prevRunEnd_.swap(runEnd_);
-  runFirst_.clear();
-  runEnd_.clear();
-
-  const Vec3d* X = particles.x.data();
-  const std::uint32_t* mat = particles.material.data();
-  const double invDx = 1.0 / spec_.dx;
-  const Vec3d o = spec_.origin;
-  const Index3 bd = baseDims_;
-  std::atomic<std::size_t> firstBad{kNone};
-
-  // Pass 1: base node of every particle (packed 21 bits per axis), a
-  // scheduling-dependent slot in its bin, and the box of bases in use
-  // (min/max are exact, so the reduction is deterministic). A run of
-  // consecutive particles in one bin (the usual case once the particles are
-  // ordered by cell) takes its slots with one atomic addition.
-  const BinKernel kernel{X,         mat,         materialCount, o,      invDx,  bd, key_.data(), rank_.data(),
-                        binSize,   rowLow,      rowHigh,       &firstBad};
-  const BaseBox box = tbb::parallel_reduce(
-      tbb::blocked_range<std::size_t>(0, np, 2048), BaseBox{},
-      [&](const tbb::blocked_range<std::size_t>& r, BaseBox acc) {
-        runKernel(kernel, r.begin(), r.end(), acc);
-        return acc;
-      },
-      [](BaseBox a, const BaseBox& b) {
-        a.join(b);
-        return a;
-      });
-
-  if (const std::size_t bad = firstBad.load(); bad != kNone) {
-    // Restore the invariants before throwing: bin sizes and row extents
-    // zero, and every node zero (no runs).
-    binSize_.clear();
-    rowLow_.clear();
-    rowHigh_.clear();
-    nodes_.clear();
-    velocity_.clear();
-    colour_.clear();
-    key_.clear();
-    prevRunFirst_.clear();
-    prevRunEnd_.clear();
-    activeLo_ = activeHi_ = binLo_ = binDims_ = {0, 0, 0};
-    const Vec3d x = X[bad];
-    if (mat[bad] >= materialCount)
-      throw InvalidArgument(concat("MPM particle ", bad, ": material index ", mat[bad], " is out of range (",
-                                   materialCount, " materials)"));
-    if (!isFinite(x))
-      throw InvalidArgument(
-          concat("MPM particle ", bad, ": position must be finite, got (", x.x, ", ", x.y, ", ", x.z, ") m"));
-    const Vec3d hi = spec_.maxCorner();
-    throw InvalidArgument(concat("MPM particle ", bad, " at (", x.x, ", ", x.y, ", ", x.z,
-                                 ") m is outside the MPM grid: its quadratic stencil needs (x - origin)/dx in "
-                                 "[1/2, dims - 3/2) per axis; the grid spans (",
-                                 o.x, ", ", o.y, ", ", o.z, ") to (", hi.x, ", ", hi.y, ", ", hi.z,
-                                 ") m with dx = ", spec_.dx, " m"));
-  }
-
-  if (np == 0) {
-    activeLo_ = activeHi_ = binLo_ = binDims_ = {0, 0, 0};
-    offsets_.assign(1, 0);
-    sorted_.clear();
-    return;
-  }
-  binLo_ = {box.lo[0], box.lo[1], box.lo[2]};
-  binDims_ = {box.hi[0] - box.lo[0] + 1, box.hi[1] - box.lo[1] + 1, box.hi[2] - box.lo[2] + 1};
-  activeLo_ = binLo_;
-  activeHi_ = {box.hi[0] + 3, box.hi[1] + 3, box.hi[2] + 3};
-
-  // Each row's extent of bins (pass 1's atomics, reset here: zero between
-  // calls) and the first offset slot of its bins.
-  const std::size_t rows = std::size_t(binDims_.j) * std::size_t(binDims_.k);
-  rowFirst_.resize(rows);
-  rowEnd_.resize(rows);
-  rowStart_.resize(rows + 1);
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, rows, 256), [&](const tbb::blocked_range<std::size_t>& r) {
-    for (std::size_t row = r.begin(); row != r.end(); ++row) {
-      const std::size_t bj = std::size_t(binLo_.j) + row % std::size_t(binDims_.j);
-      const std::size_t bk = std::size_t(binLo_.k) + row / std::size_t(binDims_.j);
-      const std::size_t at = bj + std::size_t(bd.j) * bk;
-      const std::uint32_t low = rowLow[at].load(std::memory_order_relaxed), high = rowHigh[at].load(std::memory_order_relaxed);
-      rowFirst_[row] = high > 0 ? std::uint32_t(bd.i) - low : 0;
-      rowEnd_[row] = high;
-      if (high > 0) {
-        rowLow[at].store(0, std::memory_order_relaxed);
-        rowHigh[at].store(0, std::memory_order_relaxed);
-      }
-    }
-  });
-  std::size_t slots = 0;
-  for (std::size_t row = 0; row < rows; ++row) {
-    rowStart_[row] = slots;
-    slots += rowEnd_[row] - rowFirst_[row];
-  }
-  rowStart_[rows] = slots;
-
-  // Pass 2: offsets of the rows' bins, x-rows in order (integer prefix
-  // sums: order-free); the final pass also resets the sizes it read.
-  offsets_.resize(slots + 1);
-  tbb::parallel_scan(
-      tbb::blocked_range<std::size_t>(0, rows, 64), std::uint32_t(0),
-      [&](const tbb::blocked_range<std::size_t>& r, std::uint32_t sum, bool isFinal) {
-        for (std::size_t row = r.begin(); row != r.end(); ++row) {
-          const std::size_t bj = std::size_t(binLo_.j) + row % std::size_t(binDims_.j);
-          const std::size_t bk = std::size_t(binLo_.k) + row / std::size_t(binDims_.j);
-          std::atomic<std::uint32_t>* sizes = binSize + std::size_t(bd.i) * (bj + std::size_t(bd.j) * bk);
-          std::uint32_t* off = offsets_.data() + rowStart_[row];
-          for (std::size_t i = rowFirst_[row]; i < rowEnd_[row]; ++i) {
-            const std::uint32_t n = sizes[i].load(std::memory_order_relaxed);
-            if (isFinal) {
-              off[i - rowFirst_[row]] = sum;
-              if (n != 0) sizes[i].store(0, std::memory_order_relaxed);  // empty bins' pages stay unwritten
-            }
-            sum += n;
-          }
-        }
-        return sum;
-      },
-      std::plus<std::uint32_t>());
-  offsets_[slots] = std::uint32_t(np);
-
-  // The node runs of the active box's rows.
-  runFirst_.assign(std::size_t(binDims_.j + 2) * std::size_t(binDims_.k + 2), 0);
-  runEnd_.assign(runFirst_.size(), 0);
-  mpmNodeRuns(rowFirst_.data(), rowEnd_.data(), binDims_.j, binDims_.k, runFirst_.data(), runEnd_.data());
-
-  // Pass 3: scatter indices into their bins.
-  sorted_.resize(np);
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, np, 8192), [&](const tbb::blocked_range<std::size_t>& r) {
-    for (std::size_t p = r.begin(); p != r.end(); ++p) sorted_[offsets_[binIndex(key_[p])] + rank_[p]] = std::uint32_t(p);
-  });
-
-  // Pass 4: ascending particle index within each bin (bins are small:
-  // insertion sort; std::sort for crowded ones).
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, slots, 4096), [&](const tbb::blocked_range<std::size_t>& r) {
-    for (std::size_t b = r.begin(); b != r.end(); ++b) {
-      std::uint32_t* first = sorted_.data() + offsets_[b];
-      std::uint32_t* last = sorted_.data() + offsets_[b + 1];
-      if (last - first < 2) continue;
-      if (last - first > 32) {
-        std::sort(first, last);
-        continue;
-      }
-      for (std::uint32_t* i = first + 1; i != last; ++i) {
-        const std::uint32_t v = *i;
-        std::uint32_t* j = i;
-        while (j != first && *(j - 1) > v) {
-          *j = *(j - 1);
-          --j;
-        }
-        *j = v;
-      }
-    }
-  });
 }
 
 // Nine colours (bj mod 3, bk mod 3) in a fixed order; rows of one colour

@@ -1,0 +1,51 @@
+#pragma once
+// What the MPM grid's source files share (grid.cpp, grid_binning.cpp): the
+// instruction-set dispatch of their kernels and the binning's limit.
+#include <cstdint>
+#include <utility>
+
+#include "lodestone/core/base/cpu_features.h"
+#include "lodestone/core/mpm/grid.h"
+
+#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
+#define LODESTONE_MPM_AVX2 1
+#endif
+
+namespace lodestone {
+inline namespace mpm {
+
+namespace {
+
+// The kernels below (DepositKernel, G2PKernel, BinKernel) are compiled twice:
+// for any x86-64 CPU and for AVX2, chosen at run time. Without FMA the AVX2
+// variant does the same arithmetic, so the same bits.
+template <typename Kernel, typename... Args>
+void runPortable(const Kernel& kernel, Args&&... args) {
+  kernel(std::forward<Args>(args)...);
+}
+
+#if defined(LODESTONE_MPM_AVX2)
+template <typename Kernel, typename... Args>
+__attribute__((target("avx2"))) void runAvx2(const Kernel& kernel, Args&&... args) {
+  kernel(std::forward<Args>(args)...);
+}
+#endif
+
+/// kernel(args...) in the widest variant the CPU runs.
+template <typename Kernel, typename... Args>
+void runKernel(const Kernel& kernel, Args&&... args) {
+#if defined(LODESTONE_MPM_AVX2)
+  if (cpuHasAvx2Fma()) {
+    runAvx2(kernel, std::forward<Args>(args)...);
+    return;
+  }
+#endif
+  runPortable(kernel, std::forward<Args>(args)...);
+}
+
+constexpr std::uint32_t kBadKey = std::uint32_t(kMpmGridCountLimit);
+
+}  // namespace
+
+}  // namespace mpm
+}  // namespace lodestone
