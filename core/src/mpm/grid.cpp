@@ -665,16 +665,7 @@ GridToParticleReport MpmGrid::gridToParticle(MpmParticles& particles, const std:
     kernel.lo = bounds->lo;
     kernel.hi = bounds->hi;
   }
-  const G2PSums sums = tbb::parallel_reduce(
-      tbb::blocked_range<std::size_t>(0, particles.size(), 1024), G2PSums{},
-      [&](const tbb::blocked_range<std::size_t>& r, G2PSums acc) {
-        runKernel(kernel, r.begin(), r.end(), acc);
-        return acc;
-      },
-      [](G2PSums a, const G2PSums& b) {
-        a.join(b);
-        return a;
-      });
+  const G2PSums sums = reduceKernel<G2PSums>(kernel, particles.size(), 1024);
   GridToParticleReport rep;
   rep.maxSpeed = std::sqrt(sums.maxSpeed2);
   rep.clamped = sums.clamped;

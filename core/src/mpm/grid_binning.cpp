@@ -184,16 +184,7 @@ void MpmGrid::bin(const MpmParticles& particles, std::size_t materialCount) {
   // ordered by cell) takes its slots with one atomic addition.
   const BinKernel kernel{X,         mat,         materialCount, o,      invDx,  bd, key_.data(), rank_.data(),
                         binSize,   rowLow,      rowHigh,       &firstBad};
-  const BaseBox box = tbb::parallel_reduce(
-      tbb::blocked_range<std::size_t>(0, np, 2048), BaseBox{},
-      [&](const tbb::blocked_range<std::size_t>& r, BaseBox acc) {
-        runKernel(kernel, r.begin(), r.end(), acc);
-        return acc;
-      },
-      [](BaseBox a, const BaseBox& b) {
-        a.join(b);
-        return a;
-      });
+  const BaseBox box = reduceKernel<BaseBox>(kernel, np, 2048);
 
   if (const std::size_t bad = firstBad.load(); bad != kNone) {
     // Restore the invariants before throwing: bin sizes and row extents

@@ -1,6 +1,11 @@
 #pragma once
 // What the MPM grid's source files share (grid.cpp, grid_binning.cpp): the
-// instruction-set dispatch of their kernels and the binning's limit.
+// instruction-set dispatch of their kernels, their parallel reduction and the
+// binning's limit.
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_reduce.h>
+
+#include <cstddef>
 #include <cstdint>
 #include <utility>
 
@@ -41,6 +46,22 @@ void runKernel(const Kernel& kernel, Args&&... args) {
   }
 #endif
   runPortable(kernel, std::forward<Args>(args)...);
+}
+
+/// kernel(begin, end, acc) over [0, count) in chunks of `grain`, each
+/// chunk's Sums joined (Sums::join; min, max and counts: order-free).
+template <typename Sums, typename Kernel>
+Sums reduceKernel(const Kernel& kernel, std::size_t count, std::size_t grain) {
+  return tbb::parallel_reduce(
+      tbb::blocked_range<std::size_t>(0, count, grain), Sums{},
+      [&](const tbb::blocked_range<std::size_t>& r, Sums acc) {
+        runKernel(kernel, r.begin(), r.end(), acc);
+        return acc;
+      },
+      [](Sums a, const Sums& b) {
+        a.join(b);
+        return a;
+      });
 }
 
 constexpr std::uint32_t kBadKey = std::uint32_t(kMpmGridCountLimit);
