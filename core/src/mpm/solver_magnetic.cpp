@@ -17,16 +17,6 @@ inline namespace mpm {
 
 namespace {
 using Clock = std::chrono::steady_clock;
-
-// Whether every node of `inner` is a node of `outer` (same lattice).
-bool gridContains(const GridSpec& outer, const GridSpec& inner) {
-  for (int a = 0; a < 3; ++a) {
-    const double lo = (inner.origin[a] - outer.origin[a]) / outer.dx;
-    if (lo < -1e-9 || lo + inner.dims[a] - 1 > outer.dims[a] - 1 + 1e-9) return false;
-  }
-  return true;
-}
-
 }  // namespace
 
 bool MpmSolver::isMagneticPoint(std::size_t p) const {
@@ -138,7 +128,7 @@ void MpmSolver::solveMagnetic(MpmStepReport& rep) {
       // Keep the current region while it holds the material's; otherwise a
       // new one with kActiveRegionSlackCells of slack (clipped to the full grid).
       const GridSpec& r = lastPlan_.region;
-      if (stage_ && !(stage_->grid() == magneticGrid_) && gridContains(stage_->grid(), r)) {
+      if (stage_ && !(stage_->grid() == magneticGrid_) && stage_->grid().contains(r)) {
         solveGrid = stage_->grid();
       } else {
         solveGrid = widenedRegion(r, magneticGrid_, kActiveRegionSlackCells);
@@ -181,16 +171,7 @@ void MpmSolver::solveMagnetic(MpmStepReport& rep) {
   stage_->setProgress(fieldSolveProgress_);
   rep.magnetic = stage_->run(view, *scene_, time_);
   rep.magneticSolved = true;
-  if (settings_.checkFinite) {
-    const GridView<const Vec3d> H = stage_->field(), f = stage_->nodalForce();
-    const std::size_t nn = stage_->grid().nodeCount();  // the active region's, when the planner chose one
-    const std::size_t bad = firstBad(nn, [&](std::size_t i) { return !isFinite(H.data[i]) || !isFinite(f.data[i]); });
-    if (bad < nn)
-      throw Error(concat("MPM finite check: non-finite magnetic ", isFinite(H.data[bad]) ? "nodal force (N)" : "field H (A/m)",
-                         " at magnetic-stage node index ", bad, " after the field solve in substep ", substeps_ + 1,
-                         " at t = ", time_, " s (solve: ", toString(rep.magnetic.solve.status), ", ",
-                         rep.magnetic.solve.message, ")"));
-  }
+  if (settings_.checkFinite) checkFiniteStage(*stage_, "magnetic-stage node index", rep.magnetic.solve);
   if (sameGrid_) {
     magneticDropped_ = gatherToSupport(stage_->nodalForce(), stage_->density(), magneticForce_.view());
   } else {
@@ -207,27 +188,30 @@ void MpmSolver::solveMagnetic(MpmStepReport& rep) {
   rep.secondsMagnetic = secondsSince(t0);
 }
 
+void MpmSolver::checkFiniteStage(const MagneticForceStage& stage, const char* nodeKind,
+                                 const FieldSolveReport& solve) const {
+  const GridView<const Vec3d> H = stage.field(), f = stage.nodalForce();
+  const std::size_t nn = stage.grid().nodeCount();  // the stage's own grid (an active region, a patch)
+  const std::size_t bad = firstBad(nn, [&](std::size_t i) { return !isFinite(H.data[i]) || !isFinite(f.data[i]); });
+  if (bad < nn)
+    throw Error(concat("MPM finite check: non-finite magnetic ", isFinite(H.data[bad]) ? "nodal force (N)" : "field H (A/m)",
+                       " at ", nodeKind, " ", bad, " after the field solve in substep ", substeps_ + 1, " at t = ", time_,
+                       " s (solve: ", toString(solve.status), ", ", solve.message, ")"));
+}
+
 void MpmSolver::solvePatches(const MagneticPoints& points, const MagneticMaterial& law, MpmStepReport& rep) {
   // Keep the patches while each new one lies inside the kept one of its
   // rank (their warm starts stay); otherwise new ones with
   // kActiveRegionSlackCells of slack where that keeps them apart.
   const std::vector<GridSpec>& planned = lastPlan_.patches;
   bool keep = patches_ && patches_->size() == planned.size();
-  for (std::size_t p = 0; keep && p < planned.size(); ++p) keep = gridContains(patches_->grid(p), planned[p]);
+  for (std::size_t p = 0; keep && p < planned.size(); ++p) keep = patches_->grid(p).contains(planned[p]);
   if (!keep) {
     std::vector<GridSpec> grids;
     for (const GridSpec& g : planned) grids.push_back(widenedRegion(g, magneticGrid_, kActiveRegionSlackCells));
-    const auto meet = [](const GridSpec& a, const GridSpec& b) {
-      for (int k = 0; k < 3; ++k) {
-        const double aLo = a.origin[k], aHi = aLo + a.dx * (a.dims[k] - 1);
-        const double bLo = b.origin[k], bHi = bLo + b.dx * (b.dims[k] - 1);
-        if (aHi < bLo - 1e-9 * a.dx || bHi < aLo - 1e-9 * a.dx) return false;
-      }
-      return true;
-    };
     bool apart = true;
     for (std::size_t a = 0; a < grids.size(); ++a)
-      for (std::size_t b = a + 1; b < grids.size(); ++b) apart = apart && !meet(grids[a], grids[b]);
+      for (std::size_t b = a + 1; b < grids.size(); ++b) apart = apart && !grids[a].meets(grids[b]);
     if (!apart) grids = planned;  // no slack: the planned grids lie apart
     MagneticPatchSettings ps;
     ps.couplingTolerance = std::min(1e-3, std::max(1e-6, settings_.magnetic.solve.tolerance));
@@ -266,16 +250,8 @@ void MpmSolver::solvePatches(const MagneticPoints& points, const MagneticMateria
   rep.magnetic = pr.combined();
   rep.magneticSolved = true;
   for (std::size_t p = 0; p < n; ++p) {
-    if (settings_.checkFinite) {
-      const MagneticForceStage& stage = patches_->stage(p);
-      const GridView<const Vec3d> H = stage.field(), f = stage.nodalForce();
-      const std::size_t nn = stage.grid().nodeCount();
-      const std::size_t bad = firstBad(nn, [&](std::size_t i) { return !isFinite(H.data[i]) || !isFinite(f.data[i]); });
-      if (bad < nn)
-        throw Error(concat("MPM finite check: non-finite magnetic ", isFinite(H.data[bad]) ? "nodal force (N)" : "field H (A/m)",
-                           " at node index ", bad, " of magnetic patch ", p, " after the field solve in substep ",
-                           substeps_ + 1, " at t = ", time_, " s (", rep.magnetic.solve.message, ")"));
-    }
+    if (settings_.checkFinite)
+      checkFiniteStage(patches_->stage(p), concat("node of magnetic patch ", p, ", index").c_str(), rep.magnetic.solve);
     std::vector<Vec3d> forces(x[p].size());
     patches_->particleForces(p, views[p], forces.data());
     for (std::size_t m = 0; m < forces.size(); ++m) {

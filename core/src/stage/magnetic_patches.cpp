@@ -125,15 +125,6 @@ class CoupledSource final : public FieldSource {
   std::size_t others_;
 };
 
-bool shareANode(const GridSpec& a, const GridSpec& b) {
-  for (int k = 0; k < 3; ++k) {
-    const double aLo = a.origin[k], aHi = aLo + a.dx * (a.dims[k] - 1);
-    const double bLo = b.origin[k], bHi = bLo + b.dx * (b.dims[k] - 1);
-    const double eps = 1e-9 * a.dx;
-    if (aHi < bLo - eps || bHi < aLo - eps) return false;
-  }
-  return true;
-}
 }  // namespace
 
 void MagneticPatchSettings::validate() const {
@@ -212,7 +203,7 @@ MagneticPatches::MagneticPatches(std::vector<GridSpec> grids, const MagneticMate
     require(grids[p].dx == grids[0].dx, "magnetic patches: patch ", p, " has dx = ", grids[p].dx,
             " m, patch 0 has ", grids[0].dx, " m");
     for (std::size_t q = 0; q < p; ++q)
-      require(!shareANode(grids[q], grids[p]), "magnetic patches: patches ", q, " and ", p,
+      require(!grids[q].meets(grids[p]), "magnetic patches: patches ", q, " and ", p,
               " overlap (patches must lie apart)");
   }
   for (const GridSpec& g : grids) stages_.push_back(std::make_unique<MagneticForceStage>(g, material, settings));

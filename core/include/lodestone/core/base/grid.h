@@ -68,6 +68,24 @@ struct GridSpec {
   friend bool operator==(const GridSpec& a, const GridSpec& b) {
     return a.origin == b.origin && a.dx == b.dx && a.dims == b.dims;
   }
+  /// Whether every node of `inner` is a node of this grid (same lattice).
+  bool contains(const GridSpec& inner) const {
+    for (int a = 0; a < 3; ++a) {
+      const double lo = (inner.origin[a] - origin[a]) / dx;
+      if (lo < -1e-9 || lo + inner.dims[a] - 1 > dims[a] - 1 + 1e-9) return false;
+    }
+    return true;
+  }
+  /// Whether the boxes of this grid's nodes and of `other`'s meet (share a
+  /// node, on one lattice).
+  bool meets(const GridSpec& other) const {
+    for (int a = 0; a < 3; ++a) {
+      const double lo = origin[a], hi = lo + dx * (dims[a] - 1);
+      const double otherLo = other.origin[a], otherHi = otherLo + other.dx * (other.dims[a] - 1);
+      if (hi < otherLo - 1e-9 * dx || otherHi < lo - 1e-9 * dx) return false;
+    }
+    return true;
+  }
 };
 
 /// A non-owning view of one value per grid node.

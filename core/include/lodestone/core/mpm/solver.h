@@ -451,6 +451,9 @@ class MpmSolver {
   double cflDt(double cfl, bool bound, bool* byColliders = nullptr) const;
   double colliderCrossingDt(double vmax) const;  // with the fastest particle's speed (m/s) given
   void checkFiniteGrid(const char* where) const;
+  // Throws naming the first node of `stage` with a non-finite H or nodal
+  // force (`nodeKind` says what its index counts) and the solve's outcome.
+  void checkFiniteStage(const MagneticForceStage& stage, const char* nodeKind, const FieldSolveReport& solve) const;
   class SceneField;
   std::size_t enforceDomain(std::size_t& removedOut, std::size_t& nonFiniteOut);
   ParticleBounds domainBounds() const;
