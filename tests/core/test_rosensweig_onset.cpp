@@ -95,3 +95,42 @@ TEST(RosensweigOnset, ALiquidThatSaturatesTooLowAndBadValuesAreRefused) {
   EXPECT_THROW(rosensweigOnset(fluid, kRho, std::nan(""), kG), InvalidArgument);
   EXPECT_THROW(rosensweigOnset(nonMagneticMaterial(), kRho, kSigma, kG), InvalidArgument);
 }
+
+TEST(RosensweigOnset, AFlatLayerKeepsBContinuous) {
+  // Linear: M = chi H0 / (1 + chi) exactly; Langevin (the paper's liquid
+  // and the dilute one, near saturation): the field inside, H0 - M, gives
+  // back M through the law.
+  EXPECT_NEAR(flatLayerMagnetization(linearMaterial(0.91, 1e24), 2e4), 0.91 / 1.91 * 2e4, 1e-9);
+  for (const MagneticMaterial& fluid : {paperMaterial(), langevinMaterial(1.09e-19, 300, 8000 / 1.09e-19)})
+    for (const double H0 : {0.0, 1e3, 2e4, 5e5}) {
+      const double M = flatLayerMagnetization(fluid, H0);
+      const double back = magnetization(fluid.law, fluid.numberDensity, Vec3d{0, 0, H0 - M}).z;
+      EXPECT_NEAR(M, back, 1e-9 * fluid.saturation()) << "H0 = " << H0;
+      EXPECT_LE(M, fluid.saturation());
+    }
+  EXPECT_THROW(flatLayerMagnetization(paperMaterial(), -1), InvalidArgument);
+  EXPECT_THROW(flatLayerMagnetization(paperMaterial(), std::nan("")), InvalidArgument);
+}
+
+TEST(RosensweigOnset, AMagnetBelowAddsItsPullToGravity) {
+  // A linear liquid (chi = 0.91) at H0 = 2e4 A/m, the field falling by
+  // 1e6 A/m per m upward: g + mu0 M |dH0/dz| / rho, M = chi H0 / (1 + chi);
+  // the onset rises as g^(1/4) and the wavelength shrinks as g^(-1/2).
+  const MagneticMaterial fluid = linearMaterial(0.91, 1e24);
+  const double M = 0.91 / 1.91 * 2e4;
+  const double g = gravityNearMagnet(fluid, kRho, 2e4, -1e6, kG);
+  EXPECT_NEAR(g, kG + kMu0 * M * 1e6 / kRho, 1e-9);
+  EXPECT_GT(g, 1.9 * kG);  // 10.0 m/s^2 of pull: about twice gravity
+  const RosensweigOnset here = rosensweigOnset(fluid, kRho, kSigma, g), flat = rosensweigOnset(fluid, kRho, kSigma, kG);
+  EXPECT_NEAR(here.M / flat.M, std::pow(g / kG, 0.25), 1e-9);
+  EXPECT_NEAR(here.wavelength / flat.wavelength, std::pow(g / kG, -0.5), 1e-12);
+  // A magnet above lightens the layer; one strong enough lifts it.
+  EXPECT_NEAR(gravityNearMagnet(fluid, kRho, 2e4, 5e5, kG), kG - kMu0 * M * 5e5 / kRho, 1e-9);
+  try {
+    gravityNearMagnet(fluid, kRho, 2e4, 1e7, kG);
+    FAIL() << "a layer lifted by the magnet was given a gravity";
+  } catch (const InvalidArgument& e) {
+    EXPECT_NE(std::string(e.what()).find("gradient 10000000 A/m^2"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(gravityNearMagnet(fluid, kRho, 2e4, std::nan(""), kG), InvalidArgument);
+}

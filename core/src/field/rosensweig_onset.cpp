@@ -69,5 +69,30 @@ RosensweigOnset rosensweigOnset(const MagneticMaterial& material, double density
   return out;
 }
 
+double flatLayerMagnetization(const MagneticMaterial& material, double appliedH) {
+  require(std::isfinite(appliedH) && appliedH >= 0, "flat layer: the applied field must be >= 0 and finite, got ",
+          appliedH, " A/m");
+  // H + M(H) grows with H from 0 and H0 lies between H = 0 and H = H0.
+  double lo = 0, hi = appliedH;
+  for (int it = 0; it < 200 && hi - lo > 1e-13 * hi; ++it) {
+    const double mid = 0.5 * (lo + hi);
+    (mid + at(material, mid).M < appliedH ? lo : hi) = mid;
+  }
+  return at(material, 0.5 * (lo + hi)).M;
+}
+
+double gravityNearMagnet(const MagneticMaterial& material, double density, double appliedH, double appliedGradient,
+                         double gravity) {
+  require(std::isfinite(density) && density > 0, "gravity near a magnet: density must be positive and finite, got ",
+          density, " kg/m^3");
+  require(std::isfinite(appliedGradient), "gravity near a magnet: the field's gradient must be finite, got ",
+          appliedGradient, " A/m^2");
+  require(std::isfinite(gravity), "gravity near a magnet: gravity must be finite, got ", gravity, " m/s^2");
+  const double g = gravity - kMu0 * flatLayerMagnetization(material, appliedH) * appliedGradient / density;
+  require(g > 0, "gravity near a magnet: the field's pull (gradient ", appliedGradient, " A/m^2 at H0 = ", appliedH,
+          " A/m) exceeds gravity ", gravity, " m/s^2: the layer is lifted, it has no flat state");
+  return g;
+}
+
 }  // namespace field
 }  // namespace lodestone

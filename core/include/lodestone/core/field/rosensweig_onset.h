@@ -40,5 +40,23 @@ struct RosensweigOnset {
 RosensweigOnset rosensweigOnset(const MagneticMaterial& material, double density, double surfaceTension,
                                 double gravity = 9.81);
 
+/// Magnetization (A/m) of a flat layer of `material` in a vertical applied
+/// field H0 (A/m, >= 0): B is continuous across its surface, so the field
+/// inside is the H with H + M(H) = H0. Throws InvalidArgument for an H0
+/// that is negative or not finite.
+double flatLayerMagnetization(const MagneticMaterial& material, double appliedH);
+
+/// The gravity (m/s^2) a flat layer of `material` (density kg/m^3) feels in
+/// a magnet's field: g - mu0 M dH0/dz / rho, with M the layer's
+/// magnetization in the applied vertical field H0 (A/m) at its surface and
+/// dH0/dz (A/m^2) that field's rate of change upward (negative over a
+/// magnet below: the pull adds to gravity; docs/physics.md, "Near a
+/// magnet"). The onset and the wavelength of spikes there are
+/// rosensweigOnset's with this gravity. Throws InvalidArgument naming a
+/// value that is not finite or a result that is not positive (the magnet
+/// lifts the layer off its floor).
+double gravityNearMagnet(const MagneticMaterial& material, double density, double appliedH, double appliedGradient,
+                         double gravity = 9.81);
+
 }  // namespace field
 }  // namespace lodestone
