@@ -67,3 +67,48 @@ ax.grid(True, which="both", alpha=0.3)
 fig.tight_layout()
 fig.savefig(os.path.join(here, "images", "rosensweig_saturation.png"))
 print("wrote docs/images/rosensweig_saturation.png")
+
+# The desk toy (examples/scenes/desk_toy.json; lodestone-bench-rosensweig
+# --sources scene): the last frame's surface seen from above, with the
+# spikes found and the circle within which the magnet's field passes the
+# onset (docs/data/desk_toy_surface.csv, docs/data/desk_toy.csv), for the
+# scene's magnet and a 0.7 T one (docs/data/desk_toy_07T*.csv).
+def desk_toy(ax, stem, title):
+    cells, spikes = [], []
+    with open(os.path.join(here, "data", stem + "_surface.csv")) as f:
+        for row in csv.DictReader(f):
+            p = (1e3 * float(row["x_m"]), 1e3 * float(row["y_m"]), 1e3 * float(row["z_m"]))
+            (cells if row["kind"] == "cell" else spikes).append(p)
+    with open(os.path.join(here, "data", stem + ".csv")) as f:
+        last = list(csv.DictReader(f))[-1]
+    rc = 1e3 * float(last["onset_radius_m"])
+    xs, ys = sorted({c[0] for c in cells}), sorted({c[1] for c in cells})
+    h = xs[1] - xs[0]
+    grid = [[float("nan")] * len(xs) for _ in ys]
+    for x, y, z in cells:
+        grid[round((y - ys[0]) / h)][round((x - xs[0]) / h)] = z
+    sc = ax.imshow(grid, origin="lower", extent=(xs[0] - h / 2, xs[-1] + h / 2, ys[0] - h / 2, ys[-1] + h / 2),
+                   cmap="viridis", vmin=4, vmax=11, interpolation="nearest")
+    ax.plot([s[0] for s in spikes], [s[1] for s in spikes], "r^", ms=5, label=f"{len(spikes)} peaks found")
+    if rc > 0:
+        ax.add_patch(matplotlib.patches.Circle((0, 0), rc, fill=False, color="w", ls="--", lw=1.2,
+                                               label=f"above onset: r < {rc:.1f} mm"))
+    ax.set_aspect("equal")
+    ax.set_xlim(-25, 25)
+    ax.set_ylim(-25, 25)
+    ax.set_xlabel("x (mm)")
+    ax.set_ylabel("y (mm)")
+    ax.set_title(f"{title}: {float(last['centre_applied_H_A_per_m']) / 1e3:.1f} kA/m at the centre, "
+                 f"{float(last['ratio']):.2f} H0_c", fontsize=9)
+    ax.legend(fontsize=7, loc="upper right")
+    return sc
+
+
+import matplotlib.patches  # noqa: E402
+
+fig, axes = plt.subplots(1, 2, figsize=(11, 4.8), dpi=110)
+for ax, (stem, title) in zip(axes, [("desk_toy", "1.45 T magnet"), ("desk_toy_07T", "0.7 T magnet")]):
+    sc = desk_toy(ax, stem, title)
+fig.colorbar(sc, ax=axes, label="surface height (mm)")
+fig.savefig(os.path.join(here, "images", "desk_toy_surface.png"))
+print("wrote docs/images/desk_toy_surface.png")
