@@ -17,6 +17,7 @@
 #include "lodestone/core/planner/material_patches.h"
 #include "lodestone/core/sources/sphere_magnet.h"
 #include "lodestone/core/sources/uniform_field.h"
+#include "lodestone/core/stage/far_field.h"
 #include "lodestone/core/stage/magnetic_patches.h"
 #include "lodestone/core/stage/magnetic_stage.h"
 #include "lodestone_test/scenes.h"
@@ -213,6 +214,54 @@ TEST(MagneticPatches, ASphereBesideACubeAboveAMagnetFeelsWhatItFeelsInOneBox) {
   }
   std::printf("sphere and cube: field error %.3g, %d rounds\n", c.fieldError, c.report.rounds);
   EXPECT_LT(c.fieldError, 1e-3);
+}
+
+TEST(SampledFarField, IsWithinItsBoundOfTheSumAndExactWhenTheBlocksAreNear) {
+  // 27 blocks of a magnetized cube (8-cell blocks, dipoles of a few A m^2
+  // leaning every way) beside a 30^3 grid: their centres 64 cells away, the
+  // field is sampled every 4 cells and interpolated, within 1.5 (h/d)^2 of
+  // the largest far field over the grid; 24 cells away it is summed exactly.
+  const GridSpec g{{0, 0, 0}, kDx, {30, 30, 30}};
+  for (const double gap : {60.0, 20.0}) {
+    std::vector<Multipole> blocks;
+    std::mt19937 rng(7);
+    std::uniform_real_distribution<double> U(-1, 1);
+    for (int k = 0; k < 3; ++k)
+      for (int j = 0; j < 3; ++j)
+        for (int i = 0; i < 3; ++i) {
+          Multipole m;
+          m.centre = Vec3d{(29 + gap + 4 + 8 * i) * kDx, (11 + 8 * j) * kDx, (11 + 8 * k) * kDx};
+          m.dipole = Vec3d{0.3 * U(rng), 0.3 * U(rng), 2 + 0.3 * U(rng)};
+          blocks.push_back(m);
+        }
+    const SampledFarField sampled(blocks, g);
+    double largest = 0, worst = 0;
+    std::size_t compared = 0;
+    const auto compare = [&](const Vec3d& x) {
+      const Vec3d exact = farFieldOf(blocks, x);
+      largest = std::max(largest, norm(exact));
+      worst = std::max(worst, norm(sampled.at(x) - exact));
+      ++compared;
+    };
+    for (int k = 0; k < 30; ++k)
+      for (int j = 0; j < 30; ++j)
+        for (int i = 0; i < 30; ++i) compare(g.nodePosition(i, j, k));
+    for (int q = 0; q < 2000; ++q)  // between the nodes, and up to a cell beyond the box
+      compare(Vec3d{(14.5 + 15.5 * U(rng)) * kDx, (14.5 + 15.5 * U(rng)) * kDx, (14.5 + 15.5 * U(rng)) * kDx});
+    const double d = distanceToBlocks(g, blocks), h = sampled.spacing();
+    std::printf("blocks %.0f cells from the grid: lattice %.0f cells, worst %.3g of the largest far field %.4g A/m "
+                "(bound 1.5 (h/d)^2 = %.3g), %zu points\n",
+                d / kDx, h / kDx, worst / largest, largest, 1.5 * (h / d) * (h / d), compared);
+    EXPECT_NEAR(d, (gap + 4) * kDx, 1e-12);
+    if (gap == 60.0) {
+      EXPECT_NEAR(h, 4 * kDx, 1e-12);  // floor(64 / 16) cells
+      EXPECT_GT(worst, 0.0);
+      EXPECT_LT(worst, 1.5 * (h / d) * (h / d) * largest);
+    } else {
+      EXPECT_EQ(h, 0.0);
+      EXPECT_EQ(worst, 0.0);
+    }
+  }
 }
 
 TEST(MaterialPatches, GroupsTouchingPointsAndMergesPatchesThatWouldMeet) {

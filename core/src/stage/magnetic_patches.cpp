@@ -2,14 +2,16 @@
 
 #include <algorithm>
 #include <array>
-#include <limits>
-#include <map>
 #include <chrono>
 #include <cmath>
+#include <limits>
+#include <map>
+#include <memory>
 #include <sstream>
 
 #include "lodestone/core/base/error.h"
 #include "lodestone/core/base/stopwatch.h"
+#include "lodestone/core/stage/far_field.h"
 
 namespace lodestone {
 inline namespace stage {
@@ -17,38 +19,12 @@ inline namespace stage {
 namespace {
 using Clock = std::chrono::steady_clock;
 
-/// The far field (A/m) of `blocks` at x.
-Vec3d farFieldOf(const std::vector<Multipole>& blocks, const Vec3d& x) {
-  Vec3d h;
-  for (const Multipole& m : blocks) h += m.field(x);
-  return h;
-}
-
 bool emptyMoment(const Multipole& m) {
   if (!(m.dipole == Vec3d{})) return false;
   for (const auto& row : m.quadrupole)
     for (double v : row)
       if (v != 0) return false;
   return true;
-}
-
-/// Distance (m) from grid g's box to the box of the centres of `blocks`.
-double distanceTo(const GridSpec& g, const std::vector<Multipole>& blocks) {
-  const double inf = std::numeric_limits<double>::infinity();
-  Vec3d lo{inf, inf, inf}, hi{-inf, -inf, -inf};
-  for (const Multipole& m : blocks)
-    for (int a = 0; a < 3; ++a) {
-      lo[a] = std::min(lo[a], m.centre[a]);
-      hi[a] = std::max(hi[a], m.centre[a]);
-    }
-  if (!(lo.x <= hi.x)) return inf;
-  const Vec3d gHi = g.maxCorner();
-  double d2 = 0;
-  for (int a = 0; a < 3; ++a) {
-    const double gap = std::max({0.0, lo[a] - gHi[a], g.origin[a] - hi[a]});
-    d2 += gap * gap;
-  }
-  return std::sqrt(d2);
 }
 
 /// `blocks` merged into clusters of edge `edge` (m): each cluster's moments
@@ -87,7 +63,7 @@ std::vector<Multipole> farBlocks(const std::vector<std::vector<Multipole>>& mome
   std::vector<Multipole> out;
   for (std::size_t q = 0; q < moments.size(); ++q) {
     if (q == self) continue;
-    const double edge = distanceTo(g, moments[q]) / 8;
+    const double edge = distanceToBlocks(g, moments[q]) / 8;
     if (edge > 16 * g.dx) {
       const std::vector<Multipole> c = clustered(moments[q], edge);
       out.insert(out.end(), c.begin(), c.end());
@@ -105,14 +81,14 @@ std::vector<Multipole> farBlocks(const std::vector<std::vector<Multipole>>& mome
 /// base's continuation and magnetization are passed on unchanged.
 class CoupledSource final : public FieldSource {
  public:
-  CoupledSource(const FieldSource& base, std::vector<Multipole> far, std::size_t others)
-      : base_(base), far_(std::move(far)), others_(others) {}
-  Vec3d field(const Vec3d& x, double t) const override { return base_.field(x, t) + farFieldOf(far_, x); }
+  CoupledSource(const FieldSource& base, std::vector<Multipole> far, const GridSpec& grid, std::size_t others)
+      : base_(base), far_(std::make_shared<const SampledFarField>(std::move(far), grid)), others_(others) {}
+  Vec3d field(const Vec3d& x, double t) const override { return base_.field(x, t) + far_->at(x); }
   Vec3d magnetization(const Vec3d& x, double t) const override { return base_.magnetization(x, t); }
   Vec3d exteriorContinuation(const Vec3d& x, double t) const override { return base_.exteriorContinuation(x, t); }
   void accumulateField(const Vec3d* x, std::size_t count, double t, Vec3d* out) const override {
     base_.accumulateField(x, count, t, out);
-    for (std::size_t n = 0; n < count; ++n) out[n] += farFieldOf(far_, x[n]);
+    for (std::size_t n = 0; n < count; ++n) out[n] += far_->at(x[n]);
   }
   std::string describe() const override {
     return concat(base_.describe(), " + the far field of ", others_, " other patch(es) of material");
@@ -121,7 +97,7 @@ class CoupledSource final : public FieldSource {
 
  private:
   const FieldSource& base_;
-  std::vector<Multipole> far_;
+  std::shared_ptr<const SampledFarField> far_;
   std::size_t others_;
 };
 
@@ -222,7 +198,7 @@ MagneticPatchReport MagneticPatches::run(const std::vector<ParticleView>& points
   for (int round = 1; round <= patchSettings_.maxRounds; ++round) {
     rep.rounds = round;
     for (std::size_t p = 0; p < n; ++p) {
-      const CoupledSource coupled(sources, farBlocks(moments_, p, stages_[p]->grid()), n - 1);
+      const CoupledSource coupled(sources, farBlocks(moments_, p, stages_[p]->grid()), stages_[p]->grid(), n - 1);
       MagneticForceStage& stage = *stages_[p];
       if (round == 1) {
         rep.patches[p] = stage.run(points[p], coupled, time);
