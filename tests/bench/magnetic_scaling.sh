@@ -9,7 +9,9 @@
 # and without them (one active region around both). Each case is one
 # `lodestone run` of one frame; its stats.json gives the phases, the first
 # (cold) and the mean later (warm) magnetic stage, and the estimated and
-# measured peak memory. With PREV_BUILD_DIR every case is also run by that
+# measured peak memory. Two cubes in a 257^3 box, with patches and
+# without, price the patches where both fit. ONLY=PREFIX runs the cases
+# whose name starts with PREFIX (appending to CSV). With PREV_BUILD_DIR every case is also run by that
 # binary (column `binary`); a case a binary refuses is printed and left out.
 #   tests/bench/magnetic_scaling.sh BUILD_DIR [CSV] [THREADS] [PREV_BUILD_DIR]
 set -eu
@@ -20,16 +22,21 @@ threads=${3:-2}
 prev=${4:-}
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
-echo "binary,case,particles,grid_nodes,field_nodes,patches,mpm_ms_per_substep,magnetic_ms_per_substep,magnetic_cold_s,magnetic_warm_s,estimated_bytes,peak_bytes" > "$csv"
+only=${ONLY:-}
+[ -n "$only" ] && [ -s "$csv" ] ||
+  echo "binary,case,particles,grid_nodes,field_nodes,patches,mpm_ms_per_substep,magnetic_ms_per_substep,magnetic_cold_s,magnetic_warm_s,estimated_bytes,peak_bytes" > "$csv"
 # case, particles, box side (m), bodies (1 or 2), patches (auto/off)
 cases="one-body-129 1e6 1.0 1 auto
 one-body-1027 1e6 8.0 1 auto
 one-body-1027 1e7 8.0 1 auto
 two-bodies-1027 1e6 8.0 2 auto
-two-bodies-1027-one-box 1e6 8.0 2 off"
+two-bodies-1027-one-box 1e6 8.0 2 off
+two-bodies-257 1e6 2.0 2 auto
+two-bodies-257-one-box 1e6 2.0 2 off"
 binaries="current:$build"
 [ -n "$prev" ] && binaries="$binaries previous:$prev"
 echo "$cases" | while read -r name n side bodies patches; do
+  case "$name" in "$only"*) ;; *) continue ;; esac
   python3 - "$n" "$side" "$bodies" "$patches" > "$work/scene.json" <<'PY'
 import json, sys
 n, side, bodies, patches = float(sys.argv[1]), float(sys.argv[2]), int(sys.argv[3]), sys.argv[4]
