@@ -12,6 +12,21 @@ function(to_millionths value out)
   set(${out} ${v} PARENT_SCOPE)
 endfunction()
 
+# The fields of one CSV row `row`: ratio, frame, t (s), rms (cells), peaks;
+# and lastFrame, the largest frame seen so far (a macro: they are the
+# caller's).
+macro(read_row row)
+  string(REPLACE "," ";" _fields "${row}")
+  list(GET _fields 1 ratio)
+  list(GET _fields 3 frame)
+  list(GET _fields 4 t)
+  list(GET _fields 7 rms)
+  list(GET _fields 8 peaks)
+  if(frame GREATER lastFrame)
+    set(lastFrame ${frame})
+  endif()
+endmacro()
+
 # Mean nearest spike distance (millionths of the wavelength) over the last 10
 # frames (`lastFrame` the last) of the rows in `lines` of ratio `which` (any
 # ratio when empty).
