@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <sstream>
 
 #include <tbb/blocked_range.h>
@@ -179,8 +180,12 @@ MagneticPlan planMagnetic(const PlannerSettings& settings, const PlannerInputs& 
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, in.count, 1024), [&](const tbb::blocked_range<std::size_t>& r) {
     for (std::size_t m = r.begin(); m != r.end(); ++m) H[m] = in.applied->field(in.positions[m], in.time);
   });
-  double hMax = 0;
-  for (const Vec3d& h : H) hMax = std::max(hMax, norm(h));
+  double hMax = 0, hMin = std::numeric_limits<double>::infinity();
+  for (const Vec3d& h : H) {
+    const double n = norm(h);
+    hMax = std::max(hMax, n);
+    hMin = std::min(hMin, n);
+  }
   plan.peakAppliedField = hMax;
   const MagnetizationLaw<double>& law = in.material.law;
   const double n0 = in.material.numberDensity;
@@ -235,14 +240,11 @@ MagneticPlan planMagnetic(const PlannerSettings& settings, const PlannerInputs& 
 
   // Applied field only: no solve when the material barely changes H.
   {
-    // Chord susceptibility M/H is largest at the lowest field; inside a body
-    // H >= H_ext / (1 + chi0) (N <= 1), so evaluate it there.
-    double chi = 0;
-    for (const Vec3d& h : H) {
-      const double hl = norm(h) / (1 + chi0);
-      const double M = norm(magnetization(law, n0, Vec3d{hl, 0, 0}));
-      chi = std::max(chi, hl > 0 ? M / hl : chi0);
-    }
+    // Chord susceptibility M/H is largest at the lowest field (the laws'
+    // M(H) are concave from 0); inside a body H >= H_ext / (1 + chi0)
+    // (N <= 1), so evaluate it there, at the weakest applied field.
+    const double hl = hMin / (1 + chi0);
+    const double chi = hl > 0 ? norm(magnetization(law, n0, Vec3d{hl, 0, 0})) / hl : chi0;
     const bool fits = chi <= share;
     plan.appliedFieldOnly = decide(settings.appliedFieldOnly, fits);
     const std::string why = concat("largest susceptibility ", fmt(chi), fits ? " <= " : " > ", "budget share ",
