@@ -2,6 +2,7 @@
 #include "lodestone/core/field/rosensweig_onset.h"
 
 #include <cmath>
+#include <utility>
 
 #include "lodestone/core/base/constants.h"
 #include "lodestone/core/base/error.h"
@@ -22,6 +23,18 @@ OperatingPoint at(const MagneticMaterial& m, double H) {
   p.tangent = 1 + r.iso + r.rank1 * r.h.z * r.h.z;
   p.chord = H > 0 ? 1 + p.M / H : 1 + m.lowFieldSusceptibility();
   return p;
+}
+
+/// Narrows [lo, hi] around the root of an increasing function by bisection,
+/// `below(x)` telling whether x lies below it, to 1e-13 of hi (at most 200
+/// halvings); returns the final bracket.
+template <typename Below>
+std::pair<double, double> bisect(double lo, double hi, const Below& below) {
+  for (int it = 0; it < 200 && hi - lo > 1e-13 * hi; ++it) {
+    const double mid = 0.5 * (lo + hi);
+    (below(mid) ? lo : hi) = mid;
+  }
+  return {lo, hi};
 }
 
 }  // namespace
@@ -56,10 +69,7 @@ RosensweigOnset rosensweigOnset(const MagneticMaterial& material, double density
     lo = hi;
     hi *= 2;
   }
-  for (int it = 0; it < 200 && hi - lo > 1e-13 * hi; ++it) {
-    const double mid = 0.5 * (lo + hi);
-    (excess(mid, p) < 0 ? lo : hi) = mid;
-  }
+  hi = bisect(lo, hi, [&](double H) { return excess(H, p) < 0; }).second;
   excess(hi, p);
   out.H = hi;
   out.M = p.M;
@@ -73,11 +83,7 @@ double flatLayerMagnetization(const MagneticMaterial& material, double appliedH)
   require(std::isfinite(appliedH) && appliedH >= 0, "flat layer: the applied field must be >= 0 and finite, got ",
           appliedH, " A/m");
   // H + M(H) grows with H from 0 and H0 lies between H = 0 and H = H0.
-  double lo = 0, hi = appliedH;
-  for (int it = 0; it < 200 && hi - lo > 1e-13 * hi; ++it) {
-    const double mid = 0.5 * (lo + hi);
-    (mid + at(material, mid).M < appliedH ? lo : hi) = mid;
-  }
+  const auto [lo, hi] = bisect(0.0, appliedH, [&](double H) { return H + at(material, H).M < appliedH; });
   return at(material, 0.5 * (lo + hi)).M;
 }
 
