@@ -138,6 +138,11 @@ struct PetscMpmPartition::Impl {
   }
 };
 
+// The window's width beyond the box, in nodes: a particle's stencil reaches
+// two nodes beyond its base node, and surface tension's colour Hessian the
+// neighbours of those (core/mpm/partition.h).
+constexpr PetscInt kWindowWidth = 3;
+
 PetscMpmPartition::PetscMpmPartition(MPI_Comm comm, const GridSpec& grid) : impl_(std::make_unique<Impl>()) {
   grid.validate("MPM partition grid");
   Impl& m = *impl_;
@@ -147,12 +152,12 @@ PetscMpmPartition::PetscMpmPartition(MPI_Comm comm, const GridSpec& grid) : impl
   MPI_Comm_size(comm, &m.size);
   PetscInt pm = PETSC_DECIDE, pn = PETSC_DECIDE, pp = PETSC_DECIDE;
   LODESTONE_PETSC(DMDACreate3d(comm, DM_BOUNDARY_NONE, DM_BOUNDARY_NONE, DM_BOUNDARY_NONE, DMDA_STENCIL_BOX,
-                               grid.dims.i, grid.dims.j, grid.dims.k, pm, pn, pp, 4, 2, nullptr, nullptr, nullptr,
-                               &m.da));
+                               grid.dims.i, grid.dims.j, grid.dims.k, pm, pn, pp, 4, kWindowWidth, nullptr, nullptr,
+                               nullptr, &m.da));
   if (DMSetUp(m.da) != 0)
     throw Error(concat("MPM partition: PETSc cannot split the ", grid.dims.i, " x ", grid.dims.j, " x ", grid.dims.k,
                        " node grid over ", m.size,
-                       " ranks (each rank's box needs at least 2 nodes per axis); use "
+                       " ranks (each rank's box needs at least 3 nodes per axis); use "
                        "fewer ranks"));
   PetscInt xs, ys, zs, xm, ym, zm, gxs, gys, gzs, gxm, gym, gzm, M, N, P;
   LODESTONE_PETSC(DMDAGetCorners(m.da, &xs, &ys, &zs, &xm, &ym, &zm));
@@ -184,7 +189,8 @@ PetscMpmPartition::PetscMpmPartition(MPI_Comm comm, const GridSpec& grid) : impl
   LODESTONE_PETSC(DMCreateGlobalVector(m.da, &m.global));
   LODESTONE_PETSC(DMCreateLocalVector(m.da, &m.local));
   LODESTONE_PETSC(DMDACreate3d(comm, DM_BOUNDARY_NONE, DM_BOUNDARY_NONE, DM_BOUNDARY_NONE, DMDA_STENCIL_BOX,
-                               grid.dims.i, grid.dims.j, grid.dims.k, M, N, P, 1, 2, l[0], l[1], l[2], &m.scalars));
+                               grid.dims.i, grid.dims.j, grid.dims.k, M, N, P, 1, kWindowWidth, l[0], l[1], l[2],
+                               &m.scalars));
   LODESTONE_PETSC(DMSetUp(m.scalars));
   LODESTONE_PETSC(DMCreateGlobalVector(m.scalars, &m.scalarGlobal));
   LODESTONE_PETSC(DMCreateLocalVector(m.scalars, &m.scalarLocal));

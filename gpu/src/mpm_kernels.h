@@ -139,7 +139,7 @@ LODESTONE_HOSTDEV inline bool colourParticle(const MpmDims& g, const MpmMaterial
 }
 
 /// Surface tension, second pass: the capillary stress of particle p (Pa) from
-/// the colour gradient at it (surface_tension.h); zero for materials without
+/// the colour gradient and Hessian at it (surface_tension.h); zero for materials without
 /// it or whose stencil does not fit the grid (which P2G then reports).
 LODESTONE_HOSTDEV inline Mat3d capillaryParticle(const MpmDims& g, const MpmMaterialParams* materials,
                                                  std::uint32_t materialCount, const ParticlePointers& P,
@@ -155,9 +155,7 @@ LODESTONE_HOSTDEV inline Mat3d capillaryParticle(const MpmDims& g, const MpmMate
   const QuadraticWeights<double> wx = quadraticWeightsAt(ux, bi, invDx);
   const QuadraticWeights<double> wy = quadraticWeightsAt(uy, bj, invDx);
   const QuadraticWeights<double> wz = quadraticWeightsAt(uz, bk, invDx);
-  const std::size_t sj = std::size_t(g.nx), sk = sj * std::size_t(g.ny);
-  const Vec3d grad = colourGradient(colour + g.index(bi, bj, bk), sj, sk, wx, wy, wz);
-  return particleCapillaryStress(grad, sigma, minColourGradient(invDx));
+  return particleCapillaryStress(colour, g.nx, g.ny, g.nz, bi, bj, bk, wx, wy, wz, sigma, invDx);
 }
 
 /// Whether some material has surface tension.

@@ -513,7 +513,8 @@ void MpmGrid::particleToGrid(const MpmParticles& particles, const std::vector<Mp
   // Surface tension (surface_tension.h), only when some material has it: the
   // colour field c_i = sum_p w_ip V_p / dx^3 of the liquids with sigma > 0
   // (V_p = V_p^0 J_p), scattered row by row like the mass (deterministic),
-  // then per particle g_p = sum_i c_i grad w_ip and T_p = sigma |g_p| (I - n n^T).
+  // then per particle g_p = sum_i c_i grad w_ip, the colour's Hessian and
+  // T_p = sigma (|g_p| P + d P H P), P = I - n n^T (particleCapillaryStress).
   std::vector<double> sigma(params.size());
   bool anySurfaceTension = false;
   for (std::size_t m = 0; m < params.size(); ++m) {
@@ -613,10 +614,10 @@ void MpmGrid::computeCapillaryStress(const MpmParticles& particles, const std::v
 
   if (colourSum_) colourSum_(colour_.data(), colour_.size());
 
-  // Per particle: g_p = sum_i c_i grad w_ip (1/m) and the capillary stress.
+  // Per particle: the colour's gradient and Hessian and the capillary stress
+  // (nodes outside the runs read 0, the colour there).
   capillary_.resize(np);
   Mat3d* T = capillary_.data();
-  const double minGradient = minColourGradient(invDx);
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, np, 2048), [&](const tbb::blocked_range<std::size_t>& r) {
     for (std::size_t p = r.begin(); p != r.end(); ++p) {
       const double sigma = sigmaOf[mat[p]];
@@ -629,8 +630,8 @@ void MpmGrid::computeCapillaryStress(const MpmParticles& particles, const std::v
       const QuadraticWeights<double> wx = quadraticWeightsAt(ux, int(quadraticBaseFloor(ux)), invDx);
       const QuadraticWeights<double> wy = quadraticWeightsAt(uy, int(quadraticBaseFloor(uy)), invDx);
       const QuadraticWeights<double> wz = quadraticWeightsAt(uz, int(quadraticBaseFloor(uz)), invDx);
-      const Vec3d g = colourGradient(colour + spec_.index(wx.base, wy.base, wz.base), sj, sk, wx, wy, wz);
-      T[p] = particleCapillaryStress(g, sigma, minGradient);
+      T[p] = particleCapillaryStress(colour, spec_.dims.i, spec_.dims.j, spec_.dims.k, wx.base, wy.base, wz.base, wx,
+                                     wy, wz, sigma, invDx);
     }
   });
 }

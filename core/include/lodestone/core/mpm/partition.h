@@ -7,8 +7,9 @@
 // The MPM grid is split into boxes of nodes, one per process. A process owns
 // the particles whose stencil base node (floor((x - origin)/dx - 1/2) per
 // axis, the node MpmGrid bins a particle by) lies in its box, and holds the
-// grid on its window: its box widened by two nodes on each side (clipped to
-// the grid), which covers every node its particles' 3x3x3 stencils reach.
+// grid on its window: its box widened by three nodes on each side (clipped
+// to the grid), which covers every node its particles' 3x3x3 stencils reach
+// and, for surface tension's colour Hessian, their neighbours.
 // A substep of a partitioned solver:
 //   - migrate: particles whose base node left the box go to their new owner;
 //   - P2G on the window, then sumNodes: every window node gets the sum of the
