@@ -5,7 +5,8 @@
 //   wedge-summary DIR                            contact sheet and table
 //   farm-post DIR --task T                       per-frame post-processing of
 //                                                a run's cache over frame ranges
-// main.cpp registers them (addFarmCommands) and runs the one chosen.
+// command_args.cpp registers them (addFarmCommands); main.cpp runs the one
+// chosen.
 #include <optional>
 #include <string>
 #include <vector>
