@@ -2,13 +2,13 @@
 # lodestone-bench-rosensweig --sources scene on the scene and on a copy with
 # a 0.7 T magnet instead of 1.45 T, and checks their CSVs against the onset
 # taken with the magnet's pull (field/rosensweig_onset.h, gravityNearMagnet):
-#   - 0.7 T: the centre stays below the onset field (measured ...)
+#   - 0.7 T: the centre stays below the onset field (measured 0.78 H0_c)
 #     and the surface flat: rms height below half a cell from 0.2 s on
-#     (measured at most ...);
-#   - 1.45 T: the centre above 1.2 H0_c (measured 1.36), and spikes: rms
-#     height above a cell at the end (measured 1.82), at least 10 spikes
-#     (36), their mean nearest distance over the last 10 frames between 0.5
-#     and 1.0 times the wavelength at the centre (0.66; the wavelength with
+#     (measured at most 0.37 cells);
+#   - 1.45 T: the centre above 1.2 H0_c (measured 1.38), and spikes: rms
+#     height above a cell at the end (measured 1.57), at least 10 spikes
+#     (41), their mean nearest distance over the last 10 frames between 0.5
+#     and 1.0 times the wavelength at the centre (0.64; the wavelength with
 #     gravity alone would be 1.5 times the one with the pull).
 #
 #   cmake -DBENCH=path/to/lodestone-bench-rosensweig -DSCENE=desk_toy.json -DOUT=dir -P check_desk_toy.cmake

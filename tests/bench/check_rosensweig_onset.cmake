@@ -2,12 +2,12 @@
 # (docs/ferrofluid.md): runs lodestone-bench-rosensweig at 0.8, 1.15 and 1.3
 # times the onset field H0_c and checks its CSV:
 #   - 0.8 H0_c stays flat: the surface's rms height stays below half a cell
-#     from 0.2 s on (measured: at most 0.25 cells);
+#     from 0.2 s on (measured: at most 0.24 cells);
 #   - 1.15 H0_c: the spikes' mean nearest distance over the last 10 frames
-#     within 15% of lambda_c (measured 0.90 lambda_c);
+#     within 15% of lambda_c (measured 1.01 lambda_c);
 #   - 1.3 H0_c forms spikes: rms height above one cell at the end (measured
-#     1.96), at least 6 spikes (16), closer together than at 1.15 H0_c
-#     (0.77 lambda_c: above the onset the fastest-growing wavelength
+#     1.72), at least 6 spikes (9), closer together than at 1.15 H0_c
+#     (0.88 lambda_c: above the onset the fastest-growing wavelength
 #     shortens).
 #
 #   cmake -DBENCH=path/to/lodestone-bench-rosensweig -DOUT=dir -P check_rosensweig_onset.cmake
