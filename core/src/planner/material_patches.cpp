@@ -46,6 +46,10 @@ MaterialPatches findMaterialPatches(const GridSpec& grid, const Vec3d* x, std::s
   std::vector<std::array<long, 3>> cellIndex;
   std::vector<Box> cellBox;
   std::vector<std::size_t> pointCell(count);
+  // Points come in runs of one cell (the particles are kept sorted by cell):
+  // the last cell found is tried before the hash.
+  std::uint64_t lastKey = 0;
+  std::size_t lastCell = 0;
   for (std::size_t p = 0; p < count; ++p) {
     std::array<double, 3> u;
     std::array<long, 3> c;
@@ -54,20 +58,27 @@ MaterialPatches findMaterialPatches(const GridSpec& grid, const Vec3d* x, std::s
       require(std::isfinite(u[a]), "material patches: point ", p, " is not finite");
       c[a] = long(std::floor(std::clamp(u[a], -1e6, 1e6) / pad));
     }
-    const auto [it, fresh] = cellOf.emplace(cellKey(c[0], c[1], c[2]), cellBox.size());
     Box b;
     for (int a = 0; a < 3; ++a) {
       b.lo[a] = std::max(0, int(std::floor(u[a])) - pad);
       b.hi[a] = std::min(grid.dims[a] - 1, int(std::ceil(u[a])) + pad);
     }
     b.first = p;
-    if (fresh) {
-      cellIndex.push_back(c);
-      cellBox.push_back(b);
+    const std::uint64_t key = cellKey(c[0], c[1], c[2]);
+    if (p == 0 || key != lastKey) {
+      const auto [it, fresh] = cellOf.emplace(key, cellBox.size());
+      if (fresh) {
+        cellIndex.push_back(c);
+        cellBox.push_back(b);
+      } else {
+        cellBox[it->second].add(b);
+      }
+      lastKey = key;
+      lastCell = it->second;
     } else {
-      cellBox[it->second].add(b);
+      cellBox[lastCell].add(b);
     }
-    pointCell[p] = it->second;
+    pointCell[p] = lastCell;
   }
   // Touching cells are one group.
   std::vector<std::size_t> parent(cellBox.size());
