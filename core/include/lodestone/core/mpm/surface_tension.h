@@ -79,9 +79,11 @@ LODESTONE_HOSTDEV inline Vec3<T> colourGradient(const T* corner, std::size_t sj,
 /// the liquid half (c > 1/2) of the smoothed interface, which holds half of
 /// the integral of |g| across it (the colour field is symmetric about the
 /// surface, c(s) + c(-s) = 1 across a flat one): on a flat interface seeded
-/// with 1 to 4 particles per cell and axis, sum_p V_p |g_p| per unit area is
-/// 0.50 on average over the lattice's offsets from the surface (0.45 ..
-/// 0.55). The particles' stress is therefore twice the continuum one.
+/// with 1, 2 and 3 particles per cell and axis, sum_p V_p |g_p| per unit
+/// area is 0.500, 0.483 and 0.486 on average over the lattice's offsets from
+/// the surface (0.45 .. 0.55; FlatInterfaceTensionDepth in
+/// tests/core/test_surface_tension.cpp). The particles' stress is therefore
+/// twice the continuum one.
 constexpr double kLiquidSideWeight = 2.0;
 
 /// How far inside the liquid's outline its particles carry the tension, in
