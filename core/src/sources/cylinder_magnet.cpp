@@ -59,8 +59,10 @@ void cylinderAxialField(T rho, T z, T a, T b, T M, T minKc, T& Hrho, T& Hz) {
     const T den = sqrt(zz * zz + (a + rho) * (a + rho));
     const T alpha = a / den, beta = zz / den;
     const T kc = fmax(sqrt(zz * zz + (a - rho) * (a - rho)) / den, minKc);
-    br += sign * alpha * cel(kc, T(1), T(1), T(-1));
-    bz += sign * beta * cel(kc, g * g, T(1), g);
+    T radial = T(0), axial = T(0);
+    celPair(kc, T(1), T(1), T(-1), g * g, T(1), g, radial, axial);
+    br += sign * alpha * radial;
+    bz += sign * beta * axial;
   }
   const T pi = T(3.14159265358979323846264338327950288L);
   Hrho = M / pi * br;
