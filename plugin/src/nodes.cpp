@@ -115,8 +115,7 @@ MagneticMaterial sharedMagnetic(const ParticlesData& p) {
   const MagneticMaterial* found = nullptr;
   for (const MpmMaterial& m : p.materials) {
     if (!m.isMagnetic()) continue;
-    if (found && (found->law.kind != m.magnetic.law.kind || found->law.k2 != m.magnetic.law.k2 ||
-                  found->law.chiPerDensity != m.magnetic.law.chiPerDensity))
+    if (found && found->law != m.magnetic.law)
       throw InvalidArgument("the magnetic materials differ in their magnetization law; one field solve needs one law");
     if (!found) found = &m.magnetic;
   }

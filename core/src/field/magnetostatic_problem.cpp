@@ -2,7 +2,9 @@
 #include "lodestone/core/field/wall_clearance.h"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
+#include <limits>
 #include <numeric>
 
 #include <tbb/blocked_range.h>
@@ -70,7 +72,11 @@ void MagnetostaticProblem::gatherCorners(std::size_t base, const double* v, doub
   for (int n = 0; n < 8; ++n) c[n] = v[base + cornerOffset_[n]];
 }
 
-void MagnetostaticProblem::setMaterial(GridView<const double> n, const AppliedFieldFunction& appliedField) {
+void MagnetostaticProblem::setMaterial(GridView<const double> n, const AppliedFieldFunction& appliedField,
+                                       bool sameAppliedField) {
+  // Gauss points' values are kept only from a call that completed.
+  const bool keep = sameAppliedField && haveAppliedField_;
+  haveAppliedField_ = false;
   require(n.spec == grid_, "field solve: the density grid does not match the solver grid");
   require(bool(appliedField), "field solve: no applied-field function given");
   const std::size_t count = grid_.nodeCount();
@@ -88,6 +94,15 @@ void MagnetostaticProblem::setMaterial(GridView<const double> n, const AppliedFi
     throw InvalidArgument(concat("field solve: micro-particle density n at node (", bad % nx, ", ",
                                  (bad / nx) % ny, ", ", bad / (nx * ny), ") is ", n[bad],
                                  " 1/m^3; it must be finite and >= 0"));
+  }
+
+  std::vector<std::size_t> oldBase;
+  std::vector<Vec3d> oldHext;
+  std::size_t oldStart[9] = {};
+  if (keep) {  // the previous cells and their Gauss points' applied field
+    oldBase.swap(cellBase_);
+    oldHext.swap(hext_);
+    std::copy(colourStart_, colourStart_ + 9, oldStart);
   }
 
   // Material cells per z-slab and colour, concatenated in slab order.
@@ -119,26 +134,64 @@ void MagnetostaticProblem::setMaterial(GridView<const double> n, const AppliedFi
   if (!stencil_.sameCells(grid_, cellBase_.data(), cells)) stencil_.build(grid_, cellBase_.data(), cells);
   stencil_.clear();
 
+  // Each kept cell's slot in the previous lists: within a colour both list
+  // their cells by ascending base index.
+  constexpr std::size_t kFresh = std::numeric_limits<std::size_t>::max();
+  std::vector<std::size_t> oldSlot;
+  if (keep) {
+    oldSlot.assign(cells, kFresh);
+    tbb::parallel_for(0, 8, [&](int c) {
+      std::size_t a = oldStart[c], s = colourStart_[c];
+      while (a < oldStart[c + 1] && s < colourStart_[c + 1]) {
+        if (oldBase[a] < cellBase_[s]) {
+          ++a;
+        } else if (cellBase_[s] < oldBase[a]) {
+          ++s;
+        } else {
+          oldSlot[s++] = a++;
+        }
+      }
+    });
+  }
+
   const double h = grid_.dx;
+  std::atomic<std::size_t> evaluated{0};
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, cells, 256), [&](const tbb::blocked_range<std::size_t>& r) {
-    std::vector<Vec3d> x(r.size() * 8);
+    std::vector<Vec3d> x;
+    x.reserve(r.size() * 8);
+    std::vector<std::size_t> fresh;  // cells of r evaluated now (keep only)
     for (std::size_t s = r.begin(); s != r.end(); ++s) {
       double nc[8];
       gatherCorners(cellBase_[s], n.data, nc);
-      const Vec3d o = cellOrigin(cellBase_[s]);
-      for (int q = 0; q < 8; ++q) {
-        nq_[s * 8 + std::size_t(q)] = q1::interpolate(kQ1, q, nc);
-        x[(s - r.begin()) * 8 + std::size_t(q)] =
-            o + h * Vec3d{q1::gaussAbscissa(q & 1), q1::gaussAbscissa((q >> 1) & 1), q1::gaussAbscissa((q >> 2) & 1)};
+      for (int q = 0; q < 8; ++q) nq_[s * 8 + std::size_t(q)] = q1::interpolate(kQ1, q, nc);
+      if (keep) {
+        if (oldSlot[s] != kFresh) {
+          std::copy_n(&oldHext[oldSlot[s] * 8], 8, &hext_[s * 8]);
+          continue;
+        }
+        fresh.push_back(s);
       }
+      const Vec3d o = cellOrigin(cellBase_[s]);
+      for (int q = 0; q < 8; ++q)
+        x.push_back(o + h * Vec3d{q1::gaussAbscissa(q & 1), q1::gaussAbscissa((q >> 1) & 1),
+                                  q1::gaussAbscissa((q >> 2) & 1)});
     }
-    appliedField(x.data(), x.size(), &hext_[r.begin() * 8]);
+    evaluated += x.size() / 8;
+    if (!keep) {
+      appliedField(x.data(), x.size(), &hext_[r.begin() * 8]);
+    } else if (!x.empty()) {
+      std::vector<Vec3d> H(x.size());
+      appliedField(x.data(), x.size(), H.data());
+      for (std::size_t f = 0; f < fresh.size(); ++f) std::copy_n(&H[f * 8], 8, &hext_[fresh[f] * 8]);
+    }
   });
+  cellsEvaluated_ = evaluated;
   for (std::size_t m = 0; m < cells * 8; ++m)
     if (!isFinite(hext_[m]))
       throw InvalidArgument(concat("field solve: the applied field is not finite at (",
                                    cellOrigin(cellBase_[m / 8]).x, ", ", cellOrigin(cellBase_[m / 8]).y, ", ",
                                    cellOrigin(cellBase_[m / 8]).z, ") m"));
+  haveAppliedField_ = true;
 
   // Clearance to the wall, total count and centroid.
   wallClearance_ = lodestone::materialWallClearance(grid_, cellBase_.data(), cells);

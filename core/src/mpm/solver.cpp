@@ -31,10 +31,6 @@ using Clock = std::chrono::steady_clock;
 
 constexpr std::size_t kNoNode = ~std::size_t(0);  // no node (checkFiniteGrid)
 
-bool sameLaw(const MagnetizationLaw<double>& a, const MagnetizationLaw<double>& b) {
-  return a.kind == b.kind && a.moment == b.moment && a.k2 == b.k2 && a.chiPerDensity == b.chiPerDensity;
-}
-
 bool finiteMat(const Mat3d& m) {
   for (int r = 0; r < 3; ++r)
     for (int c = 0; c < 3; ++c)
@@ -130,7 +126,7 @@ std::uint32_t MpmSolver::addMaterial(const MpmMaterial& material) {
   if (material.isMagnetic()) {
     for (const MpmMaterial& m : materials_)
       if (m.isMagnetic())
-        require(sameLaw(m.magnetic.law, material.magnetic.law),
+        require(m.magnetic.law == material.magnetic.law,
                 "MPM solver: every magnetic material must share one magnetization law (one field solve serves them "
                 "all); existing ",
                 m.magnetic.describe(), ", new ", material.magnetic.describe());

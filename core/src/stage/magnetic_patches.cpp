@@ -133,6 +133,7 @@ MagneticStageReport MagneticPatchReport::combined() const {
     c.secondsFields += r.secondsFields;
     c.secondsForce += r.secondsForce;
     c.appliedFieldReused = p == 0 ? r.appliedFieldReused : c.appliedFieldReused && r.appliedFieldReused;
+    c.appliedFieldCellsEvaluated += r.appliedFieldCellsEvaluated;
     FieldSolveReport& s = c.solve;
     if (s.converged() && (!r.solve.converged() || s.status == SolveStatus::Trivial)) {
       s.status = r.solve.status;

@@ -41,6 +41,11 @@ struct MagnetizationLaw {
     if (kind == LawKind::Langevin) return n * moment * k2 / T(3);
     return kind == LawKind::Linear ? chiPerDensity * n : T(0);
   }
+  /// Same kind and the same constants, bit for bit.
+  LODESTONE_HOSTDEV bool operator==(const MagnetizationLaw& o) const {
+    return kind == o.kind && moment == o.moment && k2 == o.k2 && chiPerDensity == o.chiPerDensity;
+  }
+  LODESTONE_HOSTDEV bool operator!=(const MagnetizationLaw& o) const { return !(*this == o); }
 };
 
 /// M, dM/dH and W at one point.

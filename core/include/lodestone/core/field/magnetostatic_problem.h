@@ -47,8 +47,17 @@ class MagnetostaticProblem {
 
   /// Finds the material cells (any corner with n > 0), interpolates n (1/m^3)
   /// to their Gauss points and evaluates the applied field there.
+  /// `sameAppliedField`: the caller knows that appliedField is the field of
+  /// the previous call (the sources and their poses unchanged); cells that
+  /// were material then keep their Gauss points' values, and only the new
+  /// cells are evaluated (the values are those a fresh evaluation gives, bit
+  /// for bit, as long as the function evaluates each point on its own).
   /// Throws InvalidArgument on a negative or non-finite density.
-  void setMaterial(GridView<const double> n, const AppliedFieldFunction& appliedField);
+  void setMaterial(GridView<const double> n, const AppliedFieldFunction& appliedField,
+                   bool sameAppliedField = false);
+  /// Material cells whose Gauss points' applied field the last setMaterial
+  /// evaluated (the others kept their values).
+  std::size_t appliedFieldCellsEvaluated() const { return cellsEvaluated_; }
 
   const GridSpec& grid() const { return grid_; }
   BoundaryKind boundary() const { return boundary_; }
@@ -174,6 +183,8 @@ class MagnetostaticProblem {
   // Material cells, grouped by colour (cell parity); colourStart_[c] .. colourStart_[c+1].
   std::vector<std::size_t> cellBase_;  // base node index of each material cell
   std::size_t colourStart_[9] = {};
+  std::size_t cellsEvaluated_ = 0;     // cells whose applied field the last setMaterial evaluated
+  bool haveAppliedField_ = false;      // hext_ holds the values of cellBase_'s cells
   std::vector<double> nq_;             // density at Gauss points, 8 per cell, 1/m^3
   std::vector<Vec3d> hext_;            // applied field at Gauss points, A/m
   // Material element matrices sum_q w dN_q^T dM/dH_q dN_q / dx^2 (packed upper

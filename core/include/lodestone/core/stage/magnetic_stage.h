@@ -9,6 +9,7 @@
 // and can sample the force density back to particle positions for hosts
 // whose grid differs from ours. No I/O; nothing MPM-specific beyond the
 // particle arrays. The potential is kept between calls as the warm start.
+#include <cstddef>
 #include <cstdint>
 #include <memory>
 #include <optional>
@@ -48,8 +49,10 @@ struct MagneticStageReport {
   double secondsAppliedField = 0;  ///< sources evaluated at nodes and Gauss points
   /// True when H_ext at the nodes was kept from the previous run: the same
   /// sources, unmoved, with the same time factor (FieldSource::appendFieldSignature);
-  /// only the material's Gauss points were evaluated.
+  /// only the material's Gauss points were evaluated, and of those only the
+  /// cells that were not material in the previous run.
   bool appliedFieldReused = false;
+  std::size_t appliedFieldCellsEvaluated = 0;  ///< material cells whose 8 Gauss points were evaluated
   double secondsSolve = 0;
   double secondsFields = 0;        ///< nodal H, M, B
   double secondsForce = 0;
