@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstdio>
 #include <string>
+#include <vector>
 
 #include "lodestone/core/planner/effects_planner.h"
 #include "lodestone/core/field/material.h"
@@ -287,5 +288,84 @@ TEST(EffectsPlanner, SeparateBodiesAreSolvedAsPatchesWithTheOneBoxesForces) {
     EXPECT_LT(box.force[b].z, 0.0);  // pulled down onto its magnet
     EXPECT_LT(norm(patched.force[b] - box.force[b]), 0.005 * norm(box.force[b]));
     EXPECT_NEAR(patched.moved[b], box.moved[b], 0.005 * std::fabs(box.moved[b]));
+  }
+}
+
+TEST(EffectsPlanner, SettlingEarlyGivesTheFullScansDecisionsFromFewerPoints) {
+  // 100,000 points in a box above a sphere magnet, ordered from the top (far
+  // from the magnet) down, so that the field grows along the points' order.
+  const GridSpec grid{{0, 0, 0}, kDx, {64, 64, 64}};
+  std::vector<Vec3d> x;
+  for (int k = 39; k >= 0 && x.size() < 100000; --k)
+    for (int j = 0; j < 50; ++j)
+      for (int i = 0; i < 50; ++i) x.push_back(grid.nodePosition(7 + i, 7 + j, 20 + k) + Vec3d{1e-3, 2e-3, 3e-3});
+  ASSERT_EQ(x.size(), 100000u);
+  const std::vector<Vec3d> nearFirst(x.rbegin(), x.rend());
+  const double c = 0.5 * 63 * kDx;
+  const auto plan = [&](double remanence, bool early, PlannerSettings settings, bool near) {
+    const SphereMagnet magnet(Pose::at({c, c, 10 * kDx}), 0.04, {0, 0, magnetizationFromRemanence(remanence)});
+    PlannerInputs in;
+    in.positions = near ? nearFirst.data() : x.data();
+    in.count = x.size();
+    in.material = paperMaterial();
+    in.applied = &magnet;
+    in.appliedEmpty = false;
+    in.grid = grid;
+    in.settleEarly = early;
+    settings.enabled = true;
+    return planMagnetic(settings, in);
+  };
+  const auto expectSameDecisions = [](const MagneticPlan& a, const MagneticPlan& b, const char* what) {
+    ASSERT_EQ(a.decisions.size(), b.decisions.size()) << what;
+    for (std::size_t d = 0; d < a.decisions.size(); ++d) {
+      EXPECT_EQ(a.decisions[d].on, b.decisions[d].on) << what << ": " << a.decisions[d].stage;
+      EXPECT_EQ(a.decisions[d].choice, b.decisions[d].choice) << what << ": " << a.decisions[d].stage;
+      EXPECT_EQ(a.decisions[d].predictedError, b.decisions[d].predictedError) << what << ": " << a.decisions[d].stage;
+    }
+    EXPECT_EQ(a.magnetic, b.magnetic) << what;
+    EXPECT_EQ(a.linearLaw, b.linearLaw) << what;
+    EXPECT_EQ(a.appliedFieldOnly, b.appliedFieldOnly) << what;
+    EXPECT_TRUE(a.region == b.region) << what;
+    EXPECT_EQ(a.predictedError, b.predictedError) << what;
+  };
+  struct Case {
+    const char* what;
+    double remanence;
+    PlannerToggle linear;
+    std::size_t evaluated;  // expected with settleEarly (0: every point)
+    bool nearFirst;         // the points ordered from the magnet up
+  };
+  // Strong, near points first: the first block already rules out the linear law (and the paper's
+  // chi0 = 0.91 always rules out skipping the solve). Weak: the linear law
+  // fits, which only every point can show. Forced off: nothing is left to
+  // settle; forced on: its predicted error needs the largest field. Medium:
+  // the far points allow the linear law, the near ones do not.
+  const Case cases[] = {{"strong", 1.2, PlannerToggle::Auto, kPlannerFieldBlock, true},
+                        {"weak", 0.003, PlannerToggle::Auto, 0, true},
+                        {"weak, linear law forced on", 0.003, PlannerToggle::On, 0, false},
+                        {"weak, linear law forced off", 0.003, PlannerToggle::Off, kPlannerFieldBlock, false},
+                        {"medium, far points first", 0.2, PlannerToggle::Auto, 0, false}};
+  for (const Case& k : cases) {
+    PlannerSettings s;
+    s.linearLaw = k.linear;
+    const MagneticPlan full = plan(k.remanence, false, s, k.nearFirst), early = plan(k.remanence, true, s, k.nearFirst);
+    expectSameDecisions(full, early, k.what);
+    EXPECT_EQ(full.fieldPointsEvaluated, x.size()) << k.what;
+    std::printf("%s: %zu of %zu points evaluated; peak |H_ext| %.4g A/m (full scan %.4g A/m)\n%s", k.what,
+                early.fieldPointsEvaluated, x.size(), early.peakAppliedField, full.peakAppliedField,
+                early.summary().c_str());
+    if (k.evaluated > 0) {
+      EXPECT_EQ(early.fieldPointsEvaluated, k.evaluated) << k.what;
+      EXPECT_LE(early.peakAppliedField, full.peakAppliedField) << k.what;  // over the points evaluated
+      EXPECT_NE(early.summary().find("magnetic points settles it"), std::string::npos) << k.what;
+    } else if (k.remanence < 0.01) {
+      EXPECT_EQ(early.fieldPointsEvaluated, x.size()) << k.what;
+      EXPECT_EQ(early.peakAppliedField, full.peakAppliedField) << k.what;
+      EXPECT_EQ(early.summary(), full.summary()) << k.what;
+    } else {  // medium: stopped at the first block that rules the linear law out, after the first
+      EXPECT_GT(early.fieldPointsEvaluated, kPlannerFieldBlock) << k.what;
+      EXPECT_LT(early.fieldPointsEvaluated, x.size()) << k.what;
+      EXPECT_FALSE(early.linearLaw) << k.what;
+    }
   }
 }

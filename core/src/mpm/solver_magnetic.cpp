@@ -119,7 +119,9 @@ void MpmSolver::solveMagnetic(MpmStepReport& rep) {
   bool usePatches = false;
   if (settings_.planner.enabled) {
     // The planner picks the law, whether to solve at all, and the solve grid.
-    lastPlan_ = planMagnetic(settings_.planner, plannerInputs(positions, *law));
+    PlannerInputs in = plannerInputs(positions, *law);
+    in.settleEarly = true;  // the decisions of a full scan, from as few points as settle them
+    lastPlan_ = planMagnetic(settings_.planner, in);
     usePatches = lastPlan_.patches.size() >= 2 && settings_.magnetic.boundary == BoundaryKind::Open;
     GridSpec solveGrid = magneticGrid_;
     if (usePatches) {

@@ -7,6 +7,7 @@
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
 
 #include "lodestone/core/base/error.h"
 #include "lodestone/core/field/magnetization_law.h"
@@ -175,21 +176,69 @@ MagneticPlan planMagnetic(const PlannerSettings& settings, const PlannerInputs& 
   }
   plan.magnetic = true;
 
-  // Applied field at the magnetic points (the planner's only field evaluation).
-  std::vector<Vec3d> H(in.count);
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, in.count, 1024), [&](const tbb::blocked_range<std::size_t>& r) {
-    for (std::size_t m = r.begin(); m != r.end(); ++m) H[m] = in.applied->field(in.positions[m], in.time);
-  });
-  double hMax = 0, hMin = std::numeric_limits<double>::infinity();
-  for (const Vec3d& h : H) {
-    const double n = norm(h);
-    hMax = std::max(hMax, n);
-    hMin = std::min(hMin, n);
-  }
-  plan.peakAppliedField = hMax;
   const MagnetizationLaw<double>& law = in.material.law;
   const double n0 = in.material.numberDensity;
   const double chi0 = law.lowFieldSusceptibility(n0);
+  // The two decisions that depend on the applied field, as functions of its
+  // extremes over the points. Chord susceptibility M/H is largest at the
+  // lowest field (the laws' M(H) are concave from 0); inside a body
+  // H >= H_ext / (1 + chi0) (N <= 1), so it is evaluated there, at the
+  // weakest applied field. The linear law errs by a^2/15 at a = k2 |H|.
+  const auto chordSusceptibility = [&](double hMin) {
+    const double hl = hMin / (1 + chi0);
+    return hl > 0 ? norm(magnetization(law, n0, Vec3d{hl, 0, 0})) / hl : chi0;
+  };
+  const auto linearLawError = [&](double hMax) {
+    const double a = law.k2 * hMax;
+    return a * a / 15;
+  };
+  // Settled whatever the other points hold (PlannerInputs::settleEarly):
+  // off, or ruled out. A decision forced on still needs every point: its
+  // predicted error is that of the extreme field.
+  const auto settled = [&](double hMin, double hMax) {
+    const auto ruledOut = [](PlannerToggle t, bool fitsNot) {
+      return t == PlannerToggle::Off || (t == PlannerToggle::Auto && fitsNot);
+    };
+    const bool noSolve = law.kind != LawKind::Langevin ||
+                         ruledOut(settings.appliedFieldOnly, chordSusceptibility(hMin) > share);
+    const bool linear = law.kind != LawKind::Langevin || ruledOut(settings.linearLaw, linearLawError(hMax) > share);
+    return hMax > 0 && noSolve && linear;
+  };
+
+  // Applied field at the magnetic points (the planner's only field
+  // evaluation), block by block in the points' order.
+  struct Extremes {
+    double lo = std::numeric_limits<double>::infinity(), hi = 0;
+  };
+  double hMax = 0, hMin = std::numeric_limits<double>::infinity();
+  const std::size_t block = in.settleEarly ? kPlannerFieldBlock : in.count;
+  for (std::size_t b = 0; b < in.count;) {
+    const std::size_t e = std::min(in.count, b + block);
+    const Extremes x = tbb::parallel_reduce(
+        tbb::blocked_range<std::size_t>(b, e, 1024), Extremes{},
+        [&](const tbb::blocked_range<std::size_t>& r, Extremes acc) {
+          for (std::size_t m = r.begin(); m != r.end(); ++m) {
+            const double n = norm(in.applied->field(in.positions[m], in.time));
+            acc.hi = std::max(acc.hi, n);
+            acc.lo = std::min(acc.lo, n);
+          }
+          return acc;
+        },
+        [](Extremes a, const Extremes& c) {
+          a.hi = std::max(a.hi, c.hi);
+          a.lo = std::min(a.lo, c.lo);
+          return a;
+        });
+    hMax = std::max(hMax, x.hi);
+    hMin = std::min(hMin, x.lo);
+    plan.fieldPointsEvaluated = b = e;
+    if (in.settleEarly && settled(hMin, hMax)) break;
+  }
+  plan.peakAppliedField = hMax;
+  const std::string scanned =
+      plan.fieldPointsEvaluated < in.count
+          ? concat(" (the applied field at ", plan.fieldPointsEvaluated, " of ", in.count, " magnetic points settles it)")
+          : std::string();
   if (!(hMax > 0)) {
     plan.magnetic = false;
     plan.decisions.push_back({"magnetic stages", false, "skipped", "the applied field is zero at the material", 0, 0});
@@ -240,15 +289,13 @@ MagneticPlan planMagnetic(const PlannerSettings& settings, const PlannerInputs& 
 
   // Applied field only: no solve when the material barely changes H.
   {
-    // Chord susceptibility M/H is largest at the lowest field (the laws'
-    // M(H) are concave from 0); inside a body H >= H_ext / (1 + chi0)
-    // (N <= 1), so evaluate it there, at the weakest applied field.
-    const double hl = hMin / (1 + chi0);
-    const double chi = hl > 0 ? norm(magnetization(law, n0, Vec3d{hl, 0, 0})) / hl : chi0;
+    const double chi = chordSusceptibility(hMin);
     const bool fits = chi <= share;
     plan.appliedFieldOnly = decide(settings.appliedFieldOnly, fits);
-    const std::string why = concat("largest susceptibility ", fmt(chi), fits ? " <= " : " > ", "budget share ",
-                                   percent(share), ": the demagnetizing field changes H by up to ", percent(chi));
+    const std::string why = concat(scanned.empty() ? "largest susceptibility " : "susceptibility reaches ", fmt(chi),
+                                   fits ? " <= " : " > ", "budget share ",
+                                   percent(share), ": the demagnetizing field changes H by up to ", percent(chi),
+                                   scanned);
     plan.decisions.push_back({"field solve", !plan.appliedFieldOnly,
                               plan.appliedFieldOnly ? "skipped: H = H_ext" : "Newton-PCG",
                               because(settings.appliedFieldOnly, why), plan.appliedFieldOnly ? chi : 0,
@@ -258,11 +305,12 @@ MagneticPlan planMagnetic(const PlannerSettings& settings, const PlannerInputs& 
   // Law: linear where k2 |H| keeps the Langevin curve straight.
   if (law.kind == LawKind::Langevin) {
     const double a = law.k2 * hMax;
-    const double err = a * a / 15;
+    const double err = linearLawError(hMax);
     const bool fits = err <= share;
     plan.linearLaw = decide(settings.linearLaw, fits);
-    const std::string why = concat("k2 |H| <= ", fmt(a), " over the material: the linear law's error a^2/15 = ",
-                                   percent(err), fits ? " <= " : " > ", "budget share ", percent(share));
+    const std::string why = concat("k2 |H| ", scanned.empty() ? "<= " : "reaches ", fmt(a),
+                                   " over the material: the linear law's error a^2/15 = ",
+                                   percent(err), fits ? " <= " : " > ", "budget share ", percent(share), scanned);
     plan.decisions.push_back({"magnetization law", true, plan.linearLaw ? "linear (one linear solve)" : "langevin",
                               because(settings.linearLaw, why), plan.linearLaw ? err : 0, 0});
   } else {

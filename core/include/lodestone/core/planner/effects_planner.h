@@ -87,7 +87,11 @@ struct MagneticPlan {
   double reuseDistance = 0;      ///< m: reuse the solve while points moved less (0: re-solve when due)
   double reuseFieldChange = 0;   ///< relative change of H_ext at the points that forces a re-solve
   double predictedError = 0;     ///< sum of the decisions' predicted errors
-  double peakAppliedField = 0;   ///< largest |H_ext| at the magnetic points, A/m (0 when no stage runs)
+  /// Largest |H_ext| at the magnetic points evaluated, A/m (0 when no
+  /// stage runs): all of them unless PlannerInputs::settleEarly stopped the
+  /// scan (fieldPointsEvaluated < the point count).
+  double peakAppliedField = 0;
+  std::size_t fieldPointsEvaluated = 0;  ///< magnetic points at which the applied field was evaluated
   std::vector<StageDecision> decisions;
 
   /// One line per decision: stage, on/off, choice, reason, predicted error.
@@ -104,7 +108,23 @@ struct PlannerInputs {
   double time = 0;                   ///< s
   GridSpec grid;                     ///< the full magnetic grid
   double secondsPerNodeSolve = 3e-7; ///< field-solve cost per grid node, s (docs/benchmarks.md: 2 cores, 1e-6, cold and warm)
+  /// The applied field is evaluated at the points in blocks of
+  /// kPlannerFieldBlock, in their order. false: at every point (the
+  /// extremes and every reason's figures are over all of them). true: the
+  /// scan stops after the first block at which both field-dependent
+  /// decisions (no solve, linear law) are settled against: once a point's
+  /// field makes the linear law too coarse, more points can only raise
+  /// |H| max, and once a point's field makes the material's susceptibility
+  /// too large to skip the solve, more points can only lower |H| min. The
+  /// decisions, the plan's grids and its predicted error are those of the
+  /// full scan; only peakAppliedField and the figures in the two reasons
+  /// cover fewer points (the reasons say how many). The MPM solver's
+  /// per-solve plans settle early; its planMagneticAt scans every point.
+  bool settleEarly = false;
 };
+
+/// Points per block of the planner's applied-field scan (PlannerInputs::settleEarly).
+inline constexpr std::size_t kPlannerFieldBlock = 16384;
 
 /// The active region's margin of free cells around the material that the
 /// budget allows: 4 cells (< 0.5% of the force) from a decision share of
