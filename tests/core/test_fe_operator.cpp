@@ -460,6 +460,14 @@ TEST(FeOperator, KeptAppliedFieldEvaluatesOnlyNewCellsAndMatchesAFreshEvaluation
   full.evaluate(phi.data(), b.data());
   for (std::size_t m = 0; m < a.size(); ++m) ASSERT_EQ(a[m], b[m]) << "node " << m;
 
+  // The same cells again: nothing is evaluated, nothing changes.
+  points = 0;
+  kept.setMaterial(second.n.view(), dipoleLike, true);
+  EXPECT_EQ(kept.appliedFieldCellsEvaluated(), 0u);
+  EXPECT_EQ(points.load(), 0u);
+  kept.evaluate(phi.data(), a.data());
+  for (std::size_t m = 0; m < a.size(); ++m) ASSERT_EQ(a[m], b[m]) << "node " << m;
+
   // Not vouched for (or after a failed call): every cell is evaluated again.
   kept.setMaterial(first.n.view(), dipoleLike, false);
   EXPECT_EQ(kept.appliedFieldCellsEvaluated(), kept.materialCellCount());

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <limits>
 #include <numeric>
+#include <type_traits>
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -96,6 +97,17 @@ void MagnetostaticProblem::setMaterial(GridView<const double> n, const AppliedFi
                                  " 1/m^3; it must be finite and >= 0"));
   }
 
+  // The per-cell arrays rebuilt below are released first, so that a problem
+  // set again holds no more memory while it is rebuilt than a new one would
+  // (only the kept applied field is held twice, until it is copied).
+  const auto release = [](auto& v) { std::decay_t<decltype(v)>().swap(v); };
+  release(elem_);
+  release(cellTensor_);
+  release(sums_);
+  release(nq_);
+  release(blockCells_);
+  release(cellBlock_);
+  release(cellFromCentre_);
   std::vector<std::size_t> oldBase;
   std::vector<Vec3d> oldHext;
   std::size_t oldStart[9] = {};
@@ -103,6 +115,8 @@ void MagnetostaticProblem::setMaterial(GridView<const double> n, const AppliedFi
     oldBase.swap(cellBase_);
     oldHext.swap(hext_);
     std::copy(colourStart_, colourStart_ + 9, oldStart);
+  } else {
+    release(hext_);
   }
 
   // Material cells per z-slab and colour, concatenated in slab order.
@@ -128,9 +142,15 @@ void MagnetostaticProblem::setMaterial(GridView<const double> n, const AppliedFi
   colourStart_[8] = cellBase_.size();
   const std::size_t cells = cellBase_.size();
   nq_.assign(cells * 8, 0.0);
-  hext_.assign(cells * 8, Vec3d{});
-  elem_.assign(cells * kPacked, 0.0);
-  cellTensor_.assign(cells, SymMat3d{});
+  // The same cells as before (the material stayed in its cells): the kept
+  // values stay where they are; otherwise each kept cell's values move to
+  // its new slot.
+  const bool sameCells = keep && oldBase == cellBase_;
+  if (sameCells) {
+    hext_.swap(oldHext);
+  } else {
+    hext_.assign(cells * 8, Vec3d{});
+  }
   if (!stencil_.sameCells(grid_, cellBase_.data(), cells)) stencil_.build(grid_, cellBase_.data(), cells);
   stencil_.clear();
 
@@ -138,7 +158,7 @@ void MagnetostaticProblem::setMaterial(GridView<const double> n, const AppliedFi
   // their cells by ascending base index.
   constexpr std::size_t kFresh = std::numeric_limits<std::size_t>::max();
   std::vector<std::size_t> oldSlot;
-  if (keep) {
+  if (keep && !sameCells) {
     oldSlot.assign(cells, kFresh);
     tbb::parallel_for(0, 8, [&](int c) {
       std::size_t a = oldStart[c], s = colourStart_[c];
@@ -164,6 +184,7 @@ void MagnetostaticProblem::setMaterial(GridView<const double> n, const AppliedFi
       double nc[8];
       gatherCorners(cellBase_[s], n.data, nc);
       for (int q = 0; q < 8; ++q) nq_[s * 8 + std::size_t(q)] = q1::interpolate(kQ1, q, nc);
+      if (sameCells) continue;
       if (keep) {
         if (oldSlot[s] != kFresh) {
           std::copy_n(&oldHext[oldSlot[s] * 8], 8, &hext_[s * 8]);
@@ -186,6 +207,11 @@ void MagnetostaticProblem::setMaterial(GridView<const double> n, const AppliedFi
     }
   });
   cellsEvaluated_ = evaluated;
+  release(oldHext);
+  release(oldSlot);
+  release(oldBase);
+  elem_.assign(cells * kPacked, 0.0);
+  cellTensor_.assign(cells, SymMat3d{});
   for (std::size_t m = 0; m < cells * 8; ++m)
     if (!isFinite(hext_[m]))
       throw InvalidArgument(concat("field solve: the applied field is not finite at (",
