@@ -6,7 +6,6 @@
 #include <cmath>
 #include <limits>
 #include <numeric>
-#include <type_traits>
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -37,6 +36,18 @@ struct EnergyTotals {
     return *this;
   }
 };
+
+// v = n copies of `value`, in v's storage when it holds n; otherwise in new
+// storage with an eighth more room, so that a slowly growing count does not
+// allocate (and first-touch) anew on every call.
+template <typename T>
+void assignKeepingCapacity(std::vector<T>& v, std::size_t n, const T& value) {
+  if (n > v.capacity()) {
+    std::vector<T>().swap(v);
+    v.reserve(n + n / 8);
+  }
+  v.assign(n, value);
+}
 
 struct EnergySums {
   double s = 0, a = 0;
@@ -97,26 +108,11 @@ void MagnetostaticProblem::setMaterial(GridView<const double> n, const AppliedFi
                                  " 1/m^3; it must be finite and >= 0"));
   }
 
-  // The per-cell arrays rebuilt below are released first, so that a problem
-  // set again holds no more memory while it is rebuilt than a new one would
-  // (only the kept applied field is held twice, until it is copied).
-  const auto release = [](auto& v) { std::decay_t<decltype(v)>().swap(v); };
-  release(elem_);
-  release(cellTensor_);
-  release(sums_);
-  release(nq_);
-  release(blockCells_);
-  release(cellBlock_);
-  release(cellFromCentre_);
   std::vector<std::size_t> oldBase;
-  std::vector<Vec3d> oldHext;
   std::size_t oldStart[9] = {};
-  if (keep) {  // the previous cells and their Gauss points' applied field
+  if (keep) {  // the previous cells (their Gauss points' applied field stays in hext_)
     oldBase.swap(cellBase_);
-    oldHext.swap(hext_);
     std::copy(colourStart_, colourStart_ + 9, oldStart);
-  } else {
-    release(hext_);
   }
 
   // Material cells per z-slab and colour, concatenated in slab order.
@@ -141,16 +137,16 @@ void MagnetostaticProblem::setMaterial(GridView<const double> n, const AppliedFi
   }
   colourStart_[8] = cellBase_.size();
   const std::size_t cells = cellBase_.size();
-  nq_.assign(cells * 8, 0.0);
+  // The per-cell arrays keep their storage from one call to the next (with
+  // slack for growth): memory first touched costs a page fault per 4 KiB,
+  // more than the arithmetic of a warm stage.
+  assignKeepingCapacity(nq_, cells * 8, 0.0);
   // The same cells as before (the material stayed in its cells): the kept
   // values stay where they are; otherwise each kept cell's values move to
-  // its new slot.
+  // its new slot in the spare buffer, which then becomes hext_.
   const bool sameCells = keep && oldBase == cellBase_;
-  if (sameCells) {
-    hext_.swap(oldHext);
-  } else {
-    hext_.assign(cells * 8, Vec3d{});
-  }
+  std::vector<Vec3d>& hextOut = keep ? hextSpare_ : hext_;
+  if (!sameCells) assignKeepingCapacity(hextOut, cells * 8, Vec3d{});
   if (!stencil_.sameCells(grid_, cellBase_.data(), cells)) stencil_.build(grid_, cellBase_.data(), cells);
   stencil_.clear();
 
@@ -187,7 +183,7 @@ void MagnetostaticProblem::setMaterial(GridView<const double> n, const AppliedFi
       if (sameCells) continue;
       if (keep) {
         if (oldSlot[s] != kFresh) {
-          std::copy_n(&oldHext[oldSlot[s] * 8], 8, &hext_[s * 8]);
+          std::copy_n(&hext_[oldSlot[s] * 8], 8, &hextOut[s * 8]);
           continue;
         }
         fresh.push_back(s);
@@ -199,19 +195,17 @@ void MagnetostaticProblem::setMaterial(GridView<const double> n, const AppliedFi
     }
     evaluated += x.size() / 8;
     if (!keep) {
-      appliedField(x.data(), x.size(), &hext_[r.begin() * 8]);
+      appliedField(x.data(), x.size(), &hextOut[r.begin() * 8]);
     } else if (!x.empty()) {
       std::vector<Vec3d> H(x.size());
       appliedField(x.data(), x.size(), H.data());
-      for (std::size_t f = 0; f < fresh.size(); ++f) std::copy_n(&H[f * 8], 8, &hext_[fresh[f] * 8]);
+      for (std::size_t f = 0; f < fresh.size(); ++f) std::copy_n(&H[f * 8], 8, &hextOut[fresh[f] * 8]);
     }
   });
   cellsEvaluated_ = evaluated;
-  release(oldHext);
-  release(oldSlot);
-  release(oldBase);
-  elem_.assign(cells * kPacked, 0.0);
-  cellTensor_.assign(cells, SymMat3d{});
+  if (keep && !sameCells) hext_.swap(hextSpare_);
+  assignKeepingCapacity(elem_, cells * kPacked, 0.0);
+  assignKeepingCapacity(cellTensor_, cells, SymMat3d{});
   for (std::size_t m = 0; m < cells * 8; ++m)
     if (!isFinite(hext_[m]))
       throw InvalidArgument(concat("field solve: the applied field is not finite at (",

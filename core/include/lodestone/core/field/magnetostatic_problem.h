@@ -187,6 +187,7 @@ class MagnetostaticProblem {
   bool haveAppliedField_ = false;      // hext_ holds the values of cellBase_'s cells
   std::vector<double> nq_;             // density at Gauss points, 8 per cell, 1/m^3
   std::vector<Vec3d> hext_;            // applied field at Gauss points, A/m
+  std::vector<Vec3d> hextSpare_;       // where setMaterial moves kept values when the cells change
   // Material element matrices sum_q w dN_q^T dM/dH_q dN_q / dx^2 (packed upper
   // triangle of the symmetric 8x8, kPacked values per cell), rebuilt by evaluate().
   std::vector<double> elem_;
