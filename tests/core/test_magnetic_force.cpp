@@ -3,8 +3,11 @@
 // conservation of the spread (sum f_i = dx^3 sum t_j).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <random>
+#include <vector>
 
 #include "lodestone/core/stage/density_raster.h"
 #include "lodestone/core/base/constants.h"
@@ -229,4 +232,72 @@ TEST(MagneticForce, GatherToSupportMovesForcesInwardAndDropsThoseOutOfReach) {
   EXPECT_EQ(all.y, 18.0);
   EXPECT_EQ(all.z, 36.0);
   for (std::size_t m = 0; m < g.nodeCount(); ++m) EXPECT_EQ(norm(out[m]), 0.0);
+}
+
+TEST(MagneticForce, GatherToSupportEqualsTheLevelByLevelSpreadBitForBit) {
+  // Reference: the distance grown one 26-connected level at a time over the
+  // whole grid, then each level's nodes split among their inward neighbours,
+  // outermost first; the function computes the distance by one-axis passes
+  // over the support's box. Random scattered support, random forces.
+  GridSpec g;
+  g.dx = 0.01;
+  g.dims = {23, 19, 17};
+  DenseGrid<double> n(g, 0.0);
+  DenseGrid<Vec3d> f(g, Vec3d{}), out(g, Vec3d{});
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> U(-1, 1);
+  for (std::size_t m = 0; m < n.size(); ++m) {
+    if (U(rng) > 0.97) n[m] = 1.0;
+    f[m] = {U(rng), U(rng), U(rng)};
+  }
+  for (int maxDistance : {0, 1, 3, 6}) {
+    constexpr int kFar = 1 << 20;
+    std::vector<int> d(n.size(), kFar);
+    for (std::size_t m = 0; m < n.size(); ++m) d[m] = n[m] > 0 ? 0 : kFar;
+    const auto neighbours = [&](int i, int j, int k, const auto& fn) {
+      for (int c = std::max(k - 1, 0); c <= std::min(k + 1, g.dims.k - 1); ++c)
+        for (int b = std::max(j - 1, 0); b <= std::min(j + 1, g.dims.j - 1); ++b)
+          for (int a = std::max(i - 1, 0); a <= std::min(i + 1, g.dims.i - 1); ++a)
+            if (a != i || b != j || c != k) fn(g.index(a, b, c));
+    };
+    for (int level = 1; level <= maxDistance; ++level) {
+      std::vector<int> next = d;
+      for (int k = 0; k < g.dims.k; ++k)
+        for (int j = 0; j < g.dims.j; ++j)
+          for (int i = 0; i < g.dims.i; ++i) {
+            const std::size_t m = g.index(i, j, k);
+            if (d[m] != kFar) continue;
+            bool reached = false;
+            neighbours(i, j, k, [&](std::size_t o) { reached = reached || d[o] == level - 1; });
+            if (reached) next[m] = level;
+          }
+      d = next;
+    }
+    std::vector<Vec3d> acc(f.data(), f.data() + f.size());
+    std::vector<int> inward(n.size(), 0);
+    for (int k = 0; k < g.dims.k; ++k)
+      for (int j = 0; j < g.dims.j; ++j)
+        for (int i = 0; i < g.dims.i; ++i) {
+          const std::size_t m = g.index(i, j, k);
+          if (d[m] != 0 && d[m] != kFar) neighbours(i, j, k, [&](std::size_t o) { inward[m] += d[o] == d[m] - 1; });
+        }
+    for (int level = maxDistance - 1; level >= 0; --level)
+      for (int k = 0; k < g.dims.k; ++k)
+        for (int j = 0; j < g.dims.j; ++j)
+          for (int i = 0; i < g.dims.i; ++i) {
+            const std::size_t m = g.index(i, j, k);
+            if (d[m] != level) continue;
+            Vec3d pulled{};
+            neighbours(i, j, k, [&](std::size_t o) {
+              if (d[o] == level + 1) pulled += acc[o] / double(inward[o]);
+            });
+            acc[m] += pulled;
+          }
+    Vec3d lost{};
+    for (std::size_t m = 0; m < n.size(); ++m)
+      if (d[m] == kFar) lost += f[m];
+    EXPECT_EQ(gatherToSupport(f.view(), n.view(), out.view(), maxDistance), lost) << "maxDistance " << maxDistance;
+    for (std::size_t m = 0; m < n.size(); ++m)
+      ASSERT_EQ(out[m], d[m] == 0 ? acc[m] : Vec3d{}) << "node " << m << ", maxDistance " << maxDistance;
+  }
 }

@@ -254,27 +254,38 @@ Vec3d gatherToSupport(GridView<const Vec3d> f, GridView<const double> n, GridVie
         for (int i = 0; i < dims[0]; ++i) fn(i, j, k);
     });
   };
-  // d: node distance (26-connectivity) to the support, up to maxDistance.
+  // d: node distance (26-connectivity) to the support, up to maxDistance
+  // (kFar beyond): the max-norm of the node steps, which within the box is
+  // the 26-connected path length. Separable: one pass per axis,
+  // d(x) = min_t max(|t|, d(x + t e_axis)), |t| <= maxDistance.
   std::vector<int> d(boxCount, kFar);
   forBox([&](int i, int j, int k) { d[local(i, j, k)] = n[global(i, j, k)] > 0 ? 0 : kFar; });
+  const std::size_t stride[3] = {1, std::size_t(dims[0]), std::size_t(dims[0]) * std::size_t(dims[1])};
+  for (int a = 0; a < 3; ++a) {
+    const int len = dims[a], lines = dims[(a + 1) % 3], slabs = dims[(a + 2) % 3];
+    const std::size_t along = stride[a], across = stride[(a + 1) % 3], slab = stride[(a + 2) % 3];
+    tbb::parallel_for(0, slabs, [&d, len, lines, along, across, slab, maxDistance](int ic) {
+      std::vector<int> line(static_cast<std::size_t>(len));
+      for (int ib = 0; ib < lines; ++ib) {
+        const std::size_t base = std::size_t(ib) * across + std::size_t(ic) * slab;
+        for (int x = 0; x < len; ++x) line[std::size_t(x)] = d[base + std::size_t(x) * along];
+        for (int x = 0; x < len; ++x) {
+          int best = line[std::size_t(x)];
+          for (int t = 1; t <= maxDistance && t < best; ++t) {
+            if (x - t >= 0) best = std::min(best, std::max(t, line[std::size_t(x - t)]));
+            if (x + t < len) best = std::min(best, std::max(t, line[std::size_t(x + t)]));
+          }
+          d[base + std::size_t(x) * along] = best;
+        }
+      }
+    });
+  }
   const auto forNeighbours = [&](int i, int j, int k, const auto& fn) {
     for (int c = std::max(k - 1, 0); c <= std::min(k + 1, dims[2] - 1); ++c)
       for (int b = std::max(j - 1, 0); b <= std::min(j + 1, dims[1] - 1); ++b)
         for (int a = std::max(i - 1, 0); a <= std::min(i + 1, dims[0] - 1); ++a)
           if (a != i || b != j || c != k) fn(local(a, b, c));
   };
-  for (int level = 1; level <= maxDistance; ++level) {
-    forBox([&](int i, int j, int k) {
-      const std::size_t m = local(i, j, k);
-      if (d[m] != kFar) return;
-      bool next = false;
-      forNeighbours(i, j, k, [&](std::size_t o) { next = next || d[o] == level - 1; });
-      if (next) d[m] = -level;  // mark; committed below so this pass reads only older levels
-    });
-    tbb::parallel_for(std::size_t(0), boxCount, [&](std::size_t m) {
-      if (d[m] < 0) d[m] = -d[m];
-    });
-  }
   // Each node at distance L > 0 splits what it holds equally among its
   // neighbours at distance L - 1, outermost level first.
   std::vector<Vec3d> acc(boxCount);
