@@ -7,6 +7,7 @@
 #include <tbb/parallel_for.h>
 
 #include "lodestone/core/base/error.h"
+#include "lodestone/core/base/kept_capacity.h"
 
 namespace lodestone {
 inline namespace field {
@@ -55,14 +56,9 @@ void HullStencil<T>::build(const GridSpec& grid, const std::size_t* cellBase, st
     const std::size_t b = cellBase[s];
     cellSlot_[grid.cellIndex(int(b % nx), int((b / nx) % ny), int(b / (nx * ny)))] = std::int32_t(s);
   }
-  // Rebuilt as the material moves: keep the storage, with an eighth more
-  // room when it grows (memory first touched costs a page fault per 4 KiB).
-  const std::size_t need = std::size_t(kTaps) * size();
-  if (need > values_.capacity()) {
-    std::vector<T>().swap(values_);
-    values_.reserve(need + need / 8);
-  }
-  values_.resize(need);
+  // Rebuilt as the material moves: the coefficients keep their storage.
+  reserveKeepingCapacity(values_, std::size_t(kTaps) * size());
+  values_.resize(std::size_t(kTaps) * size());
 }
 
 template <typename T>

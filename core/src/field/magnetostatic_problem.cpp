@@ -11,6 +11,7 @@
 #include <tbb/parallel_for.h>
 
 #include "lodestone/core/base/coloured_scatter.h"
+#include "lodestone/core/base/kept_capacity.h"
 #include "lodestone/core/base/error.h"
 #include "lodestone/core/field/element_build.h"
 #include "lodestone/core/field/multipole_blocks.h"
@@ -36,18 +37,6 @@ struct EnergyTotals {
     return *this;
   }
 };
-
-// v = n copies of `value`, in v's storage when it holds n; otherwise in new
-// storage with an eighth more room, so that a slowly growing count does not
-// allocate (and first-touch) anew on every call.
-template <typename T>
-void assignKeepingCapacity(std::vector<T>& v, std::size_t n, const T& value) {
-  if (n > v.capacity()) {
-    std::vector<T>().swap(v);
-    v.reserve(n + n / 8);
-  }
-  v.assign(n, value);
-}
 
 struct EnergySums {
   double s = 0, a = 0;
@@ -137,9 +126,7 @@ void MagnetostaticProblem::setMaterial(GridView<const double> n, const AppliedFi
   }
   colourStart_[8] = cellBase_.size();
   const std::size_t cells = cellBase_.size();
-  // The per-cell arrays keep their storage from one call to the next (with
-  // slack for growth): memory first touched costs a page fault per 4 KiB,
-  // more than the arithmetic of a warm stage.
+  // The per-cell arrays keep their storage from one call to the next.
   assignKeepingCapacity(nq_, cells * 8, 0.0);
   // The same cells as before (the material stayed in its cells): the kept
   // values stay where they are; otherwise each kept cell's values move to

@@ -1,0 +1,33 @@
+#pragma once
+// Arrays rebuilt on every call (a field problem's per-cell arrays, a
+// stencil's coefficients as the material moves) keep their storage from one
+// call to the next: memory touched for the first time costs a page fault
+// per 4 KiB, more than the arithmetic of a warm field solve. When a count
+// grows past the storage, new storage gets an eighth more room, so that a
+// slowly growing count does not allocate anew on every call.
+#include <cstddef>
+#include <vector>
+
+namespace lodestone {
+inline namespace base {
+
+/// Makes room for n elements in v: its storage when that holds n;
+/// otherwise the old storage is released first (not copied: the contents
+/// are discarded) and new storage reserved for n + n/8.
+template <typename T>
+void reserveKeepingCapacity(std::vector<T>& v, std::size_t n) {
+  if (n <= v.capacity()) return;
+  std::vector<T>().swap(v);
+  v.reserve(n + n / 8);
+}
+
+/// v = n copies of `value`, in v's storage when it holds n
+/// (reserveKeepingCapacity).
+template <typename T>
+void assignKeepingCapacity(std::vector<T>& v, std::size_t n, const T& value) {
+  reserveKeepingCapacity(v, n);
+  v.assign(n, value);
+}
+
+}  // namespace base
+}  // namespace lodestone
