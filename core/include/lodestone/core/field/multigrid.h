@@ -50,7 +50,7 @@ class MultigridPreconditioner final : public Preconditioner {
   int levelCount() const;
 
   template <typename T>
-  class Hierarchy;  // the levels in one storage precision (multigrid.cpp)
+  class Hierarchy;  // the levels in one storage precision (core/src/field/multigrid_hierarchy.h)
 
  private:
   MultigridSettings settings_;
