@@ -67,6 +67,19 @@ template <>
 inline Vec3d apicVec3<Lanes4>(const Lanes4& lanes) {
   return {lanes[0], lanes[1], lanes[2]};
 }
+// A line of three nodes is nine consecutive doubles: three overlapping
+// 4-wide loads, the last one rotated so that x, y, z come first. The fourth
+// lane holds a neighbour's component, which the gather never reads out
+// (apicVec3); no load reaches past the line.
+template <>
+inline void apicLine<Lanes4>(const Vec3d* line, Lanes4& n0, Lanes4& n1, Lanes4& n2) {
+  static_assert(sizeof(Vec3d) == 3 * sizeof(double), "Vec3d: x, y, z packed");
+  const double* d = &line[0].x;
+  n0 = load4(d);
+  n1 = load4(d + 3);
+  const Lanes4 tail = load4(d + 5);  // n1.z, n2.x, n2.y, n2.z
+  n2 = Lanes4{tail[1], tail[2], tail[3], tail[0]};
+}
 
 namespace {
 
@@ -126,6 +139,11 @@ struct DepositKernel {
   __attribute__((always_inline)) inline void operator()(int bj, int bk) const {
     const std::size_t row = std::size_t(bj - binLo.j) + std::size_t(binDims.j) * std::size_t(bk - binLo.k);
     const int first = int(rowFirst[row]), last = int(rowEnd[row]);
+    if (first >= last) return;
+    // The row's particles, in the order they are deposited: each one's
+    // arrays are asked for kAhead particles early, so that their cache
+    // lines arrive while the ones before are deposited.
+    const std::uint32_t* rowLast = sorted + offsets[rowStart[row] + std::size_t(last - first)] - 1;
     for (int bi = first; bi < last; ++bi) {
       const std::size_t bin = rowStart[row] + std::size_t(bi - first);
       const std::uint32_t* it = sorted + offsets[bin];
@@ -134,6 +152,16 @@ struct DepositKernel {
       MpmNode* corner = nodes + (std::size_t(bi) + sj * std::size_t(bj) + sk * std::size_t(bk));
       for (; it != end; ++it) {
         const std::size_t p = *it;
+        {
+          constexpr std::ptrdiff_t kAhead = 8;
+          const std::size_t q = rowLast - it > kAhead ? it[kAhead] : *rowLast;
+          __builtin_prefetch(&Cp[q]);
+          __builtin_prefetch(reinterpret_cast<const char*>(&Cp[q]) + 64);
+          __builtin_prefetch(&Fp[q]);
+          __builtin_prefetch(reinterpret_cast<const char*>(&Fp[q]) + 64);
+          __builtin_prefetch(&X[q]);
+          __builtin_prefetch(&V[q]);
+        }
         const Vec3d x = X[p];
         const double ux = (x.x - o.x) * invDx, uy = (x.y - o.y) * invDx, uz = (x.z - o.z) * invDx;
         const QuadraticWeights<double> wx = quadraticWeightsAt(ux, bi);

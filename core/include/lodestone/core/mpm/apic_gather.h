@@ -32,6 +32,15 @@ LODESTONE_HOSTDEV inline Vec3d apicVec3<Vec3d>(const Vec3d& lanes) {
   return lanes;
 }
 
+/// The three node velocities line[0..2] (consecutive in x) in lanes of L;
+/// a host vector type may specialise it to load the nine doubles at once.
+template <typename L>
+LODESTONE_HOSTDEV inline void apicLine(const Vec3d* line, L& n0, L& n1, L& n2) {
+  n0 = apicLanes<L>(line[0]);
+  n1 = apicLanes<L>(line[1]);
+  n2 = apicLanes<L>(line[2]);
+}
+
 /// `vel`: the nodal velocities (m/s) of a grid of nx x ny nodes; u: the
 /// particle's grid coordinates (cells, (x - origin) / dx) and b the stencil's
 /// base node (from the same u); cScale = 4/dx (1/m). Sets vp (m/s) and C (1/s).
@@ -52,8 +61,10 @@ LODESTONE_HOSTDEV inline void gatherApic(const Vec3d* vel, std::size_t nx, std::
     for (int b = 0; b < 3; ++b) {
       const double wbc = wy.w[b] * wz.w[c];
       const Vec3d* line = corner + std::size_t(b) * sj + std::size_t(c) * sk;
-      const L l1 = wx.w[1] * apicLanes<L>(line[1]), l2 = wx.w[2] * apicLanes<L>(line[2]);
-      const L s0 = wx.w[0] * apicLanes<L>(line[0]) + l1 + l2;
+      L n0, n1, n2;
+      apicLine<L>(line, n0, n1, n2);
+      const L l1 = wx.w[1] * n1, l2 = wx.w[2] * n2;
+      const L s0 = wx.w[0] * n0 + l1 + l2;
       const L s1 = l1 + 2.0 * l2;
       v += wbc * s0;
       S0 += wbc * s1;
