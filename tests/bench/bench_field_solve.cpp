@@ -111,7 +111,7 @@ int main(int argc, char** argv) {
     csv << "body,nodes_per_axis,H0_A_per_m,start,newton_iterations,cg_iterations,line_search_cuts,relative_residual,"
            "status,material_cells,seconds_solve,seconds_stage,threads,tolerance,seconds_initial,seconds_wall,"
            "seconds_setup,seconds_cg,seconds_line_search,law,wall_prediction,seconds_wall_prediction,"
-           "pre_smoothing,post_smoothing\n";
+           "pre_smoothing,post_smoothing,seconds_transfer,seconds_applied_field,seconds_fields,seconds_force\n";
     const int threads = tbb::info::default_concurrency();
     // The solver predicts the open wall with multigrid only.
     const bool predicted =
@@ -147,7 +147,10 @@ int main(int argc, char** argv) {
                         r.solve.newtonIterations, r.solve.cgIterations, r.solve.lineSearchCuts,
                         r.solve.relativeResidual, r.secondsSolve, r.secondsTotal,
                         r.converged() ? "" : "  NOT CONVERGED");
-            if (history)
+            if (history) {
+              std::printf("    stage: transfer %.3f s, applied field %.3f s, solve %.3f s, nodal H/M/B %.3f s, "
+                          "force %.3f s\n",
+                          r.secondsTransfer, r.secondsAppliedField, r.secondsSolve, r.secondsFields, r.secondsForce);
               for (const NewtonIterationRecord& h : r.solve.history)
                 std::printf("    newton %2d  residual %9.2e  eta %8.1e  cg %3d (%8.1e, wall %d)  step %5.3f%s  cuts %d"
                             "  %.3f s  (wall %.3f, set-up %.3f, cg %.3f, wall prediction %.3f, line search %.3f)%s%s\n",
@@ -156,6 +159,7 @@ int main(int argc, char** argv) {
                             h.secondsWall, h.secondsSetup, h.secondsCg, h.secondsWallPrediction, h.secondsLineSearch,
                             h.jacobianRebuilt ? "  [deferred Jacobian built]" : "",
                             h.jacobianDeferred ? "  [Jacobian deferred]" : "");
+            }
             std::fflush(stdout);
             if (crop > 0 && pass == 0) {
               // The material's box plus `crop` free cells, cold.
@@ -213,7 +217,8 @@ int main(int argc, char** argv) {
               }
               csv << ',' << wall << ',' << setup << ',' << cgs << ',' << search << ',' << (linear ? "linear" : "langevin")
                   << ',' << (predicted ? "on" : "off") << ',' << predict << ',' << settings.solve.multigrid.preSmoothing
-                  << ',' << settings.solve.multigrid.postSmoothing << '\n';
+                  << ',' << settings.solve.multigrid.postSmoothing << ',' << r.secondsTransfer << ','
+                  << r.secondsAppliedField << ',' << r.secondsFields << ',' << r.secondsForce << '\n';
             }
           }
         }
