@@ -413,6 +413,63 @@ TEST(FeOperator, LinearizedMultipolesAreTheFirstOrderChangeOfTheEvaluatedOnes) {
   }
 }
 
+TEST(FeOperator, ASetAgainProblemMatchesAFreshOneBitForBit) {
+  // One problem set again and again (as in a simulation: the same cells
+  // with a new density, then moved cells, then the first material again)
+  // against a fresh problem per material: the residual, the multipole
+  // blocks (their cells, centres and moments), the Jacobian's element
+  // tensors and its product, bit for bit.
+  const AppliedFieldFunction uniform = [](const Vec3d*, std::size_t c, Vec3d* out) {
+    for (std::size_t m = 0; m < c; ++m) out[m] = {2e3, -1e3, 4e4};
+  };
+  SmallProblem first = randomMaterial(11, 31);
+  SmallProblem denser = first, moved = randomMaterial(11, 32);
+  for (std::size_t m = 0; m < denser.n.size(); ++m) denser.n[m] *= 1.0 + 0.5 * double(m % 7) / 7.0;
+  for (int k = 0; k < moved.grid.dims.k; ++k)
+    for (int j = 0; j < moved.grid.dims.j; ++j)
+      for (int i = 0; i < moved.grid.dims.i; ++i)
+        if (i < 3) moved.n(i, j, k) = 0;
+  std::vector<double> phi(first.grid.nodeCount()), dphi(phi.size());
+  std::mt19937 rng(8);
+  std::uniform_real_distribution<double> U(-1, 1);
+  for (double& v : phi) v = 20 * U(rng);
+  for (double& v : dphi) v = U(rng);
+  const auto same = [](const std::vector<Multipole>& a, const std::vector<Multipole>& b) {
+    if (a.size() != b.size()) return false;
+    for (std::size_t m = 0; m < a.size(); ++m) {
+      if (!(a[m].centre == b[m].centre) || !(a[m].dipole == b[m].dipole)) return false;
+      for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j)
+          if (a[m].quadrupole[i][j] != b[m].quadrupole[i][j]) return false;
+    }
+    return true;
+  };
+  MagnetostaticProblem kept(first.grid, first.material.law, BoundaryKind::Open);
+  for (const SmallProblem* p : {&first, &denser, &moved, &first}) {
+    kept.setMaterial(p->n.view(), uniform);
+    MagnetostaticProblem fresh(p->grid, p->material.law, BoundaryKind::Open);
+    fresh.setMaterial(p->n.view(), uniform);
+    ASSERT_EQ(kept.materialCellCount(), fresh.materialCellCount());
+    ASSERT_EQ(kept.multipoleBlockCount(), fresh.multipoleBlockCount());
+    std::vector<double> a(phi.size()), b(phi.size());
+    const MagnetostaticProblem::Evaluation ea = kept.evaluate(phi.data(), a.data());
+    const MagnetostaticProblem::Evaluation eb = fresh.evaluate(phi.data(), b.data());
+    for (std::size_t m = 0; m < a.size(); ++m) ASSERT_EQ(a[m], b[m]) << "residual, node " << m;
+    EXPECT_TRUE(same(ea.multipoles, eb.multipoles));
+    EXPECT_TRUE(same(kept.linearizedMultipoles(dphi.data()), fresh.linearizedMultipoles(dphi.data())));
+    for (std::size_t s = 0; s < kept.materialCellCount(); ++s) {
+      const SymMat3d& ta = kept.materialCellTensor(s);
+      const SymMat3d& tb = fresh.materialCellTensor(s);
+      ASSERT_TRUE(ta.xx == tb.xx && ta.yy == tb.yy && ta.zz == tb.zz && ta.xy == tb.xy && ta.xz == tb.xz &&
+                  ta.yz == tb.yz)
+          << "cell " << s;
+    }
+    kept.applyJacobian(dphi.data(), a.data());
+    fresh.applyJacobian(dphi.data(), b.data());
+    for (std::size_t m = 0; m < a.size(); ++m) ASSERT_EQ(a[m], b[m]) << "Jacobian product, node " << m;
+  }
+}
+
 TEST(FeOperator, KeptAppliedFieldEvaluatesOnlyNewCellsAndMatchesAFreshEvaluation) {
   // A non-uniform applied field that counts the points it is asked for.
   std::atomic<std::size_t> points{0};

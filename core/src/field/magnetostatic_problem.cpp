@@ -9,6 +9,7 @@
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_sort.h>
 
 #include "lodestone/core/base/coloured_scatter.h"
 #include "lodestone/core/base/kept_capacity.h"
@@ -82,14 +83,8 @@ void MagnetostaticProblem::setMaterial(GridView<const double> n, const AppliedFi
   require(bool(appliedField), "field solve: no applied-field function given");
   const std::size_t count = grid_.nodeCount();
   // First bad density by index (deterministic message).
-  const std::size_t bad = tbb::parallel_reduce(
-      tbb::blocked_range<std::size_t>(0, count, 1 << 14), count,
-      [&](const tbb::blocked_range<std::size_t>& r, std::size_t first) {
-        for (std::size_t m = r.begin(); m != r.end() && m < first; ++m)
-          if (!(std::isfinite(n[m]) && n[m] >= 0)) return m;
-        return first;
-      },
-      [](std::size_t a, std::size_t b) { return std::min(a, b); });
+  const std::size_t bad = firstIndexWhere(count, [&](std::size_t m) { return !(std::isfinite(n[m]) && n[m] >= 0); },
+                                           std::size_t(1) << 14);
   if (bad < count) {
     const std::size_t nx = std::size_t(grid_.dims.i), ny = std::size_t(grid_.dims.j);
     throw InvalidArgument(concat("field solve: micro-particle density n at node (", bad % nx, ", ",
@@ -97,12 +92,14 @@ void MagnetostaticProblem::setMaterial(GridView<const double> n, const AppliedFi
                                  " 1/m^3; it must be finite and >= 0"));
   }
 
-  std::vector<std::size_t> oldBase;
+  // The previous cells: their Gauss points' applied field stays in hext_
+  // (keep), and their multipole blocks stay while the cells do.
+  std::vector<std::size_t>& oldBase = previousCellBase_;
+  oldBase.swap(cellBase_);
+  const bool hadBlocks = haveBlocks_;
+  haveBlocks_ = false;
   std::size_t oldStart[9] = {};
-  if (keep) {  // the previous cells (their Gauss points' applied field stays in hext_)
-    oldBase.swap(cellBase_);
-    std::copy(colourStart_, colourStart_ + 9, oldStart);
-  }
+  std::copy(colourStart_, colourStart_ + 9, oldStart);
 
   // Material cells per z-slab and colour, concatenated in slab order.
   const Index3 cd = grid_.cellDims();
@@ -126,14 +123,16 @@ void MagnetostaticProblem::setMaterial(GridView<const double> n, const AppliedFi
   }
   colourStart_[8] = cellBase_.size();
   const std::size_t cells = cellBase_.size();
+  const bool cellsUnchanged = hadBlocks && oldBase == cellBase_;
   // The per-cell arrays keep their storage from one call to the next.
-  assignKeepingCapacity(nq_, cells * 8, 0.0);
+  // (nq_ and hextOut are written whole below.)
+  resizeKeepingCapacity(nq_, cells * 8);
   // The same cells as before (the material stayed in its cells): the kept
   // values stay where they are; otherwise each kept cell's values move to
   // its new slot in the spare buffer, which then becomes hext_.
-  const bool sameCells = keep && oldBase == cellBase_;
+  const bool sameCells = keep && cellsUnchanged;
   std::vector<Vec3d>& hextOut = keep ? hextSpare_ : hext_;
-  if (!sameCells) assignKeepingCapacity(hextOut, cells * 8, Vec3d{});
+  if (!sameCells) resizeKeepingCapacity(hextOut, cells * 8);
   if (!stencil_.sameCells(grid_, cellBase_.data(), cells)) stencil_.build(grid_, cellBase_.data(), cells);
   stencil_.clear();
 
@@ -191,13 +190,13 @@ void MagnetostaticProblem::setMaterial(GridView<const double> n, const AppliedFi
   });
   cellsEvaluated_ = evaluated;
   if (keep && !sameCells) hext_.swap(hextSpare_);
-  assignKeepingCapacity(elem_, cells * kPacked, 0.0);
-  assignKeepingCapacity(cellTensor_, cells, SymMat3d{});
-  for (std::size_t m = 0; m < cells * 8; ++m)
-    if (!isFinite(hext_[m]))
-      throw InvalidArgument(concat("field solve: the applied field is not finite at (",
-                                   cellOrigin(cellBase_[m / 8]).x, ", ", cellOrigin(cellBase_[m / 8]).y, ", ",
-                                   cellOrigin(cellBase_[m / 8]).z, ") m"));
+  // Written whole by every evaluate(..., true).
+  resizeKeepingCapacity(elem_, cells * kPacked);
+  resizeKeepingCapacity(cellTensor_, cells);
+  if (const std::size_t m = firstIndexWhere(cells * 8, [&](std::size_t g) { return !isFinite(hext_[g]); });
+      m < cells * 8)
+    throw InvalidArgument(concat("field solve: the applied field is not finite at (", cellOrigin(cellBase_[m / 8]).x,
+                                 ", ", cellOrigin(cellBase_[m / 8]).y, ", ", cellOrigin(cellBase_[m / 8]).z, ") m"));
   haveAppliedField_ = true;
 
   // Clearance to the wall, total count and centroid.
@@ -228,24 +227,13 @@ void MagnetostaticProblem::setMaterial(GridView<const double> n, const AppliedFi
 
   // Multipole blocks (multipole_blocks.h), sorted by (block, slot) so the
   // per-block sums have a fixed order.
-  blockEdge_ = multipoleBlockEdgeFor(wallClearance_);
-  const MultipoleBlockTiling tiling(cd, blockEdge_);
-  std::vector<std::uint64_t> key(cells);
-  tbb::parallel_for(std::size_t(0), cells, [&](std::size_t s) {
-    const std::size_t b = cellBase_[s], nx = std::size_t(grid_.dims.i), ny = std::size_t(grid_.dims.j);
-    key[s] = tiling.key(int(b % nx), int((b / nx) % ny), int(b / (nx * ny)));
-  });
-  blockCells_.resize(cells);
-  std::iota(blockCells_.begin(), blockCells_.end(), std::size_t(0));
-  std::sort(blockCells_.begin(), blockCells_.end(),
-            [&](std::size_t a, std::size_t b) { return key[a] != key[b] ? key[a] < key[b] : a < b; });
-  blockStart_.clear();
-  cellBlock_.assign(cells, 0);
-  for (std::size_t m = 0; m < cells; ++m) {
-    if (m == 0 || key[blockCells_[m]] != key[blockCells_[m - 1]]) blockStart_.push_back(m);
-    cellBlock_[blockCells_[m]] = std::uint32_t(blockStart_.size() - 1);
+  // The same cells (hence the same clearance and block edge) keep their
+  // blocks; only the centres, which follow the density, are recomputed.
+  const int edge = multipoleBlockEdgeFor(wallClearance_);
+  if (!cellsUnchanged || edge != blockEdge_) {
+    blockEdge_ = edge;
+    sortCellsIntoBlocks();
   }
-  blockStart_.push_back(cells);
   const std::size_t blocks = blockStart_.size() - 1;
   blockCentre_.assign(blocks, Vec3d{});
   tbb::parallel_for(std::size_t(0), blocks, [&](std::size_t b) {
@@ -268,6 +256,33 @@ void MagnetostaticProblem::setMaterial(GridView<const double> n, const AppliedFi
   tbb::parallel_for(std::size_t(0), cells, [&](std::size_t s) {
     cellFromCentre_[s] = cellOrigin(cellBase_[s]) - blockCentre_[cellBlock_[s]];
   });
+  haveBlocks_ = true;
+}
+
+void MagnetostaticProblem::sortCellsIntoBlocks() {
+  // Cells by (block key, slot): one 64-bit word each (key above, slot
+  // below), sorted as plain integers, which is the same order.
+  const std::size_t cells = cellBase_.size();
+  const MultipoleBlockTiling tiling(grid_.cellDims(), blockEdge_);
+  require(tiling.keyCount() < (std::uint64_t(1) << 32) && cells < (std::size_t(1) << 32),
+          "field solve: ", cells, " material cells in ", tiling.keyCount(), " multipole blocks is too many to sort");
+  std::vector<std::uint64_t> order(cells);
+  const std::size_t nx = std::size_t(grid_.dims.i), ny = std::size_t(grid_.dims.j);
+  parallelForEach(cells, [&](std::size_t s) {
+    const std::size_t b = cellBase_[s];
+    order[s] = (tiling.key(int(b % nx), int((b / nx) % ny), int(b / (nx * ny))) << 32) | std::uint64_t(s);
+  });
+  tbb::parallel_sort(order.begin(), order.end());
+  blockCells_.resize(cells);
+  blockStart_.clear();
+  cellBlock_.assign(cells, 0);
+  for (std::size_t m = 0; m < cells; ++m) {
+    const std::size_t s = std::size_t(order[m] & 0xffffffffu);
+    if (m == 0 || (order[m] >> 32) != (order[m - 1] >> 32)) blockStart_.push_back(m);
+    blockCells_[m] = s;
+    cellBlock_[s] = std::uint32_t(blockStart_.size() - 1);
+  }
+  blockStart_.push_back(cells);
 }
 
 template <typename CellFn>

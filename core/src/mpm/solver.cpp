@@ -399,7 +399,7 @@ void MpmSolver::checkFiniteParticles(const char* where) const {
   const MpmParticles& P = particles_;
   const std::size_t np = P.size();
   const bool forces = P.magneticForce.size() == np;
-  const std::size_t p = firstBad(np, [&](std::size_t i) {
+  const std::size_t p = firstIndexWhere(np, [&](std::size_t i) {
     return !isFinite(P.x[i]) || !isFinite(P.v[i]) || !finiteMat(P.C[i]) || !finiteMat(P.F[i]) ||
            !std::isfinite(P.J[i]) || (forces && !isFinite(P.magneticForce[i]));
   });
@@ -439,7 +439,7 @@ void MpmSolver::checkFiniteGrid(const char* where) const {
       if (bad(g.index(i, j, k))) return g.index(i, j, k);
     return kNoNode;
   };
-  const std::size_t row = firstBad(rows, [&](std::size_t r) { return firstInRow(r) != kNoNode; });
+  const std::size_t row = firstIndexWhere(rows, [&](std::size_t r) { return firstInRow(r) != kNoNode; });
   if (row == rows) return;
   const std::size_t n = firstInRow(row);
   const char* what = !std::isfinite(nodes[n].mass)      ? "mass (kg)"

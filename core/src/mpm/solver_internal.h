@@ -1,33 +1,12 @@
 #pragma once
 // What the MPM solver's source files share (solver.cpp, solver_magnetic.cpp):
-// the applied field its stages see and a deterministic search for the first
-// bad index.
-#include <tbb/blocked_range.h>
-#include <tbb/parallel_reduce.h>
-
-#include <algorithm>
+// the applied field its stages see.
 #include <cstddef>
 
 #include "lodestone/core/mpm/solver.h"
 
 namespace lodestone {
 inline namespace mpm {
-
-namespace {
-// The first index in [0, n) for which bad(i) holds, or n; deterministic.
-template <typename Bad>
-std::size_t firstBad(std::size_t n, const Bad& bad) {
-  return tbb::parallel_reduce(
-      tbb::blocked_range<std::size_t>(0, n, 4096), n,
-      [&](const tbb::blocked_range<std::size_t>& r, std::size_t found) {
-        for (std::size_t i = r.begin(); i != r.end() && i < found; ++i)
-          if (bad(i)) return i;
-        return found;
-      },
-      [](std::size_t a, std::size_t b) { return std::min(a, b); });
-}
-
-}  // namespace
 
 // ---------------------------------------------------------------------------
 // The applied field the stage sees: the user's sources plus the magnets.

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "lodestone/core/base/error.h"
+#include "lodestone/core/base/parallel.h"
 #include "lodestone/core/base/stopwatch.h"
 #include "lodestone/core/mpm/solver.h"
 #include "lodestone/core/stage/magnetic_force.h"
@@ -194,7 +195,7 @@ void MpmSolver::checkFiniteStage(const MagneticForceStage& stage, const char* no
                                  const FieldSolveReport& solve) const {
   const GridView<const Vec3d> H = stage.field(), f = stage.nodalForce();
   const std::size_t nn = stage.grid().nodeCount();  // the stage's own grid (an active region, a patch)
-  const std::size_t bad = firstBad(nn, [&](std::size_t i) { return !isFinite(H.data[i]) || !isFinite(f.data[i]); });
+  const std::size_t bad = firstIndexWhere(nn, [&](std::size_t i) { return !isFinite(H.data[i]) || !isFinite(f.data[i]); });
   if (bad < nn)
     throw Error(concat("MPM finite check: non-finite magnetic ", isFinite(H.data[bad]) ? "nodal force (N)" : "field H (A/m)",
                        " at ", nodeKind, " ", bad, " after the field solve in substep ", substeps_ + 1, " at t = ", time_,

@@ -21,6 +21,16 @@ void reserveKeepingCapacity(std::vector<T>& v, std::size_t n) {
   v.reserve(n + n / 8);
 }
 
+/// v resized to n elements in v's storage when it holds n
+/// (reserveKeepingCapacity): elements below the old size keep their values
+/// when the storage is kept, new ones are value-initialized. For arrays
+/// that the caller overwrites whole.
+template <typename T>
+void resizeKeepingCapacity(std::vector<T>& v, std::size_t n) {
+  reserveKeepingCapacity(v, n);
+  v.resize(n);
+}
+
 /// v = n copies of `value`, in v's storage when it holds n
 /// (reserveKeepingCapacity).
 template <typename T>

@@ -1,8 +1,9 @@
 #pragma once
-// Deterministic parallel reductions: the same sums, bit for bit, whatever the
-// number of threads. tbb::parallel_deterministic_reduce splits the range the
+// Deterministic parallel reductions: the same sums (and the same first
+// index), bit for bit, whatever the number of threads. tbb::parallel_deterministic_reduce splits the range the
 // same way every time (fixed grain, simple partitioner) and joins the partial
 // sums in a fixed tree order.
+#include <algorithm>
 #include <cstddef>
 
 #include <tbb/blocked_range.h>
@@ -33,6 +34,21 @@ T deterministicSum(std::size_t count, const Term& term, std::size_t grain = kRed
         return acc;
       },
       [](T a, const T& b) { return a += b; });
+}
+
+/// The first index m in [0, n) for which pred(m) holds, or n: the same index
+/// whatever the thread count (a chunk stops at its first hit, or at a lower
+/// hit another chunk already found).
+template <typename Pred>
+std::size_t firstIndexWhere(std::size_t n, const Pred& pred, std::size_t grain = kReduceGrain) {
+  return tbb::parallel_reduce(
+      tbb::blocked_range<std::size_t>(0, n, grain), n,
+      [&](const tbb::blocked_range<std::size_t>& r, std::size_t found) {
+        for (std::size_t m = r.begin(); m != r.end() && m < found; ++m)
+          if (pred(m)) return m;
+        return found;
+      },
+      [](std::size_t a, std::size_t b) { return std::min(a, b); });
 }
 
 /// Dot product of two arrays, deterministic.

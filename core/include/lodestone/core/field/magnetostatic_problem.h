@@ -173,6 +173,8 @@ class MagnetostaticProblem {
 
   template <typename CellFn>
   void scatterCells(double* out, const CellFn& cellFn) const;
+  /// blockCells_, blockStart_ and cellBlock_ from cellBase_ and blockEdge_.
+  void sortCellsIntoBlocks();
   void gatherCorners(std::size_t base, const double* v, double c[8]) const;
   Vec3d cellOrigin(std::size_t base) const;
 
@@ -182,6 +184,7 @@ class MagnetostaticProblem {
   std::size_t cornerOffset_[8];
   // Material cells, grouped by colour (cell parity); colourStart_[c] .. colourStart_[c+1].
   std::vector<std::size_t> cellBase_;  // base node index of each material cell
+  std::vector<std::size_t> previousCellBase_;  // setMaterial(): the previous call's cells (storage kept)
   std::size_t colourStart_[9] = {};
   std::size_t cellsEvaluated_ = 0;     // cells whose applied field the last setMaterial evaluated
   bool haveAppliedField_ = false;      // hext_ holds the values of cellBase_'s cells
@@ -200,6 +203,7 @@ class MagnetostaticProblem {
   std::vector<std::size_t> blockCells_;  // material cell slots sorted by block
   std::vector<Vec3d> blockCentre_;       // n-weighted centroid of each block, m
   std::vector<std::uint32_t> cellBlock_; // block of each material cell slot
+  bool haveBlocks_ = false;              // the blocks above belong to cellBase_ (a completed setMaterial)
   std::vector<Vec3d> cellFromCentre_;    // each cell slot's origin minus its block's centre, m
   double totalCount_ = 0;
 };
