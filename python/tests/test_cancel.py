@@ -178,7 +178,7 @@ def test_runs_release_the_gil():
     # it returns: a thread ticking every millisecond meanwhile shows that the
     # call released it (holding it, the other thread would not tick at all).
     x, n = ball_particles(4000)
-    grid = lodestone.Grid((-0.04, -0.04, -0.02), 0.002, (41, 41, 31))
+    grid = lodestone.Grid((-0.04, -0.04, -0.02), 0.001, (81, 81, 61))
     stage = lodestone.MagneticForceStage(grid, lodestone.paper_material())
     ticks = [0]
     done = threading.Event()

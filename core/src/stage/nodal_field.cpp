@@ -1,8 +1,11 @@
 #include "lodestone/core/stage/nodal_field.h"
 
+#include <algorithm>
 #include <vector>
 
+#include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
 
 #include "lodestone/core/base/constants.h"
 #include "lodestone/core/base/error.h"
@@ -11,75 +14,140 @@ namespace lodestone {
 inline namespace stage {
 
 namespace {
-// Node (i,j,k) index arithmetic along one axis.
-struct AxisStep {
-  int count;
-  std::ptrdiff_t stride;
-};
-inline AxisStep axisStep(const GridSpec& g, int axis) {
-  if (axis == 0) return {g.dims.i, 1};
-  if (axis == 1) return {g.dims.j, std::ptrdiff_t(g.dims.i)};
-  return {g.dims.k, std::ptrdiff_t(g.dims.i) * g.dims.j};
-}
-inline int coord(int i, int j, int k, int axis) { return axis == 0 ? i : (axis == 1 ? j : k); }
 
-// dst = central difference (axis) of src divided by dx; one-sided at walls.
-void differenceAlong(const GridSpec& g, const double* src, double* dst, int axis) {
-  const AxisStep a = axisStep(g, axis);
+// The projected gradient is computed z plane by z plane (nx * ny nodes each),
+// chunks of planes in parallel, each value by the same operations in the
+// same order as three separate whole-grid passes per component would
+// (difference along the component's axis, then smoothing along the next axis,
+// then along the one after), so the same bits; the intermediate values live
+// in a few planes per thread instead of whole grids.
+
+// dst = difference of src along x (axis 0) or y (axis 1) within a plane, / dx;
+// one-sided at the walls.
+void differenceInPlane(const GridSpec& g, const double* src, double* dst, int axis) {
   const double inv2h = 0.5 / g.dx, invh = 1.0 / g.dx;
-  tbb::parallel_for(0, g.dims.k, [&](int k) {
-    for (int j = 0; j < g.dims.j; ++j)
-      for (int i = 0; i < g.dims.i; ++i) {
-        const std::size_t m = g.index(i, j, k);
-        const int p = coord(i, j, k, axis);
-        if (p == 0)
-          dst[m] = (src[m + std::size_t(a.stride)] - src[m]) * invh;
-        else if (p == a.count - 1)
-          dst[m] = (src[m] - src[m - std::size_t(a.stride)]) * invh;
-        else
-          dst[m] = (src[m + std::size_t(a.stride)] - src[m - std::size_t(a.stride)]) * inv2h;
+  const std::size_t stride = axis == 0 ? 1 : std::size_t(g.dims.i);
+  const int count = axis == 0 ? g.dims.i : g.dims.j;
+  for (int j = 0; j < g.dims.j; ++j)
+    for (int i = 0; i < g.dims.i; ++i) {
+      const std::size_t m = std::size_t(i) + std::size_t(g.dims.i) * std::size_t(j);
+      const int p = axis == 0 ? i : j;
+      if (p == 0)
+        dst[m] = (src[m + stride] - src[m]) * invh;
+      else if (p == count - 1)
+        dst[m] = (src[m] - src[m - stride]) * invh;
+      else
+        dst[m] = (src[m + stride] - src[m - stride]) * inv2h;
+    }
+}
+
+// dst = [1/6, 2/3, 1/6] smoothing of src along x (axis 0) or y (axis 1)
+// within a plane ([2/3, 1/3] at the walls).
+void smoothInPlane(const GridSpec& g, const double* src, double* dst, int axis) {
+  const std::size_t stride = axis == 0 ? 1 : std::size_t(g.dims.i);
+  const int count = axis == 0 ? g.dims.i : g.dims.j;
+  for (int j = 0; j < g.dims.j; ++j)
+    for (int i = 0; i < g.dims.i; ++i) {
+      const std::size_t m = std::size_t(i) + std::size_t(g.dims.i) * std::size_t(j);
+      const int p = axis == 0 ? i : j;
+      if (p == 0)
+        dst[m] = (2.0 / 3) * src[m] + (1.0 / 3) * src[m + stride];
+      else if (p == count - 1)
+        dst[m] = (2.0 / 3) * src[m] + (1.0 / 3) * src[m - stride];
+      else
+        dst[m] = (2.0 / 3) * src[m] + (1.0 / 6) * (src[m + stride] + src[m - stride]);
+    }
+}
+
+// The same two operations along z at plane k, from planes k - 1 (below),
+// k (centre) and k + 1 (above); below / above are not read at the walls.
+void differenceAcross(const GridSpec& g, const double* below, const double* centre, const double* above, int k,
+                      double* dst) {
+  const double inv2h = 0.5 / g.dx, invh = 1.0 / g.dx;
+  const std::size_t plane = std::size_t(g.dims.i) * std::size_t(g.dims.j);
+  for (std::size_t m = 0; m < plane; ++m) {
+    if (k == 0)
+      dst[m] = (above[m] - centre[m]) * invh;
+    else if (k == g.dims.k - 1)
+      dst[m] = (centre[m] - below[m]) * invh;
+    else
+      dst[m] = (above[m] - below[m]) * inv2h;
+  }
+}
+
+void smoothAcross(const GridSpec& g, const double* below, const double* centre, const double* above, int k,
+                  double* dst) {
+  const std::size_t plane = std::size_t(g.dims.i) * std::size_t(g.dims.j);
+  for (std::size_t m = 0; m < plane; ++m) {
+    if (k == 0)
+      dst[m] = (2.0 / 3) * centre[m] + (1.0 / 3) * above[m];
+    else if (k == g.dims.k - 1)
+      dst[m] = (2.0 / 3) * centre[m] + (1.0 / 3) * below[m];
+    else
+      dst[m] = (2.0 / 3) * centre[m] + (1.0 / 6) * (above[m] + below[m]);
+  }
+}
+
+// Planes per thread: two windows of three (x: the y-smoothed x difference;
+// y: the y difference), two temporaries and the three components.
+constexpr std::size_t kPlanesPerThread = 11;
+
+// fn(k, gx, gy, gz) for every z plane k, with the planes of the projected
+// gradient's components (1/m times the unit of phi); planes in parallel
+// chunks. The per-thread planes live in scratch.scalar0.
+template <typename Fn>
+void forEachGradientPlane(GridView<const double> phi, GridScratch& scratch, const Fn& fn) {
+  const GridSpec& g = phi.spec;
+  const std::size_t plane = std::size_t(g.dims.i) * std::size_t(g.dims.j);
+  const int nz = g.dims.k;
+  const std::size_t threads = std::size_t(tbb::this_task_arena::max_concurrency());
+  scratch.scalar0.resize(threads * kPlanesPerThread * plane);
+  const auto phiPlane = [&](int k) { return phi.data + std::size_t(k) * plane; };
+  tbb::parallel_for(tbb::blocked_range<int>(0, nz, 16), [&](const tbb::blocked_range<int>& r) {
+    const std::size_t slot = std::size_t(tbb::this_task_arena::current_thread_index());
+    require(slot < threads, "projected gradient: thread index ", slot, " outside the arena's ", threads);
+    double* base = scratch.scalar0.data() + slot * kPlanesPerThread * plane;
+    double* xWindow[3] = {base, base + plane, base + 2 * plane};  // plane j in xWindow[j % 3]
+    double* yWindow[3] = {base + 3 * plane, base + 4 * plane, base + 5 * plane};
+    double* t0 = base + 6 * plane;
+    double* t1 = base + 7 * plane;
+    double* gx = base + 8 * plane;
+    double* gy = base + 9 * plane;
+    double* gz = base + 10 * plane;
+    int next = std::max(r.begin() - 1, 0);  // the next plane the windows lack
+    for (int k = r.begin(); k != r.end(); ++k) {
+      for (; next <= std::min(k + 1, nz - 1); ++next) {
+        differenceInPlane(g, phiPlane(next), t0, 0);
+        smoothInPlane(g, t0, xWindow[next % 3], 1);
+        differenceInPlane(g, phiPlane(next), yWindow[next % 3], 1);
       }
+      const auto at = [&](double* const* window, int j) { return j >= 0 && j < nz ? window[j % 3] : nullptr; };
+      // x: difference along x, smoothed along y (the window), then along z.
+      smoothAcross(g, at(xWindow, k - 1), at(xWindow, k), at(xWindow, k + 1), k, gx);
+      // y: difference along y (the window), smoothed along z, then along x.
+      smoothAcross(g, at(yWindow, k - 1), at(yWindow, k), at(yWindow, k + 1), k, t0);
+      smoothInPlane(g, t0, gy, 0);
+      // z: difference along z, smoothed along x, then along y.
+      differenceAcross(g, k > 0 ? phiPlane(k - 1) : nullptr, phiPlane(k), k + 1 < nz ? phiPlane(k + 1) : nullptr, k,
+                       t0);
+      smoothInPlane(g, t0, t1, 0);
+      smoothInPlane(g, t1, gz, 1);
+      fn(k, static_cast<const double*>(gx), static_cast<const double*>(gy), static_cast<const double*>(gz));
+    }
   });
 }
 
-// dst = [1/6, 2/3, 1/6] smoothing of src along axis ([2/3, 1/3] at walls).
-void smoothAlong(const GridSpec& g, const double* src, double* dst, int axis) {
-  const AxisStep a = axisStep(g, axis);
-  tbb::parallel_for(0, g.dims.k, [&](int k) {
-    for (int j = 0; j < g.dims.j; ++j)
-      for (int i = 0; i < g.dims.i; ++i) {
-        const std::size_t m = g.index(i, j, k);
-        const int p = coord(i, j, k, axis);
-        if (p == 0)
-          dst[m] = (2.0 / 3) * src[m] + (1.0 / 3) * src[m + std::size_t(a.stride)];
-        else if (p == a.count - 1)
-          dst[m] = (2.0 / 3) * src[m] + (1.0 / 3) * src[m - std::size_t(a.stride)];
-        else
-          dst[m] = (2.0 / 3) * src[m] + (1.0 / 6) * (src[m + std::size_t(a.stride)] + src[m - std::size_t(a.stride)]);
-      }
-  });
-}
 }  // namespace
 
 void projectedGradient(GridView<const double> phi, GridView<Vec3d> gradient, GridScratch* scratch) {
   require(phi.spec == gradient.spec, "projectedGradient: grids differ");
-  const GridSpec& g = phi.spec;
-  const std::size_t n = g.nodeCount();
   GridScratch local;
   GridScratch& s = scratch ? *scratch : local;
-  s.scalar0.resize(n);  // every value is written before it is read
-  s.scalar1.resize(n);
-  std::vector<double>&a = s.scalar0, &b = s.scalar1;
-  for (int axis = 0; axis < 3; ++axis) {
-    const int s1 = (axis + 1) % 3, s2 = (axis + 2) % 3;
-    differenceAlong(g, phi.data, a.data(), axis);
-    smoothAlong(g, a.data(), b.data(), s1);
-    smoothAlong(g, b.data(), a.data(), s2);
-    tbb::parallel_for(std::size_t(0), n, std::size_t(1) << 14, [&](std::size_t m0) {
-      const std::size_t m1 = std::min(n, m0 + (std::size_t(1) << 14));
-      for (std::size_t m = m0; m < m1; ++m) gradient[m][axis] = a[m];
-    });
-  }
+  const std::size_t plane = std::size_t(phi.spec.dims.i) * std::size_t(phi.spec.dims.j);
+  forEachGradientPlane(phi, s, [&](int k, const double* gx, const double* gy, const double* gz) {
+    Vec3d* out = gradient.data + std::size_t(k) * plane;
+    for (std::size_t q = 0; q < plane; ++q) out[q] = {gx[q], gy[q], gz[q]};
+  });
 }
 
 void recoverNodalFields(GridView<const double> phi, GridView<const Vec3d> Hext, GridView<const double> n,
@@ -89,14 +157,12 @@ void recoverNodalFields(GridView<const double> phi, GridView<const Vec3d> Hext, 
   require(Hext.spec == g && n.spec == g, "recoverNodalFields: input grids differ");
   GridScratch local;
   GridScratch& s = scratch ? *scratch : local;
-  s.vector0.resize(g.nodeCount());
-  const std::vector<Vec3d>& grad = s.vector0;
-  projectedGradient(phi, GridView<Vec3d>{s.vector0.data(), g}, &s);
-  const std::size_t count = g.nodeCount();
-  tbb::parallel_for(std::size_t(0), count, std::size_t(1) << 12, [&](std::size_t m0) {
-    const std::size_t m1 = std::min(count, m0 + (std::size_t(1) << 12));
-    for (std::size_t m = m0; m < m1; ++m) {
-      const Vec3d h = Hext[m] - grad[m];
+  const std::size_t plane = std::size_t(g.dims.i) * std::size_t(g.dims.j);
+  forEachGradientPlane(phi, s, [&](int k, const double* gx, const double* gy, const double* gz) {
+    const std::size_t first = std::size_t(k) * plane;
+    for (std::size_t q = 0; q < plane; ++q) {
+      const std::size_t m = first + q;
+      const Vec3d h = Hext[m] - Vec3d{gx[q], gy[q], gz[q]};
       // Empty nodes (most of a grid) skip the Langevin function: with n = 0
       // it returns (0 * g) H = 0 * H for finite H, bit for bit.
       const bool skip = n[m] == 0 && law.kind == LawKind::Langevin && isFinite(h);

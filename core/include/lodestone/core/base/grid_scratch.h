@@ -1,9 +1,10 @@
 #pragma once
-// Reusable whole-grid temporaries of the nodal-field and force passes
-// (projectedGradient, recoverNodalFields, spreadForce). A caller that runs
-// them repeatedly on one grid keeps one GridScratch, so that these buffers
-// (tens to hundreds of MB at 128^3 to 256^3) are allocated once instead of
-// being mapped, page-faulted and cleared by the kernel on every call.
+// Reusable temporaries of the nodal-field and force passes: a few z planes
+// per thread for projectedGradient and recoverNodalFields (scalar0), a
+// whole-grid vector field for spreadForce (vector0; tens to hundreds of MB at
+// 128^3 to 256^3). A caller that runs them repeatedly on one grid keeps one
+// GridScratch, so that these buffers are allocated once instead of being
+// mapped, page-faulted and cleared by the kernel on every call.
 #include <vector>
 
 #include "lodestone/core/base/vec3.h"

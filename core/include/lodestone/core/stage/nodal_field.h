@@ -17,7 +17,8 @@ namespace lodestone {
 inline namespace stage {
 
 /// grad(phi) at every node, 1/m times the unit of phi. `scratch`, when
-/// given, holds the temporaries between calls (results are the same).
+/// given, holds the temporaries (a few z planes per thread) between calls
+/// (results are the same).
 void projectedGradient(GridView<const double> phi, GridView<Vec3d> gradient, GridScratch* scratch = nullptr);
 
 /// H (A/m), M (A/m) and B (T) at every node; any output view may be empty
