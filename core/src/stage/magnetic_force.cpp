@@ -7,6 +7,7 @@
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
 #include <tbb/parallel_reduce.h>
 
 #include "lodestone/core/base/constants.h"
@@ -80,9 +81,71 @@ MagnetWrench sourceReaction(GridView<const Vec3d> materialM, const FieldSource& 
   return {sum.force, sum.torque};
 }
 
+namespace {
+
+// Nodes within `dilation` nodes (per axis) of material, n above
+// kMaskDustFraction of its maximum (particles on B-spline tie points, a
+// weight 0 in exact arithmetic, leave round-off dust of 1e-30 and less of the
+// maximum on one side only, which would break the mask's symmetry and give a
+// symmetric body a net force): 1, else 0, in scratch.mask0. The box dilation
+// is three one-axis passes, each the OR of shifted rows (x) or of whole
+// neighbouring rows (y, z).
+const std::uint8_t* materialMask(GridView<const double> n, int dilation, GridScratch& scratch) {
+  const GridSpec& g = n.spec;
+  const std::size_t count = g.nodeCount(), nx = std::size_t(g.dims.i);
+  const double nMax = tbb::parallel_reduce(
+      tbb::blocked_range<std::size_t>(0, count, std::size_t(1) << 14), 0.0,
+      [&](const tbb::blocked_range<std::size_t>& r, double acc) {
+        for (std::size_t m = r.begin(); m != r.end(); ++m) acc = std::max(acc, n[m]);
+        return acc;
+      },
+      [](double a, double b) { return std::max(a, b); });
+  const double threshold = kMaskDustFraction * nMax;
+  std::vector<std::uint8_t>&a = scratch.mask0, &b = scratch.mask1;
+  a.resize(count);  // every value is written before it is read
+  b.resize(count);
+  const auto rows = [&](const auto& rowFn) {
+    tbb::parallel_for(0, g.dims.k, [&](int k) {
+      for (int j = 0; j < g.dims.j; ++j) rowFn(j, k, g.index(0, j, k));
+    });
+  };
+  rows([&](int, int, std::size_t row) {
+    for (std::size_t i = 0; i < nx; ++i) a[row + i] = n[row + i] > threshold;
+  });
+  if (dilation == 0) return a.data();
+  // x: b[i] = OR of a[i + s], |s| <= dilation, within the row.
+  rows([&](int, int, std::size_t row) {
+    const std::uint8_t* src = a.data() + row;
+    std::uint8_t* dst = b.data() + row;
+    std::fill(dst, dst + nx, std::uint8_t(0));
+    for (int s = -dilation; s <= dilation; ++s) {
+      const std::size_t from = std::size_t(std::max(0, -s)), to = nx - std::size_t(std::max(0, s));
+      for (std::size_t i = from; i < to; ++i) dst[i] |= src[std::ptrdiff_t(i) + s];
+    }
+  });
+  // y, then z: a row is the OR of the rows within `dilation` along the axis.
+  for (int axis = 1; axis < 3; ++axis) {
+    const std::vector<std::uint8_t>& src = axis == 1 ? b : a;
+    std::vector<std::uint8_t>& dst = axis == 1 ? a : b;
+    const int extent = axis == 1 ? g.dims.j : g.dims.k;
+    rows([&](int j, int k, std::size_t row) {
+      const int p = axis == 1 ? j : k;
+      std::uint8_t* out = dst.data() + row;
+      std::fill(out, out + nx, std::uint8_t(0));
+      for (int q = std::max(p - dilation, 0); q <= std::min(p + dilation, extent - 1); ++q) {
+        const std::uint8_t* in = src.data() + (axis == 1 ? g.index(0, q, k) : g.index(0, j, q));
+        for (std::size_t i = 0; i < nx; ++i) out[i] |= in[i];
+      }
+    });
+  }
+  return b.data();
+}
+
+}  // namespace
+
 void stressDivergence(GridView<const Vec3d> H, GridView<const Vec3d> B, GridView<const Vec3d> Hext,
                       GridView<const double> n, ForceMask mask, GridView<Vec3d> t, int dilation,
-                      const FieldSource* applied, double time) {
+                      const FieldSource* applied, double time, GridScratch* scratch) {
   require(std::isfinite(time), "stressDivergence: time must be finite, got ", time, " s");
   require(dilation >= 0 && dilation <= 8, "stressDivergence: mask dilation must be 0..8 nodes, got ", dilation);
   const GridSpec& g = H.spec;
@@ -98,46 +161,15 @@ void stressDivergence(GridView<const Vec3d> H, GridView<const Vec3d> B, GridView
     r[a] -= 0.5 * kMu0 * norm2(Hd);
     return r;
   };
-  // The material mask: nodes within `dilation` nodes (per axis) of n > 0, a
-  // box dilation done as three one-axis passes.
-  std::vector<std::uint8_t> near;
-  if (mask == ForceMask::Material) {
-    const std::size_t count = g.nodeCount();
-    near.resize(count);
-    std::vector<std::uint8_t> next(count);
-    // Material is n above kMaskDustFraction of its maximum: particles on
-    // B-spline tie points (a weight 0 in exact arithmetic) leave round-off
-    // dust of 1e-30 and less of the maximum on one side only, which would
-    // break the mask's symmetry (and give a symmetric body a net force).
-    const double nMax = tbb::parallel_reduce(
-        tbb::blocked_range<std::size_t>(0, count), 0.0,
-        [&](const tbb::blocked_range<std::size_t>& r, double acc) {
-          for (std::size_t m = r.begin(); m != r.end(); ++m) acc = std::max(acc, n[m]);
-          return acc;
-        },
-        [](double a, double b) { return std::max(a, b); });
-    const double threshold = kMaskDustFraction * nMax;
-    tbb::parallel_for(std::size_t(0), count, [&](std::size_t m) { near[m] = n[m] > threshold; });
-    for (int axis = 0; axis < 3 && dilation > 0; ++axis) {
-      tbb::parallel_for(0, g.dims.k, [&](int k) {
-        for (int j = 0; j < g.dims.j; ++j)
-          for (int i = 0; i < g.dims.i; ++i) {
-            const std::size_t m = g.index(i, j, k);
-            const int p = axis == 0 ? i : (axis == 1 ? j : k);
-            const int from = std::max(p - dilation, 0) - p, to = std::min(p + dilation, dims[axis] - 1) - p;
-            std::uint8_t any = 0;
-            for (int s = from; s <= to && !any; ++s) any = near[std::size_t(std::ptrdiff_t(m) + s * stride[axis])];
-            next[m] = any;
-          }
-      });
-      near.swap(next);
-    }
-  }
+  // The material mask: nodes within `dilation` nodes (per axis) of n > 0.
+  GridScratch local;
+  GridScratch& sc = scratch ? *scratch : local;
+  const std::uint8_t* near = mask == ForceMask::Material ? materialMask(n, dilation, sc) : nullptr;
   tbb::parallel_for(0, g.dims.k, [&](int k) {
     for (int j = 0; j < g.dims.j; ++j)
       for (int i = 0; i < g.dims.i; ++i) {
         const std::size_t m = g.index(i, j, k);
-        if (mask == ForceMask::Material && !near[m]) {
+        if (near && !near[m]) {
           t[m] = Vec3d{};
           continue;
         }
@@ -164,35 +196,61 @@ void spreadForce(GridView<const Vec3d> t, GridView<Vec3d> f, GridScratch* scratc
   const std::size_t count = g.nodeCount();
   GridScratch local;
   GridScratch& sc = scratch ? *scratch : local;
-  sc.vector0.resize(count);
-  Vec3d* tmp = sc.vector0.data();
-  // Three one-axis passes, t -> f -> tmp -> f (t is first copied to tmp
-  // when it is f itself, so that no pass reads what it writes).
-  const Vec3d* first = t.data;
+  // The three one-axis passes (x, y, then z) z plane by z plane: x and y
+  // within a plane, z from a window of the three xy-spread planes around it;
+  // each value by the same operations in the same order as whole-grid passes.
+  // Chunks of planes run in parallel; t is first copied when it is f itself
+  // (a chunk reads the planes next to its own, which another chunk writes).
+  const Vec3d* src = t.data;
   if (t.data == f.data) {
-    std::copy(t.data, t.data + count, tmp);
-    first = tmp;
+    sc.vector0.resize(count);
+    std::copy(t.data, t.data + count, sc.vector0.data());
+    src = sc.vector0.data();
   }
-  const int dims[3] = {g.dims.i, g.dims.j, g.dims.k};
-  const std::size_t stride[3] = {1, std::size_t(g.dims.i), std::size_t(g.dims.i) * std::size_t(g.dims.j)};
+  const int nx = g.dims.i, ny = g.dims.j, nz = g.dims.k;
+  const std::size_t plane = std::size_t(nx) * std::size_t(ny);
   const double r0 = 2.0 * g.dx / 3.0, r1 = g.dx / 6.0;
-  const Vec3d* src[3] = {first, f.data, tmp};
-  Vec3d* dst[3] = {f.data, tmp, f.data};
-  for (int axis = 0; axis < 3; ++axis) {
-    const Vec3d* a = src[axis];
-    Vec3d* b = dst[axis];
-    tbb::parallel_for(0, g.dims.k, [&](int k) {
-      for (int j = 0; j < g.dims.j; ++j)
-        for (int i = 0; i < g.dims.i; ++i) {
-          const std::size_t m = g.index(i, j, k);
-          const int p = axis == 0 ? i : (axis == 1 ? j : k);
-          Vec3d s = r0 * a[m];
-          if (p > 0) s += r1 * a[m - stride[axis]];
-          if (p < dims[axis] - 1) s += r1 * a[m + stride[axis]];
-          b[m] = s;
-        }
-    });
-  }
+  constexpr std::size_t kPlanes = 4;  // per thread: a window of three xy-spread planes and one temporary
+  const std::size_t threads = std::size_t(tbb::this_task_arena::max_concurrency());
+  sc.vector1.resize(threads * kPlanes * plane);
+  // out = the spread of in along one in-plane axis (stride 1: x; nx: y).
+  const auto spreadInPlane = [&](const Vec3d* in, Vec3d* out, int axis) {
+    const std::size_t stride = axis == 0 ? 1 : std::size_t(nx);
+    const int extent = axis == 0 ? nx : ny;
+    for (int j = 0; j < ny; ++j)
+      for (int i = 0; i < nx; ++i) {
+        const std::size_t m = std::size_t(i) + std::size_t(nx) * std::size_t(j);
+        const int p = axis == 0 ? i : j;
+        Vec3d v = r0 * in[m];
+        if (p > 0) v += r1 * in[m - stride];
+        if (p < extent - 1) v += r1 * in[m + stride];
+        out[m] = v;
+      }
+  };
+  tbb::parallel_for(tbb::blocked_range<int>(0, nz, 16), [&](const tbb::blocked_range<int>& r) {
+    const std::size_t slot = std::size_t(tbb::this_task_arena::current_thread_index());
+    require(slot < threads, "spreadForce: thread index ", slot, " outside the arena's ", threads);
+    Vec3d* base = sc.vector1.data() + slot * kPlanes * plane;
+    Vec3d* window[3] = {base, base + plane, base + 2 * plane};  // plane q in window[q % 3]
+    Vec3d* temp = base + 3 * plane;
+    int next = std::max(r.begin() - 1, 0);  // the next plane the window lacks
+    for (int k = r.begin(); k != r.end(); ++k) {
+      for (; next <= std::min(k + 1, nz - 1); ++next) {
+        spreadInPlane(src + std::size_t(next) * plane, temp, 0);
+        spreadInPlane(temp, window[next % 3], 1);
+      }
+      const Vec3d* centre = window[k % 3];
+      const Vec3d* below = k > 0 ? window[(k - 1) % 3] : nullptr;
+      const Vec3d* above = k < nz - 1 ? window[(k + 1) % 3] : nullptr;
+      Vec3d* out = f.data + std::size_t(k) * plane;
+      for (std::size_t q = 0; q < plane; ++q) {
+        Vec3d v = r0 * centre[q];
+        if (below) v += r1 * below[q];
+        if (above) v += r1 * above[q];
+        out[q] = v;
+      }
+    }
+  });
 }
 
 Vec3d gatherToSupport(GridView<const Vec3d> f, GridView<const double> n, GridView<Vec3d> out, int maxDistance) {

@@ -190,7 +190,7 @@ MagneticStageReport MagneticForceStage::solveAndForce(const FieldSource& sources
   // Force.
   t = Clock::now();
   stressDivergence(h_.view(), b_.view(), hext_.view(), n_.view(), settings_.forceMask, t_.view(),
-                   settings_.forceMaskDilation, &sources, time);
+                   settings_.forceMaskDilation, &sources, time, &scratch_);
   spreadForce(t_.view(), f_.view(), &scratch_);
   rep.totalForce = deterministicSum<Vec3d>(count, [&](std::size_t m) { return f_[m]; });
   rep.secondsForce = secondsSince(t);

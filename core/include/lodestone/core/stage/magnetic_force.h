@@ -54,9 +54,10 @@ const char* toString(ForceMask mask);
 /// (it pushed a cube resting on a magnet away with 400 N). The derivative
 /// is that of the field the material sees (field + exteriorContinuation, as
 /// the magnetic stage samples H_ext), continuous across magnets' faces.
+/// `scratch`, when given, holds the mask between calls (results are the same).
 void stressDivergence(GridView<const Vec3d> H, GridView<const Vec3d> B, GridView<const Vec3d> Hext,
                       GridView<const double> n, ForceMask mask, GridView<Vec3d> t, int dilation = 2,
-                      const FieldSource* applied = nullptr, double time = 0.0);
+                      const FieldSource* applied = nullptr, double time = 0.0, GridScratch* scratch = nullptr);
 
 /// mu0 (M . grad) H_s (N/m^3): the Kelvin force density that `source`
 /// exerts on magnetization M (A/m) at x (m), the derivative taken of the
