@@ -87,9 +87,9 @@ namespace {
 // kMaskDustFraction of its maximum (particles on B-spline tie points, a
 // weight 0 in exact arithmetic, leave round-off dust of 1e-30 and less of the
 // maximum on one side only, which would break the mask's symmetry and give a
-// symmetric body a net force): 1, else 0, in scratch.mask0. The box dilation
-// is three one-axis passes, each the OR of shifted rows (x) or of whole
-// neighbouring rows (y, z).
+// symmetric body a net force): 1, else 0, in scratch.mask0 or mask1. The box
+// dilation is three one-axis passes, each an OR of shifted copies: of a row
+// (x), of a plane's rows (y), of neighbouring planes (z).
 const std::uint8_t* materialMask(GridView<const double> n, int dilation, GridScratch& scratch) {
   const GridSpec& g = n.spec;
   const std::size_t count = g.nodeCount(), nx = std::size_t(g.dims.i);
@@ -109,32 +109,46 @@ const std::uint8_t* materialMask(GridView<const double> n, int dilation, GridScr
       for (int j = 0; j < g.dims.j; ++j) rowFn(j, k, g.index(0, j, k));
     });
   };
+  // Byte stores may alias anything, so every loop works through local
+  // pointers marked as not aliasing (the compiler then vectorizes it).
   rows([&](int, int, std::size_t row) {
-    for (std::size_t i = 0; i < nx; ++i) a[row + i] = n[row + i] > threshold;
+    std::uint8_t* __restrict out = a.data() + row;
+    const double* __restrict in = n.data + row;
+    for (std::size_t i = 0; i < nx; ++i) out[i] = in[i] > threshold;
   });
   if (dilation == 0) return a.data();
   // x: b[i] = OR of a[i + s], |s| <= dilation, within the row.
   rows([&](int, int, std::size_t row) {
-    const std::uint8_t* src = a.data() + row;
-    std::uint8_t* dst = b.data() + row;
+    const std::uint8_t* __restrict src = a.data() + row;
+    std::uint8_t* __restrict dst = b.data() + row;
     std::fill(dst, dst + nx, std::uint8_t(0));
     for (int s = -dilation; s <= dilation; ++s) {
       const std::size_t from = std::size_t(std::max(0, -s)), to = nx - std::size_t(std::max(0, s));
       for (std::size_t i = from; i < to; ++i) dst[i] |= src[std::ptrdiff_t(i) + s];
     }
   });
-  // y, then z: a row is the OR of the rows within `dilation` along the axis.
+  // y, then z, a plane at a time: the OR of the plane's rows shifted by
+  // up to `dilation` rows (y), or of the planes within `dilation` (z).
+  const std::size_t plane = nx * std::size_t(g.dims.j);
   for (int axis = 1; axis < 3; ++axis) {
-    const std::vector<std::uint8_t>& src = axis == 1 ? b : a;
-    std::vector<std::uint8_t>& dst = axis == 1 ? a : b;
-    const int extent = axis == 1 ? g.dims.j : g.dims.k;
-    rows([&](int j, int k, std::size_t row) {
-      const int p = axis == 1 ? j : k;
-      std::uint8_t* out = dst.data() + row;
-      std::fill(out, out + nx, std::uint8_t(0));
-      for (int q = std::max(p - dilation, 0); q <= std::min(p + dilation, extent - 1); ++q) {
-        const std::uint8_t* in = src.data() + (axis == 1 ? g.index(0, q, k) : g.index(0, j, q));
-        for (std::size_t i = 0; i < nx; ++i) out[i] |= in[i];
+    const std::uint8_t* src = (axis == 1 ? b : a).data();
+    std::uint8_t* dst = (axis == 1 ? a : b).data();
+    tbb::parallel_for(0, g.dims.k, [&](int k) {
+      std::uint8_t* __restrict out = dst + std::size_t(k) * plane;
+      std::fill(out, out + plane, std::uint8_t(0));
+      if (axis == 1) {
+        const std::uint8_t* __restrict in = src + std::size_t(k) * plane;
+        for (int s = -dilation; s <= dilation; ++s) {
+          const std::size_t from = nx * std::size_t(std::max(0, -s)),
+                            to = plane - nx * std::size_t(std::max(0, s));
+          const std::ptrdiff_t shift = std::ptrdiff_t(nx) * s;
+          for (std::size_t m = from; m < to; ++m) out[m] |= in[std::ptrdiff_t(m) + shift];
+        }
+      } else {
+        for (int q = std::max(k - dilation, 0); q <= std::min(k + dilation, g.dims.k - 1); ++q) {
+          const std::uint8_t* __restrict in = src + std::size_t(q) * plane;
+          for (std::size_t m = 0; m < plane; ++m) out[m] |= in[m];
+        }
       }
     });
   }
