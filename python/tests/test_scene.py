@@ -81,7 +81,7 @@ def test_memory_estimate_counts_the_scene_by_part():
     assert m["field_solve_nodes"] > np.prod(grid.dims)
     # Each part is its count times the documented figure (docs/cli.md, "Memory").
     assert m["mpm_grid_bytes"] == 64 * m["mpm_nodes"]
-    assert m["field_solve_bytes"] == 392 * m["field_solve_nodes"]
+    assert m["field_solve_bytes"] == 356 * m["field_solve_nodes"]
     assert m["particles_bytes"] == (392 + 277) * m["particles"]
     assert m["total_bytes"] == pytest.approx(
         m["mpm_grid_bytes"] + m["field_solve_bytes"] + m["particles_bytes"] + m["previews_bytes"])

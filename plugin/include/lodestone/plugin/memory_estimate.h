@@ -20,8 +20,8 @@ constexpr double kMpmNodeBytes = 64;
 constexpr double kSurfaceTensionNodeBytes = 8;
 /// Bytes per node of the field solve's (padded) grid: n, phi, the applied
 /// and total fields, M, B, the force, the Newton-PCG vectors and the
-/// multigrid levels (measured: 391-395 B at 0.4M and 2.6M nodes).
-constexpr double kFieldNodeBytes = 392;
+/// multigrid levels (measured: 356 B at 2.6M nodes).
+constexpr double kFieldNodeBytes = 356;
 /// Bytes per material point: its state (position, velocity, C, F, J, mass,
 /// volume, count, material, id, force: 260 B), its bin key and slot, and the
 /// copy a reordering makes (measured: 392 B at 1.0M particles).
