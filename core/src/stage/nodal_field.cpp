@@ -22,70 +22,55 @@ namespace {
 // then along the one after), so the same bits; the intermediate values live
 // in a few planes per thread instead of whole grids.
 
-// dst = difference of src along x (axis 0) or y (axis 1) within a plane, / dx;
-// one-sided at the walls.
-void differenceInPlane(const GridSpec& g, const double* src, double* dst, int axis) {
-  const double inv2h = 0.5 / g.dx, invh = 1.0 / g.dx;
+// Where a node lies along the axis of an operation: on the first wall, the
+// last, or between (where both neighbours exist).
+enum class Along { First, Last, Inner };
+
+// The two operations at one node from its value and its neighbours' along
+// the axis (a missing neighbour is passed as 0 and not used): the central
+// difference / dx, one-sided at the walls; the [1/6, 2/3, 1/6] smoothing,
+// [2/3, 1/3] at the walls.
+struct Difference {
+  double invh, inv2h;
+  explicit Difference(double dx) : invh(1.0 / dx), inv2h(0.5 / dx) {}
+  double operator()(double below, double centre, double above, Along at) const {
+    if (at == Along::First) return (above - centre) * invh;
+    if (at == Along::Last) return (centre - below) * invh;
+    return (above - below) * inv2h;
+  }
+};
+struct Smooth {
+  double operator()(double below, double centre, double above, Along at) const {
+    if (at == Along::First) return (2.0 / 3) * centre + (1.0 / 3) * above;
+    if (at == Along::Last) return (2.0 / 3) * centre + (1.0 / 3) * below;
+    return (2.0 / 3) * centre + (1.0 / 6) * (above + below);
+  }
+};
+
+inline Along along(int p, int count) { return p == 0 ? Along::First : (p == count - 1 ? Along::Last : Along::Inner); }
+
+// dst = op along x (axis 0) or y (axis 1) of src within a plane.
+template <typename Op>
+void inPlane(const GridSpec& g, const double* src, double* dst, int axis, const Op& op) {
   const std::size_t stride = axis == 0 ? 1 : std::size_t(g.dims.i);
   const int count = axis == 0 ? g.dims.i : g.dims.j;
   for (int j = 0; j < g.dims.j; ++j)
     for (int i = 0; i < g.dims.i; ++i) {
       const std::size_t m = std::size_t(i) + std::size_t(g.dims.i) * std::size_t(j);
-      const int p = axis == 0 ? i : j;
-      if (p == 0)
-        dst[m] = (src[m + stride] - src[m]) * invh;
-      else if (p == count - 1)
-        dst[m] = (src[m] - src[m - stride]) * invh;
-      else
-        dst[m] = (src[m + stride] - src[m - stride]) * inv2h;
+      const Along at = along(axis == 0 ? i : j, count);
+      dst[m] = op(at == Along::First ? 0.0 : src[m - stride], src[m], at == Along::Last ? 0.0 : src[m + stride], at);
     }
 }
 
-// dst = [1/6, 2/3, 1/6] smoothing of src along x (axis 0) or y (axis 1)
-// within a plane ([2/3, 1/3] at the walls).
-void smoothInPlane(const GridSpec& g, const double* src, double* dst, int axis) {
-  const std::size_t stride = axis == 0 ? 1 : std::size_t(g.dims.i);
-  const int count = axis == 0 ? g.dims.i : g.dims.j;
-  for (int j = 0; j < g.dims.j; ++j)
-    for (int i = 0; i < g.dims.i; ++i) {
-      const std::size_t m = std::size_t(i) + std::size_t(g.dims.i) * std::size_t(j);
-      const int p = axis == 0 ? i : j;
-      if (p == 0)
-        dst[m] = (2.0 / 3) * src[m] + (1.0 / 3) * src[m + stride];
-      else if (p == count - 1)
-        dst[m] = (2.0 / 3) * src[m] + (1.0 / 3) * src[m - stride];
-      else
-        dst[m] = (2.0 / 3) * src[m] + (1.0 / 6) * (src[m + stride] + src[m - stride]);
-    }
-}
-
-// The same two operations along z at plane k, from planes k - 1 (below),
-// k (centre) and k + 1 (above); below / above are not read at the walls.
-void differenceAcross(const GridSpec& g, const double* below, const double* centre, const double* above, int k,
-                      double* dst) {
-  const double inv2h = 0.5 / g.dx, invh = 1.0 / g.dx;
+// dst = op along z at plane k, from planes k - 1 (below), k (centre) and
+// k + 1 (above); below / above are not read at the walls.
+template <typename Op>
+void acrossPlanes(const GridSpec& g, const double* below, const double* centre, const double* above, int k,
+                  double* dst, const Op& op) {
   const std::size_t plane = std::size_t(g.dims.i) * std::size_t(g.dims.j);
-  for (std::size_t m = 0; m < plane; ++m) {
-    if (k == 0)
-      dst[m] = (above[m] - centre[m]) * invh;
-    else if (k == g.dims.k - 1)
-      dst[m] = (centre[m] - below[m]) * invh;
-    else
-      dst[m] = (above[m] - below[m]) * inv2h;
-  }
-}
-
-void smoothAcross(const GridSpec& g, const double* below, const double* centre, const double* above, int k,
-                  double* dst) {
-  const std::size_t plane = std::size_t(g.dims.i) * std::size_t(g.dims.j);
-  for (std::size_t m = 0; m < plane; ++m) {
-    if (k == 0)
-      dst[m] = (2.0 / 3) * centre[m] + (1.0 / 3) * above[m];
-    else if (k == g.dims.k - 1)
-      dst[m] = (2.0 / 3) * centre[m] + (1.0 / 3) * below[m];
-    else
-      dst[m] = (2.0 / 3) * centre[m] + (1.0 / 6) * (above[m] + below[m]);
-  }
+  const Along at = along(k, g.dims.k);
+  for (std::size_t m = 0; m < plane; ++m)
+    dst[m] = op(at == Along::First ? 0.0 : below[m], centre[m], at == Along::Last ? 0.0 : above[m], at);
 }
 
 // Planes per thread: two windows of three (x: the y-smoothed x difference;
@@ -103,6 +88,8 @@ void forEachGradientPlane(GridView<const double> phi, GridScratch& scratch, cons
   const std::size_t threads = std::size_t(tbb::this_task_arena::max_concurrency());
   scratch.scalar0.resize(threads * kPlanesPerThread * plane);
   const auto phiPlane = [&](int k) { return phi.data + std::size_t(k) * plane; };
+  const Difference difference(g.dx);
+  const Smooth smooth;
   tbb::parallel_for(tbb::blocked_range<int>(0, nz, 16), [&](const tbb::blocked_range<int>& r) {
     const std::size_t slot = std::size_t(tbb::this_task_arena::current_thread_index());
     require(slot < threads, "projected gradient: thread index ", slot, " outside the arena's ", threads);
@@ -117,21 +104,21 @@ void forEachGradientPlane(GridView<const double> phi, GridScratch& scratch, cons
     int next = std::max(r.begin() - 1, 0);  // the next plane the windows lack
     for (int k = r.begin(); k != r.end(); ++k) {
       for (; next <= std::min(k + 1, nz - 1); ++next) {
-        differenceInPlane(g, phiPlane(next), t0, 0);
-        smoothInPlane(g, t0, xWindow[next % 3], 1);
-        differenceInPlane(g, phiPlane(next), yWindow[next % 3], 1);
+        inPlane(g, phiPlane(next), t0, 0, difference);
+        inPlane(g, t0, xWindow[next % 3], 1, smooth);
+        inPlane(g, phiPlane(next), yWindow[next % 3], 1, difference);
       }
       const auto at = [&](double* const* window, int j) { return j >= 0 && j < nz ? window[j % 3] : nullptr; };
       // x: difference along x, smoothed along y (the window), then along z.
-      smoothAcross(g, at(xWindow, k - 1), at(xWindow, k), at(xWindow, k + 1), k, gx);
+      acrossPlanes(g, at(xWindow, k - 1), at(xWindow, k), at(xWindow, k + 1), k, gx, smooth);
       // y: difference along y (the window), smoothed along z, then along x.
-      smoothAcross(g, at(yWindow, k - 1), at(yWindow, k), at(yWindow, k + 1), k, t0);
-      smoothInPlane(g, t0, gy, 0);
+      acrossPlanes(g, at(yWindow, k - 1), at(yWindow, k), at(yWindow, k + 1), k, t0, smooth);
+      inPlane(g, t0, gy, 0, smooth);
       // z: difference along z, smoothed along x, then along y.
-      differenceAcross(g, k > 0 ? phiPlane(k - 1) : nullptr, phiPlane(k), k + 1 < nz ? phiPlane(k + 1) : nullptr, k,
-                       t0);
-      smoothInPlane(g, t0, t1, 0);
-      smoothInPlane(g, t1, gz, 1);
+      acrossPlanes(g, k > 0 ? phiPlane(k - 1) : nullptr, phiPlane(k), k + 1 < nz ? phiPlane(k + 1) : nullptr, k, t0,
+                   difference);
+      inPlane(g, t0, t1, 0, smooth);
+      inPlane(g, t1, gz, 1, smooth);
       fn(k, static_cast<const double*>(gx), static_cast<const double*>(gy), static_cast<const double*>(gz));
     }
   });
