@@ -43,8 +43,9 @@ std::vector<std::string> fluidCompressionWarnings(const plugin::Scene& scene, co
 /// with `processBytes` what the process held besides: residentBytes() after
 /// loadScene, which counts the scene's loaded meshes) writing `outputs`, by
 /// part, against the limit:
-/// "  estimated peak memory: 1.19 GiB: MPM grid 0.13, ... (GiB) of 23.5 GiB
-/// (this machine's memory, ...)"; returns the estimate.
+/// "  estimated peak memory: 1.19 GiB: MPM grid 0.13, ... (GiB) for ...;
+/// limit 18.8 GiB (80% of this machine's memory, 23.5 GiB)"; returns the
+/// estimate.
 plugin::MemoryEstimate printMemoryEstimate(const plugin::Scene& scene, const MpmSolver& solver, double processBytes,
                                            const OutputSelection& outputs, std::FILE* out);
 

@@ -99,8 +99,10 @@ double estimatedMemoryBytes(double nodes, double particles) {
   return estimateMemory(c).total();
 }
 
-double memoryLimitBytes() {
-  if (const double gibs = limitOverrideGiB(); gibs > 0) return gibs * kGiB;
+namespace {
+// The machine's physical memory or the control group's limit, whichever is
+// smaller, bytes.
+double machineMemoryBytes() {
   double physical = 16 * kGiB;  // unknown: a modest machine
 #if defined(_SC_PHYS_PAGES) && defined(_SC_PAGE_SIZE)
   const long pages = sysconf(_SC_PHYS_PAGES), pageSize = sysconf(_SC_PAGE_SIZE);
@@ -109,13 +111,21 @@ double memoryLimitBytes() {
   const double group = cgroupLimitBytes();
   return group > 0 ? std::min(physical, group) : physical;
 }
+}  // namespace
+
+double memoryLimitBytes() {
+  if (const double gibs = limitOverrideGiB(); gibs > 0) return gibs * kGiB;
+  return kUsableMemoryFraction * machineMemoryBytes();
+}
 
 std::string memoryLimitText() {
   const double limit = memoryLimitBytes();
   if (limitOverrideGiB() > 0) return concat(kLimitVariable, " = ", gib(limit), " GiB");
+  const double machine = machineMemoryBytes();
   const double group = cgroupLimitBytes();
-  if (group > 0 && group <= limit) return concat("this process's control group's limit, ", gib(limit), " GiB");
-  return concat("this machine's memory, ", gib(limit), " GiB");
+  const std::string of = group > 0 && group <= machine ? "this process's control group's limit" : "this machine's memory";
+  return concat(gib(limit), " GiB (", int(std::lround(100 * kUsableMemoryFraction)), "% of ", of, ", ", gib(machine),
+                " GiB)");
 }
 
 double residentBytes() {

@@ -66,7 +66,7 @@ void bindScene(py::module_& m) {
           "The memory a run of the scene needs at its largest, bytes, by part (docs/cli.md, \"Memory\"): "
           "total_bytes, mpm_grid_bytes, field_solve_bytes, particles_bytes, previews_bytes (frame previews), "
           "the counts behind them (mpm_nodes: the MPM grid's nodes in the runs of each x-row the material reaches; "
-          "field_solve_nodes; particles: with all that emitters add by the last frame) and limit_bytes (this machine's memory, a lower control-group limit, or "
+          "field_solve_nodes; particles: with all that emitters add by the last frame) and limit_bytes (80% of this machine's memory or of a lower control-group limit, or "
           "LODESTONE_MEMORY_LIMIT_GIB). Without what this process already holds; builds the solver to count.")
       .def("build_solver", [](const Scene& s) { return std::shared_ptr<MpmSolver>(plugin::buildSolver(s)); },
            "A new MpmSolver with the scene's bodies, magnets, fields and colliders at the scene's start time.")

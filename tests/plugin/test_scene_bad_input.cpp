@@ -156,12 +156,13 @@ TEST(SceneBadInput, GridEstimateIsInGibibytesAndAcceptsTheLargestThatFits) {
   ASSERT_EQ(unsetenv("LODESTONE_MEMORY_LIMIT_GIB"), 0);
 }
 
-// Without an override the limit is this machine's physical memory, or less
-// where the process's control group has a lower limit.
+// Without an override the limit is 80% of this machine's physical memory, or
+// of the process's control group's limit where that is lower.
 TEST(SceneBadInput, MemoryLimitIsAtMostThePhysicalMemory) {
   const double bytes = double(sysconf(_SC_PHYS_PAGES)) * double(sysconf(_SC_PAGE_SIZE));
-  EXPECT_LE(memoryLimitBytes(), bytes);
+  EXPECT_LE(memoryLimitBytes(), kUsableMemoryFraction * bytes);
   EXPECT_GT(memoryLimitBytes(), 64.0 * 1024 * 1024);
+  EXPECT_NE(memoryLimitText().find("GiB (80% of this"), std::string::npos) << memoryLimitText();
   ASSERT_EQ(setenv("LODESTONE_MEMORY_LIMIT_GIB", "0.5", 1), 0);
   EXPECT_EQ(memoryLimitBytes(), 0.5 * 1024 * 1024 * 1024);
   EXPECT_EQ(memoryLimitText(), "LODESTONE_MEMORY_LIMIT_GIB = 0.5 GiB");

@@ -75,15 +75,21 @@ MemoryEstimate estimateMemory(const MemoryCounts& counts, double processBytes = 
 /// kFieldNodeBytes) + particles * (kParticleBytes + kMagneticParticleBytes).
 double estimatedMemoryBytes(double nodes, double particles);
 
-/// What an estimate is compared with, bytes: the machine's physical memory or
-/// the memory limit of the process's control group (cgroup v2 memory.max or
-/// v1 memory.limit_in_bytes), whichever is smaller; or the environment
-/// variable LODESTONE_MEMORY_LIMIT_GIB when it is set (a positive number of
-/// GiB; anything else throws InvalidArgument).
+/// The part of the machine's memory a run may plan to use: the rest is the
+/// system's and the estimate's margin (the measured peak is within 20% of
+/// the estimate; a run planned at the whole memory was killed for memory).
+constexpr double kUsableMemoryFraction = 0.8;
+
+/// What an estimate is compared with, bytes: kUsableMemoryFraction of the
+/// machine's physical memory or of the memory limit of the process's control
+/// group (cgroup v2 memory.max or v1 memory.limit_in_bytes), whichever is
+/// smaller; or the environment variable LODESTONE_MEMORY_LIMIT_GIB when it is
+/// set (a positive number of GiB, taken as it is; anything else throws
+/// InvalidArgument).
 double memoryLimitBytes();
-/// Where memoryLimitBytes() comes from, with its value: "this machine's
-/// memory, 23.5 GiB", "this process's control group's limit, 8 GiB" or
-/// "LODESTONE_MEMORY_LIMIT_GIB = 2 GiB".
+/// Where memoryLimitBytes() comes from, with its value: "18.8 GiB (80% of
+/// this machine's memory, 23.5 GiB)", "6.4 GiB (80% of this process's control
+/// group's limit, 8 GiB)" or "LODESTONE_MEMORY_LIMIT_GIB = 2 GiB".
 std::string memoryLimitText();
 
 /// The process's resident memory now, bytes (0 where it cannot be read).
