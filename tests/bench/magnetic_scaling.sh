@@ -35,8 +35,15 @@ two-bodies-257 1e6 2.0 2 auto
 two-bodies-257-one-box 1e6 2.0 2 off"
 binaries="current:$build"
 [ -n "$prev" ] && binaries="$binaries previous:$prev"
+# The first large run after a pause pays more for fresh memory (its first
+# stage took up to twice as long, whichever binary it was): the binaries
+# take turns at going first, case by case.
+turn=0
 echo "$cases" | while read -r name n side bodies patches; do
   case "$name" in "$only"*) ;; *) continue ;; esac
+  order=$binaries
+  if [ -n "$prev" ] && [ $((turn % 2)) -eq 1 ]; then order="previous:$prev current:$build"; fi
+  turn=$((turn + 1))
   python3 - "$n" "$side" "$bodies" "$patches" > "$work/scene.json" <<'PY'
 import json, sys
 n, side, bodies, patches = float(sys.argv[1]), float(sys.argv[2]), int(sys.argv[3]), sys.argv[4]
@@ -59,7 +66,7 @@ scene = {
     "output": {"png": False, "ply": False}}
 print(json.dumps(scene))
 PY
-  for b in $binaries; do
+  for b in $order; do
     bin=${b%%:*}
     dir=${b#*:}
     run_case "$dir" "$work/scene.json" "$work/out" "$work/log" "$threads" "$bin $name $n" || continue
