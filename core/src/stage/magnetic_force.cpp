@@ -7,13 +7,13 @@
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
-#include <tbb/task_arena.h>
 #include <tbb/parallel_reduce.h>
 
 #include "lodestone/core/base/constants.h"
 #include "lodestone/core/base/error.h"
 #include "lodestone/core/base/parallel.h"
 #include "lodestone/core/sources/field_source.h"
+#include "plane_sweep.h"
 
 namespace lodestone {
 inline namespace stage {
@@ -225,8 +225,6 @@ void spreadForce(GridView<const Vec3d> t, GridView<Vec3d> f, GridScratch* scratc
   const std::size_t plane = std::size_t(nx) * std::size_t(ny);
   const double r0 = 2.0 * g.dx / 3.0, r1 = g.dx / 6.0;
   constexpr std::size_t kPlanes = 4;  // per thread: a window of three xy-spread planes and one temporary
-  const std::size_t threads = std::size_t(tbb::this_task_arena::max_concurrency());
-  sc.vector1.resize(threads * kPlanes * plane);
   // out = the spread of in along one in-plane axis (stride 1: x; nx: y).
   const auto spreadInPlane = [&](const Vec3d* in, Vec3d* out, int axis) {
     const std::size_t stride = axis == 0 ? 1 : std::size_t(nx);
@@ -241,21 +239,17 @@ void spreadForce(GridView<const Vec3d> t, GridView<Vec3d> f, GridScratch* scratc
         out[m] = v;
       }
   };
-  tbb::parallel_for(tbb::blocked_range<int>(0, nz, 16), [&](const tbb::blocked_range<int>& r) {
-    const std::size_t slot = std::size_t(tbb::this_task_arena::current_thread_index());
-    require(slot < threads, "spreadForce: thread index ", slot, " outside the arena's ", threads);
-    Vec3d* base = sc.vector1.data() + slot * kPlanes * plane;
-    Vec3d* window[3] = {base, base + plane, base + 2 * plane};  // plane q in window[q % 3]
+  forEachPlaneChunk(nz, plane, kPlanes, sc.vector1, [&](int first, int end, Vec3d* base) {
+    PlaneWindow<Vec3d> window(base, plane, first, nz);  // the xy-spread planes
     Vec3d* temp = base + 3 * plane;
-    int next = std::max(r.begin() - 1, 0);  // the next plane the window lacks
-    for (int k = r.begin(); k != r.end(); ++k) {
-      for (; next <= std::min(k + 1, nz - 1); ++next) {
-        spreadInPlane(src + std::size_t(next) * plane, temp, 0);
-        spreadInPlane(temp, window[next % 3], 1);
-      }
-      const Vec3d* centre = window[k % 3];
-      const Vec3d* below = k > 0 ? window[(k - 1) % 3] : nullptr;
-      const Vec3d* above = k < nz - 1 ? window[(k + 1) % 3] : nullptr;
+    for (int k = first; k != end; ++k) {
+      window.advanceTo(k, [&](int j, Vec3d* dst) {
+        spreadInPlane(src + std::size_t(j) * plane, temp, 0);
+        spreadInPlane(temp, dst, 1);
+      });
+      const Vec3d* centre = window.at(k);
+      const Vec3d* below = window.at(k - 1);
+      const Vec3d* above = window.at(k + 1);
       Vec3d* out = f.data + std::size_t(k) * plane;
       for (std::size_t q = 0; q < plane; ++q) {
         Vec3d v = r0 * centre[q];

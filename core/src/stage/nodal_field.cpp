@@ -1,14 +1,10 @@
 #include "lodestone/core/stage/nodal_field.h"
 
-#include <algorithm>
 #include <vector>
-
-#include <tbb/blocked_range.h>
-#include <tbb/parallel_for.h>
-#include <tbb/task_arena.h>
 
 #include "lodestone/core/base/constants.h"
 #include "lodestone/core/base/error.h"
+#include "plane_sweep.h"
 
 namespace lodestone {
 inline namespace stage {
@@ -85,34 +81,27 @@ void forEachGradientPlane(GridView<const double> phi, GridScratch& scratch, cons
   const GridSpec& g = phi.spec;
   const std::size_t plane = std::size_t(g.dims.i) * std::size_t(g.dims.j);
   const int nz = g.dims.k;
-  const std::size_t threads = std::size_t(tbb::this_task_arena::max_concurrency());
-  scratch.scalar0.resize(threads * kPlanesPerThread * plane);
   const auto phiPlane = [&](int k) { return phi.data + std::size_t(k) * plane; };
   const Difference difference(g.dx);
   const Smooth smooth;
-  tbb::parallel_for(tbb::blocked_range<int>(0, nz, 16), [&](const tbb::blocked_range<int>& r) {
-    const std::size_t slot = std::size_t(tbb::this_task_arena::current_thread_index());
-    require(slot < threads, "projected gradient: thread index ", slot, " outside the arena's ", threads);
-    double* base = scratch.scalar0.data() + slot * kPlanesPerThread * plane;
-    double* xWindow[3] = {base, base + plane, base + 2 * plane};  // plane j in xWindow[j % 3]
-    double* yWindow[3] = {base + 3 * plane, base + 4 * plane, base + 5 * plane};
+  forEachPlaneChunk(nz, plane, kPlanesPerThread, scratch.scalar0, [&](int first, int end, double* base) {
+    // x: the difference along x smoothed along y; y: the difference along y.
+    PlaneWindow<double> xWindow(base, plane, first, nz), yWindow(base + 3 * plane, plane, first, nz);
     double* t0 = base + 6 * plane;
     double* t1 = base + 7 * plane;
     double* gx = base + 8 * plane;
     double* gy = base + 9 * plane;
     double* gz = base + 10 * plane;
-    int next = std::max(r.begin() - 1, 0);  // the next plane the windows lack
-    for (int k = r.begin(); k != r.end(); ++k) {
-      for (; next <= std::min(k + 1, nz - 1); ++next) {
-        inPlane(g, phiPlane(next), t0, 0, difference);
-        inPlane(g, t0, xWindow[next % 3], 1, smooth);
-        inPlane(g, phiPlane(next), yWindow[next % 3], 1, difference);
-      }
-      const auto at = [&](double* const* window, int j) { return j >= 0 && j < nz ? window[j % 3] : nullptr; };
+    for (int k = first; k != end; ++k) {
+      xWindow.advanceTo(k, [&](int j, double* dst) {
+        inPlane(g, phiPlane(j), t0, 0, difference);
+        inPlane(g, t0, dst, 1, smooth);
+      });
+      yWindow.advanceTo(k, [&](int j, double* dst) { inPlane(g, phiPlane(j), dst, 1, difference); });
       // x: difference along x, smoothed along y (the window), then along z.
-      acrossPlanes(g, at(xWindow, k - 1), at(xWindow, k), at(xWindow, k + 1), k, gx, smooth);
+      acrossPlanes(g, xWindow.at(k - 1), xWindow.at(k), xWindow.at(k + 1), k, gx, smooth);
       // y: difference along y (the window), smoothed along z, then along x.
-      acrossPlanes(g, at(yWindow, k - 1), at(yWindow, k), at(yWindow, k + 1), k, t0, smooth);
+      acrossPlanes(g, yWindow.at(k - 1), yWindow.at(k), yWindow.at(k + 1), k, t0, smooth);
       inPlane(g, t0, gy, 0, smooth);
       // z: difference along z, smoothed along x, then along y.
       acrossPlanes(g, k > 0 ? phiPlane(k - 1) : nullptr, phiPlane(k), k + 1 < nz ? phiPlane(k + 1) : nullptr, k, t0,
