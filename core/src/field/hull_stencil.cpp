@@ -57,8 +57,7 @@ void HullStencil<T>::build(const GridSpec& grid, const std::size_t* cellBase, st
     cellSlot_[grid.cellIndex(int(b % nx), int((b / nx) % ny), int(b / (nx * ny)))] = std::int32_t(s);
   }
   // Rebuilt as the material moves: the coefficients keep their storage.
-  reserveKeepingCapacity(values_, std::size_t(kTaps) * size());
-  values_.resize(std::size_t(kTaps) * size());
+  resizeKeepingCapacity(values_, std::size_t(kTaps) * size());
 }
 
 template <typename T>

@@ -31,13 +31,5 @@ void resizeKeepingCapacity(std::vector<T>& v, std::size_t n) {
   v.resize(n);
 }
 
-/// v = n copies of `value`, in v's storage when it holds n
-/// (reserveKeepingCapacity).
-template <typename T>
-void assignKeepingCapacity(std::vector<T>& v, std::size_t n, const T& value) {
-  reserveKeepingCapacity(v, n);
-  v.assign(n, value);
-}
-
 }  // namespace base
 }  // namespace lodestone
