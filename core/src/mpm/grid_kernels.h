@@ -1,7 +1,7 @@
 #pragma once
-// What the MPM grid's source files share (grid.cpp, grid_binning.cpp): the
-// instruction-set dispatch of their kernels, their parallel reduction and the
-// binning's limit.
+// What the MPM grid's source files share (grid.cpp, grid_binning.cpp,
+// grid_storage.cpp): the instruction-set dispatch of their kernels, their
+// parallel reduction and the binning's limit.
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_reduce.h>
 

@@ -1,0 +1,184 @@
+// The MPM grid's storage: construction, and the nodes and bins zeroed or
+// handed back to the system as the rows of nodes the material reaches move
+// (mpm/grid.h). The transfers are in grid.cpp, the binning in
+// grid_binning.cpp.
+#include "lodestone/core/mpm/grid.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include "grid_kernels.h"
+
+#include "lodestone/core/base/error.h"
+
+namespace lodestone {
+inline namespace mpm {
+
+MpmGrid::MpmGrid(const GridSpec& spec) : spec_(spec) {
+  spec_.validate("MPM grid");
+  require(spec_.dims.i >= 3 && spec_.dims.j >= 3 && spec_.dims.k >= 3,
+          "MPM grid: a quadratic B-spline stencil needs at least 3 nodes per axis, got ", spec_.dims.i, " x ",
+          spec_.dims.j, " x ", spec_.dims.k);
+  baseDims_ = {spec_.dims.i - 2, spec_.dims.j - 2, spec_.dims.k - 2};
+  const std::size_t nb = std::size_t(baseDims_.i) * std::size_t(baseDims_.j) * std::size_t(baseDims_.k);
+  require(nb < std::size_t(kBadKey), "MPM grid: ", nb, " stencil bins is too many (at most 2^32 - 2)");
+  require(spec_.dims.i < (1 << 21) && spec_.dims.j < (1 << 21) && spec_.dims.k < (1 << 21),
+          "MPM grid: at most 2^21 - 1 nodes per axis");
+  // Reserved, not yet backed by memory: pages are taken as P2G first writes them.
+  nodes_ = PageArray<MpmNode>(spec_.nodeCount());
+  velocity_ = PageArray<Vec3d>(spec_.nodeCount());
+  binSize_ = PageArray<std::uint32_t>(nb);
+  rowLow_ = PageArray<std::uint32_t>(std::size_t(baseDims_.j) * std::size_t(baseDims_.k));
+  rowHigh_ = PageArray<std::uint32_t>(std::size_t(baseDims_.j) * std::size_t(baseDims_.k));
+}
+
+static_assert(sizeof(std::atomic<std::uint32_t>) == sizeof(std::uint32_t) &&
+                  alignof(std::atomic<std::uint32_t>) == alignof(std::uint32_t) &&
+                  std::atomic<std::uint32_t>::is_always_lock_free,
+              "the bin sizes are zero-initialised uint32 storage used as lock-free atomics");
+
+MpmGrid::MpmGrid(MpmGrid&&) noexcept = default;
+MpmGrid& MpmGrid::operator=(MpmGrid&&) noexcept = default;
+MpmGrid::~MpmGrid() = default;
+
+void MpmGrid::zeroBox(Index3 lo, Index3 hi) {
+  if (lo.i >= hi.i || lo.j >= hi.j || lo.k >= hi.k) return;
+  const std::size_t rows = std::size_t(hi.j - lo.j) * std::size_t(hi.k - lo.k);
+  const int nj = hi.j - lo.j;
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, rows, 16), [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t row = r.begin(); row != r.end(); ++row) {
+      const int j = lo.j + int(row % std::size_t(nj));
+      const int k = lo.k + int(row / std::size_t(nj));
+      const std::size_t first = spec_.index(lo.i, j, k);
+      std::fill(nodes_.begin() + std::ptrdiff_t(first), nodes_.begin() + std::ptrdiff_t(first + (hi.i - lo.i)),
+                MpmNode{});
+      std::fill(velocity_.begin() + std::ptrdiff_t(first), velocity_.begin() + std::ptrdiff_t(first + (hi.i - lo.i)),
+                Vec3d{});
+    }
+  });
+}
+
+namespace {
+
+bool emptyBox(Index3 lo, Index3 hi) { return lo.i >= hi.i || lo.j >= hi.j || lo.k >= hi.k; }
+
+// Zeroes the pieces [i0, i1) of each row (j, k) of box [lo, hi) that
+// `zeroRow(j, k, zero)` passes to zero(i0, i1), in an array over a grid of
+// `dims` (x fastest); `keep(j, k, f, e)` gives the run [f, e) of row (j, k)
+// whose pages must stay. Contiguous runs are merged, and since every element
+// outside what is kept is zero or about to be, a page holding nothing kept
+// goes back to the system whole.
+template <typename T, typename ZeroRow, typename Keep>
+void zeroRowPieces(PageArray<T>& a, Index3 dims, Index3 lo, Index3 hi, const ZeroRow& zeroRow, const Keep& keep) {
+  if (a.empty() || emptyBox(lo, hi)) return;
+  const std::size_t rowLength = std::size_t(dims.i), plane = rowLength * std::size_t(dims.j);
+  // Whether elements [e0, e1) all lie outside what is kept.
+  const auto outsideKeep = [&](std::size_t e0, std::size_t e1) {
+    for (std::size_t e = e0; e < e1;) {
+      const std::size_t i = e % rowLength, j = (e / rowLength) % std::size_t(dims.j), k = e / plane;
+      const std::size_t rowEnd = std::min(e1, e - i + rowLength);
+      const std::size_t iEnd = i + (rowEnd - e);
+      int f = 0, l = 0;
+      keep(int(j), int(k), f, l);
+      if (f < l && int(i) < l && int(iEnd) > f) return false;
+      e = rowEnd;
+    }
+    return true;
+  };
+  std::size_t runStart = 0, runEnd = 0;  // pending run [runStart, runEnd)
+  const auto flush = [&] { a.zeroPages(runStart, runEnd - runStart, outsideKeep); };
+  const auto zero = [&](std::size_t first, std::size_t count) {
+    if (count == 0) return;
+    if (first == runEnd) {
+      runEnd += count;
+      return;
+    }
+    flush();
+    runStart = first;
+    runEnd = first + count;
+  };
+  for (int k = lo.k; k < hi.k; ++k)
+    for (int j = lo.j; j < hi.j; ++j) {
+      const std::size_t row = std::size_t(j) * rowLength + std::size_t(k) * plane;
+      zeroRow(j, k, [&](int i0, int i1) {
+        if (i1 > i0) zero(row + std::size_t(i0), std::size_t(i1 - i0));
+      });
+    }
+  flush();
+}
+
+}  // namespace
+
+void MpmGrid::zeroRuns() {
+  const Index3 lo = activeLo_, hi = activeHi_;
+  if (emptyBox(lo, hi)) return;
+  const int nj = hi.j - lo.j;
+  const std::size_t rows = std::size_t(nj) * std::size_t(hi.k - lo.k);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, rows, 16), [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t row = r.begin(); row != r.end(); ++row) {
+      const int first = runFirst_[row], end = runEnd_[row];
+      if (first >= end) continue;
+      const std::size_t at = spec_.index(first, lo.j + int(row % std::size_t(nj)), lo.k + int(row / std::size_t(nj)));
+      std::fill(nodes_.begin() + std::ptrdiff_t(at), nodes_.begin() + std::ptrdiff_t(at + std::size_t(end - first)),
+                MpmNode{});
+      std::fill(velocity_.begin() + std::ptrdiff_t(at),
+                velocity_.begin() + std::ptrdiff_t(at + std::size_t(end - first)), Vec3d{});
+    }
+  });
+}
+
+void MpmGrid::releaseOutsideRuns(Index3 lo, Index3 hi, const std::vector<std::int32_t>& first,
+                                 const std::vector<std::int32_t>& end) {
+  if (emptyBox(lo, hi)) return;
+  const int nj = hi.j - lo.j;
+  const auto keep = [&](int j, int k, int& f, int& e) { activeRun(j, k, f, e); };
+  // The previous run of each row less the current one (up to two pieces).
+  const auto zeroRow = [&](int j, int k, const auto& zero) {
+    const std::size_t row = std::size_t(j - lo.j) + std::size_t(nj) * std::size_t(k - lo.k);
+    const int a = first[row], b = end[row];
+    if (a >= b) return;
+    int c = 0, d = 0;
+    activeRun(j, k, c, d);
+    if (c >= d) {
+      zero(a, b);
+      return;
+    }
+    zero(a, std::min(b, c));
+    zero(std::max(a, d), b);
+  };
+  zeroRowPieces(nodes_, spec_.dims, lo, hi, zeroRow, keep);
+  zeroRowPieces(velocity_, spec_.dims, lo, hi, zeroRow, keep);
+  zeroRowPieces(colour_, spec_.dims, lo, hi, zeroRow, keep);
+}
+
+void MpmGrid::releaseBinsOutside(Index3 lo, Index3 hi, Index3 keepLo, Index3 keepHi) {
+  // Every bin size is zero between calls: only pages go back.
+  const bool kept = !emptyBox(keepLo, keepHi);
+  const auto keep = [&](int j, int k, int& f, int& e) {
+    f = e = 0;
+    if (kept && j >= keepLo.j && j < keepHi.j && k >= keepLo.k && k < keepHi.k) {
+      f = keepLo.i;
+      e = keepHi.i;
+    }
+  };
+  const auto zeroRow = [&](int j, int k, const auto& zero) {
+    int c = 0, d = 0;
+    keep(j, k, c, d);
+    if (c >= d) {
+      zero(lo.i, hi.i);
+      return;
+    }
+    zero(lo.i, std::min(hi.i, c));
+    zero(std::max(lo.i, d), hi.i);
+  };
+  zeroRowPieces(binSize_, baseDims_, lo, hi, zeroRow, keep);
+}
+
+}  // namespace mpm
+}  // namespace lodestone
