@@ -11,6 +11,9 @@
 #include <vector>
 
 #include "lodestone/core/base/error.h"
+#if LODESTONE_HAVE_DIST
+#include "lodestone/dist/allocator_defaults.h"
+#endif
 #include "lodestone/plugin/node_registry.h"
 #include "lodestone/plugin/scene.h"
 #if LODESTONE_HAVE_VDB
@@ -113,6 +116,9 @@ int validate(const Args& a) {
 }  // namespace
 
 int main(int argc, char** argv) {
+#if LODESTONE_HAVE_DIST
+  lodestone::dist::restoreAllocatorDefaults();
+#endif
   try {
     Args a;
     if (const std::optional<int> code = parseArgs(argc, argv, a)) return *code;
