@@ -45,9 +45,8 @@ TEST(AllocatorDefaults, FreedLargeBlocksGoBackToTheSystem) {
   constexpr std::size_t kBytes = std::size_t(64) << 20;  // 64 MiB
   for (int round = 0; round < 3; ++round) {
     const double returned = returnedOnFree(kBytes);
-    EXPECT_GT(returned, 0.9 * double(kBytes))
-        << "round " << round << ": of a freed 64 MiB block, " << returned / double(1 << 20)
-        << " MiB went back to the system";
+    EXPECT_GT(returned, 0.9 * double(kBytes)) << "round " << round << ": of a freed 64 MiB block, "
+                                              << returned / double(1 << 20) << " MiB went back to the system";
   }
   // Blocks below the mapping threshold, freed from the top of the heap down,
   // go back whenever the free top exceeds the trim threshold: all but less
