@@ -258,34 +258,33 @@ void drawWireframe(LineDrawer& lines, const Primitive& p, const Vec3d& cameraLoc
 
 // ---------------------------------------------------------------- primitives
 
-Primitive Primitive::box(const Pose& pose, const Vec3d& halfSize, Rgb colour, Style style) {
+namespace {
+Primitive primitiveOf(Primitive::Shape shape, const Pose& pose, Rgb colour, Primitive::Style style) {
   Primitive p;
-  p.shape = Shape::Box;
+  p.shape = shape;
   p.pose = pose;
-  p.halfSize = halfSize;
   p.colour = colour;
   p.style = style;
+  return p;
+}
+}  // namespace
+
+Primitive Primitive::box(const Pose& pose, const Vec3d& halfSize, Rgb colour, Style style) {
+  Primitive p = primitiveOf(Shape::Box, pose, colour, style);
+  p.halfSize = halfSize;
   return p;
 }
 
 Primitive Primitive::sphere(const Pose& pose, double radius, Rgb colour, Style style) {
-  Primitive p;
-  p.shape = Shape::Sphere;
-  p.pose = pose;
+  Primitive p = primitiveOf(Shape::Sphere, pose, colour, style);
   p.radius = radius;
-  p.colour = colour;
-  p.style = style;
   return p;
 }
 
 Primitive Primitive::cylinder(const Pose& pose, double radius, double halfLength, Rgb colour, Style style) {
-  Primitive p;
-  p.shape = Shape::Cylinder;
-  p.pose = pose;
+  Primitive p = primitiveOf(Shape::Cylinder, pose, colour, style);
   p.radius = radius;
   p.halfLength = halfLength;
-  p.colour = colour;
-  p.style = style;
   return p;
 }
 
