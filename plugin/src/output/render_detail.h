@@ -8,11 +8,12 @@
 #include <limits>
 #include <vector>
 
+#include "lodestone/core/base/constants.h"
 #include "lodestone/plugin/output/particle_render.h"
 
 namespace lodestone::output::render_detail {
 
-constexpr double kPi = 3.14159265358979323846;
+using lodestone::kPi;  // core/base/constants.h
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
 inline Vec3d normalised(const Vec3d& v) { return v / norm(v); }
