@@ -4,12 +4,12 @@
 #include <algorithm>
 #include <cmath>
 
+#include "lodestone/core/base/constants.h"
 #include "lodestone/core/base/error.h"
 #include "render_detail.h"
 
 namespace lodestone::output {
 
-using render_detail::kPi;
 using render_detail::normalised;
 
 namespace {

@@ -8,12 +8,10 @@
 #include <limits>
 #include <vector>
 
-#include "lodestone/core/base/constants.h"
 #include "lodestone/plugin/output/particle_render.h"
 
 namespace lodestone::output::render_detail {
 
-using lodestone::kPi;  // core/base/constants.h
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
 inline Vec3d normalised(const Vec3d& v) { return v / norm(v); }

@@ -6,6 +6,7 @@
 #include <utility>
 #include <vector>
 
+#include "lodestone/core/base/constants.h"
 #include "lodestone/core/base/error.h"
 #include "render_detail.h"
 
