@@ -101,31 +101,35 @@ double estimatedMemoryBytes(double nodes, double particles) {
 
 namespace {
 // The machine's physical memory or the control group's limit, whichever is
-// smaller, bytes.
-double machineMemoryBytes() {
+// smaller, bytes, and which of the two it is.
+struct MachineMemory {
+  double bytes = 0;
+  bool controlGroup = false;
+};
+
+MachineMemory machineMemory() {
   double physical = 16 * kGiB;  // unknown: a modest machine
 #if defined(_SC_PHYS_PAGES) && defined(_SC_PAGE_SIZE)
   const long pages = sysconf(_SC_PHYS_PAGES), pageSize = sysconf(_SC_PAGE_SIZE);
   if (pages > 0 && pageSize > 0) physical = double(pages) * double(pageSize);
 #endif
   const double group = cgroupLimitBytes();
-  return group > 0 ? std::min(physical, group) : physical;
+  if (group > 0 && group <= physical) return {group, true};
+  return {physical, false};
 }
 }  // namespace
 
 double memoryLimitBytes() {
   if (const double gibs = limitOverrideGiB(); gibs > 0) return gibs * kGiB;
-  return kUsableMemoryFraction * machineMemoryBytes();
+  return kUsableMemoryFraction * machineMemory().bytes;
 }
 
 std::string memoryLimitText() {
-  const double limit = memoryLimitBytes();
-  if (limitOverrideGiB() > 0) return concat(kLimitVariable, " = ", gib(limit), " GiB");
-  const double machine = machineMemoryBytes();
-  const double group = cgroupLimitBytes();
-  const std::string of = group > 0 && group <= machine ? "this process's control group's limit" : "this machine's memory";
-  return concat(gib(limit), " GiB (", int(std::lround(100 * kUsableMemoryFraction)), "% of ", of, ", ", gib(machine),
-                " GiB)");
+  if (const double gibs = limitOverrideGiB(); gibs > 0) return concat(kLimitVariable, " = ", gib(gibs * kGiB), " GiB");
+  const MachineMemory machine = machineMemory();
+  const char* of = machine.controlGroup ? "this process's control group's limit" : "this machine's memory";
+  return concat(gib(kUsableMemoryFraction * machine.bytes), " GiB (", int(std::lround(100 * kUsableMemoryFraction)),
+                "% of ", of, ", ", gib(machine.bytes), " GiB)");
 }
 
 double residentBytes() {
