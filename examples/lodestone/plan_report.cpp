@@ -176,8 +176,10 @@ plugin::MemoryEstimate printMemoryEstimate(const plugin::Scene& scene, const Mpm
   if (outputs.has("fields")) c.fieldFileNodes = c.fieldNodes;
   if (outputs.rendersSurface()) c.surfaceParticles = c.particles;
   const plugin::MemoryEstimate e = plugin::estimateMemory(c, processBytes);
-  std::fprintf(out, "  estimated peak memory: %s for %.4g MPM nodes, %.4g field-solve nodes, %.0f particles%s; limit %s\n",
-               e.describe().c_str(), c.mpmNodes, c.fieldNodes, c.particles,
+  std::fprintf(out,
+               "  estimated peak memory: %s for %.4g MPM nodes, %.4g field-solve nodes (%.4g material cells), %.0f "
+               "particles%s; limit %s\n",
+               e.describe().c_str(), c.mpmNodes, c.fieldNodes, c.fieldMaterialCells, c.particles,
                solver.emitterCount() > 0 ? " (at the end, with the emitted ones)" : "",
                plugin::memoryLimitText().c_str());
   return e;

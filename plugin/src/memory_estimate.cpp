@@ -83,7 +83,7 @@ std::string MemoryEstimate::describe() const {
 MemoryEstimate estimateMemory(const MemoryCounts& c, double processBytes) {
   MemoryEstimate e;
   e.mpmGrid = c.mpmNodes * (kMpmNodeBytes + (c.capillaryParticles > 0 ? kSurfaceTensionNodeBytes : 0.0));
-  e.fieldGrid = c.fieldNodes * kFieldNodeBytes;
+  e.fieldGrid = c.fieldNodes * kFieldNodeBytes + c.fieldMaterialCells * kFieldMaterialCellBytes;
   e.particles = c.particles * kParticleBytes + c.magneticParticles * kMagneticParticleBytes +
                 c.capillaryParticles * kSurfaceTensionParticleBytes;
   e.outputs = c.previewPixels * kPreviewPixelBytes + c.fieldFileNodes * kFieldFileNodeBytes +
@@ -96,6 +96,7 @@ double estimatedMemoryBytes(double nodes, double particles) {
   MemoryCounts c;
   c.mpmNodes = c.fieldNodes = nodes;
   c.particles = c.magneticParticles = particles;
+  c.fieldMaterialCells = std::min(nodes, particles / 8);
   return estimateMemory(c).total();
 }
 

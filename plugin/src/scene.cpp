@@ -507,6 +507,46 @@ MemoryCounts sceneMemory(const Scene& scene, const MpmSolver* solver) {
     }
     const bool placeKnown = !magneticEmitters && !at.empty() && !split;
     c.fieldNodes = placeKnown ? plannedSolveNodes(scene.settings.planner, mg, at.data(), at.size()) : double(mg.nodeCount());
+    // The material cells: of the magnetic particles, or before a run of a
+    // lattice of one point per field cell filling each magnetic body; the
+    // cells emitted material fills (its volume: how it spreads is not known
+    // before the run).
+    const auto emittedCells = [&](double points, const RateEmitterSettings& e) {
+      const double cell = e.lattice.cellSize;
+      return points * cell * cell * cell / e.lattice.particlesPerCell / (mg.dx * mg.dx * mg.dx);
+    };
+    if (solver) {
+      // With a partition every process solves the field of all the material,
+      // of which it holds about its share.
+      c.fieldMaterialCells = plannedMaterialCells(mg, at.data(), at.size()) * (split ? split->ranks() : 1);
+      const double end = solver->time() + scene.frames * scene.frameDuration();
+      for (std::size_t e = 0; e < solver->emitterCount(); ++e) {
+        const RateEmitter& emitter = solver->emitter(e);
+        const MpmMaterial& m = solver->materials()[emitter.materialIndex()];
+        if (m.isMagnetic())
+          c.fieldMaterialCells +=
+              emittedCells(emitter.particlesBy(end) - emitter.particlesBy(solver->time()), emitter.settings());
+      }
+    } else {
+      std::vector<Vec3d> cells;
+      double halfWidth = 0;
+      for (const SceneBody& b : scene.bodies) {
+        if (!scene.materials[b.material].isMagnetic()) continue;
+        EmitterSettings lattice = b.emit;
+        lattice.cellSize = mg.dx;
+        lattice.particlesPerCell = 1;
+        lattice.jitter = 0;
+        const EmitterLattice l = emitterLattice(b.shape, lattice);
+        for (const Vec3d& p : l.points) cells.push_back(b.shape.pose.toWorld(p));
+        halfWidth = std::max({halfWidth, 0.5 * l.spacing.x, 0.5 * l.spacing.y, 0.5 * l.spacing.z});
+      }
+      c.fieldMaterialCells = plannedMaterialCells(mg, cells.data(), cells.size(), halfWidth);
+      for (const SceneEmitter& e : scene.emitters)
+        if (scene.materials[e.material].isMagnetic())
+          c.fieldMaterialCells += emittedCells(
+              estimatedEmittedParticles(e.shape, e.settings, scene.startTime(), scene.frameTime(scene.lastFrame())),
+              e.settings);
+    }
   } else {
     c.magneticParticles = 0;  // no stage runs: no transfer weights
   }

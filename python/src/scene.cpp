@@ -59,6 +59,7 @@ void bindScene(py::module_& m) {
             d["previews_bytes"] = e.outputs;
             d["mpm_nodes"] = c.mpmNodes;
             d["field_solve_nodes"] = c.fieldNodes;
+            d["field_material_cells"] = c.fieldMaterialCells;
             d["particles"] = c.particles;
             d["limit_bytes"] = plugin::memoryLimitBytes();
             return d;
@@ -66,7 +67,7 @@ void bindScene(py::module_& m) {
           "The memory a run of the scene needs at its largest, bytes, by part (docs/cli.md, \"Memory\"): "
           "total_bytes, mpm_grid_bytes, field_solve_bytes, particles_bytes, previews_bytes (frame previews), "
           "the counts behind them (mpm_nodes: the MPM grid's nodes in the runs of each x-row the material reaches; "
-          "field_solve_nodes; particles: with all that emitters add by the last frame) and limit_bytes (80% of this machine's memory or of a lower control-group limit, or "
+          "field_solve_nodes; field_material_cells: the field solve's cells the magnetic material reaches; particles: with all that emitters add by the last frame) and limit_bytes (80% of this machine's memory or of a lower control-group limit, or "
           "LODESTONE_MEMORY_LIMIT_GIB). Without what this process already holds; builds the solver to count.")
       .def("build_solver", [](const Scene& s) { return std::shared_ptr<MpmSolver>(plugin::buildSolver(s)); },
            "A new MpmSolver with the scene's bodies, magnets, fields and colliders at the scene's start time.")

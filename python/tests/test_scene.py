@@ -81,8 +81,12 @@ def test_memory_estimate_counts_the_scene_by_part():
     assert m["field_solve_nodes"] > np.prod(grid.dims)
     # Each part is its count times the documented figure (docs/cli.md, "Memory").
     assert m["mpm_grid_bytes"] == 64 * m["mpm_nodes"]
-    assert m["field_solve_bytes"] == 356 * m["field_solve_nodes"]
-    assert m["particles_bytes"] == (392 + 277) * m["particles"]
+    # The cube's material cells: its own and the two cells around them that
+    # its points' deposit reaches, at most.
+    cube_cells = np.prod(np.ptp(u, axis=0) + 1)
+    assert cube_cells < m["field_material_cells"] < np.prod(np.ptp(u, axis=0) + 5)
+    assert m["field_solve_bytes"] == 356 * m["field_solve_nodes"] + 1300 * m["field_material_cells"]
+    assert m["particles_bytes"] == (392 + 150) * m["particles"]
     assert m["total_bytes"] == pytest.approx(
         m["mpm_grid_bytes"] + m["field_solve_bytes"] + m["particles_bytes"] + m["previews_bytes"])
     assert 0 < m["total_bytes"] < m["limit_bytes"]

@@ -15,6 +15,8 @@
 #include "lodestone/core/mpm/solver.h"
 #include "lodestone/core/sources/sphere_magnet.h"
 #include "lodestone/core/sources/uniform_field.h"
+#include "lodestone/core/stage/transfer.h"
+#include "lodestone/core/base/error.h"
 
 using namespace lodestone;
 
@@ -368,4 +370,77 @@ TEST(EffectsPlanner, SettlingEarlyGivesTheFullScansDecisionsFromFewerPoints) {
       EXPECT_FALSE(early.linearLaw) << k.what;
     }
   }
+}
+
+namespace {
+
+/// Cells of `grid` with a corner where the deposit of the points puts n > 0:
+/// the field solve's material cells, counted node by node.
+double depositedMaterialCells(const GridSpec& grid, const std::vector<Vec3d>& x) {
+  std::vector<double> counts(x.size(), 1.0), n(grid.nodeCount(), 0.0);
+  depositNumberDensity({x.data(), counts.data(), x.size()}, GridView<double>{n.data(), grid});
+  double cells = 0;
+  for (int k = 0; k + 1 < grid.dims.k; ++k)
+    for (int j = 0; j + 1 < grid.dims.j; ++j)
+      for (int i = 0; i + 1 < grid.dims.i; ++i) {
+        bool material = false;
+        for (int c = 0; c < 8 && !material; ++c)
+          material = n[grid.index(i + (c & 1), j + ((c >> 1) & 1), k + ((c >> 2) & 1))] > 0;
+        cells += material;
+      }
+  return cells;
+}
+
+/// `count` points uniform in the sphere of `radius` (m) around `centre`,
+/// from a fixed seed.
+std::vector<Vec3d> pointsInSphere(const Vec3d& centre, double radius, std::size_t count, unsigned seed) {
+  std::vector<Vec3d> x;
+  std::uint64_t s = seed;
+  const auto uniform = [&] {
+    s = s * 6364136223846793005ULL + 1442695040888963407ULL;
+    return double(s >> 11) * 0x1.0p-53 * 2 - 1;
+  };
+  while (x.size() < count) {
+    const Vec3d d{uniform(), uniform(), uniform()};
+    if (norm2(d) <= 1) x.push_back(centre + radius * d);
+  }
+  return x;
+}
+
+}  // namespace
+
+TEST(EffectsPlanner, MaterialCellsAreTheCellsTheDepositReaches) {
+  GridSpec g;
+  g.dx = 0.01;
+  g.dims = {40, 36, 32};
+  g.origin = {-0.2, -0.18, -0.16};
+  // A ball: every x-row of its cells is one run, so the count is exact.
+  const std::vector<Vec3d> ball = pointsInSphere({0.01, -0.02, 0.015}, 0.08, 200000, 7);
+  const double exact = depositedMaterialCells(g, ball);
+  EXPECT_GT(exact, 4.0 / 3.0 * 3.14159 * 8 * 8 * 8);  // more than the ball's own cells
+  EXPECT_EQ(plannedMaterialCells(g, ball.data(), ball.size()), exact);
+  // Two balls side by side along x: rows through both hold the gap between
+  // them too, so the count is an upper bound, and within the gap's share.
+  std::vector<Vec3d> two = pointsInSphere({-0.1, 0, 0}, 0.05, 50000, 8);
+  const std::vector<Vec3d> other = pointsInSphere({0.1, 0, 0}, 0.05, 50000, 9);
+  two.insert(two.end(), other.begin(), other.end());
+  const double apart = depositedMaterialCells(g, two), planned = plannedMaterialCells(g, two.data(), two.size());
+  EXPECT_GE(planned, apart);
+  EXPECT_LT(planned, 2.5 * apart);
+  // A lattice of one point per cell standing for the cells around it gives
+  // what its material points give: a box filled at 8 points a cell.
+  std::vector<Vec3d> fine, coarse;
+  for (int k = 0; k < 12; ++k)
+    for (int j = 0; j < 10; ++j)
+      for (int i = 0; i < 14; ++i) fine.push_back(Vec3d{-0.07 + (i + 0.5) * 0.005, -0.05 + (j + 0.5) * 0.005, -0.03 + (k + 0.5) * 0.005});
+  for (int k = 0; k < 6; ++k)
+    for (int j = 0; j < 5; ++j)
+      for (int i = 0; i < 7; ++i) coarse.push_back(Vec3d{-0.07 + (i + 0.5) * 0.01, -0.05 + (j + 0.5) * 0.01, -0.03 + (k + 0.5) * 0.01});
+  const double box = depositedMaterialCells(g, fine);
+  EXPECT_EQ(plannedMaterialCells(g, fine.data(), fine.size()), box);
+  EXPECT_EQ(plannedMaterialCells(g, coarse.data(), coarse.size(), 0.5 * g.dx), box);
+  // Without the half-width the lattice misses the cells its points stand for.
+  EXPECT_LT(plannedMaterialCells(g, coarse.data(), coarse.size()), box);
+  EXPECT_EQ(plannedMaterialCells(g, nullptr, 0), 0);
+  EXPECT_THROW(plannedMaterialCells(g, ball.data(), ball.size(), -1.0), InvalidArgument);
 }

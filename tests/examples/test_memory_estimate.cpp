@@ -138,8 +138,9 @@ TEST(MemoryEstimate, ManyParticles) {
 }
 
 TEST(MemoryEstimate, ManyMagneticParticles) {
-  // The same particles, magnetic: the stage's per-particle data on top.
-  cubeCase("magnetic_particles", 0.0156, 0.36, true, "--no-png --no-ply", &Memory::particles, 0.5);
+  // The same particles, magnetic: the stage's per-particle data on top, and
+  // the field solve's data per material cell (77,500 cells, 18% of the estimate).
+  cubeCase("magnetic_particles", 0.0156, 0.36, true, "--no-png --no-ply", &Memory::particles, 0.4);
 }
 
 TEST(MemoryEstimate, SurfaceOutputs) {
@@ -180,6 +181,6 @@ TEST(MemoryEstimate, TwoMagneticBodiesFarApartCostTheirPatches) {
   const std::string log((std::istreambuf_iterator<char>(logFile)), std::istreambuf_iterator<char>());
   EXPECT_NE(log.find("patches: on (2 patches)"), std::string::npos) << log;
   EXPECT_GT(m.fieldSolve, 0);
-  EXPECT_LT(m.fieldSolve, 0.05 * 129.0 * 129.0 * 129.0 * 356) << "the estimate counts the box between the bodies";
+  EXPECT_LT(m.fieldSolve, 0.1 * 129.0 * 129.0 * 129.0 * 356) << "the estimate counts the box between the bodies";
   expectClose(m, m.fieldSolve, 0.0);
 }

@@ -128,12 +128,12 @@ TEST(SceneBadInput, GridEstimateIsInGibibytesAndAcceptsTheLargestThatFits) {
   // 257^3 MPM nodes (1.0 GiB), the field solve's 265^3 (6.2 GiB) and 1.9e6
   // points (1.2 GiB): accepted (nothing is allocated by parsing).
   EXPECT_EQ(errorOf(replaced(kScene, "\"dx\": 0.02", "\"dx\": 0.00078125")), "");
-  // 401^3: the run as a whole (the field solve's 409^3 nodes, 22.7 GiB) is
-  // refused, by part; the MPM grid counts the box the sphere's stencils
+  // 401^3: the run as a whole (the field solve's 409^3 nodes, 22.7 GiB, and
+  // the sphere's 0.95M material cells, 1.2 GiB) is refused, by part; the MPM grid counts the box the sphere's stencils
   // reach (124^3 nodes, 0.111 GiB), not the domain's 401^3 (3.84 GiB).
   const std::string err = errorOf(replaced(kScene, "\"dx\": 0.02", "\"dx\": 0.0005"));
   EXPECT_NE(err.find("bad.json needs about"), std::string::npos) << err;
-  EXPECT_NE(err.find("MPM grid 0.111, field solve 22.7"), std::string::npos) << err;
+  EXPECT_NE(err.find("MPM grid 0.111, field solve 24,"), std::string::npos) << err;
   EXPECT_NE(err.find("more than LODESTONE_MEMORY_LIMIT_GIB = 25 GiB"), std::string::npos) << err;
   // Without magnetism the same grid needs no field solve: accepted.
   const std::string plain = replaced(kScene, ",\n                   \"magnetic\": { \"law\": \"paper\" }", "");
@@ -176,13 +176,14 @@ TEST(SceneBadInput, MemoryEstimateAddsItsParts) {
   MemoryCounts c;
   c.mpmNodes = 1e6;
   c.fieldNodes = 2e6;
+  c.fieldMaterialCells = 4e4;
   c.particles = 3e5;
   c.magneticParticles = 1e5;
   c.capillaryParticles = 0;
   c.previewPixels = 640 * 480;
   const MemoryEstimate e = estimateMemory(c, 5e7);
   EXPECT_DOUBLE_EQ(e.mpmGrid, 1e6 * kMpmNodeBytes);
-  EXPECT_DOUBLE_EQ(e.fieldGrid, 2e6 * kFieldNodeBytes);
+  EXPECT_DOUBLE_EQ(e.fieldGrid, 2e6 * kFieldNodeBytes + 4e4 * kFieldMaterialCellBytes);
   EXPECT_DOUBLE_EQ(e.particles, 3e5 * kParticleBytes + 1e5 * kMagneticParticleBytes);
   EXPECT_DOUBLE_EQ(e.outputs, 640 * 480 * kPreviewPixelBytes);
   EXPECT_DOUBLE_EQ(e.total(), e.mpmGrid + e.fieldGrid + e.particles + e.outputs + 5e7);
@@ -191,7 +192,7 @@ TEST(SceneBadInput, MemoryEstimateAddsItsParts) {
   const MemoryEstimate s = estimateMemory(c);
   EXPECT_DOUBLE_EQ(s.mpmGrid, 1e6 * (kMpmNodeBytes + kSurfaceTensionNodeBytes));
   EXPECT_DOUBLE_EQ(s.particles - e.particles, 1e5 * kSurfaceTensionParticleBytes);
-  EXPECT_NE(e.describe().find("field solve 0.663"), std::string::npos) << e.describe();
+  EXPECT_NE(e.describe().find("field solve 0.712"), std::string::npos) << e.describe();
   // A scene over the limit is refused naming its parts and the limit.
   ASSERT_EQ(setenv("LODESTONE_MEMORY_LIMIT_GIB", "0.5", 1), 0);
   try {
@@ -199,7 +200,7 @@ TEST(SceneBadInput, MemoryEstimateAddsItsParts) {
     ADD_FAILURE() << "accepted";
   } catch (const TooLarge& error) {
     const std::string what = error.what();
-    EXPECT_NE(what.find("scene 'big' needs about 0.909 GiB: MPM grid 0.0596, field solve 0.663"), std::string::npos)
+    EXPECT_NE(what.find("scene 'big' needs about 0.946 GiB: MPM grid 0.0596, field solve 0.712"), std::string::npos)
         << what;
     EXPECT_NE(what.find("more than LODESTONE_MEMORY_LIMIT_GIB = 0.5 GiB"), std::string::npos) << what;
   }

@@ -9,6 +9,7 @@
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>
 
+#include "lodestone/core/base/bspline.h"
 #include "lodestone/core/base/error.h"
 #include "lodestone/core/field/magnetization_law.h"
 #include "lodestone/core/planner/material_patches.h"
@@ -159,6 +160,67 @@ double plannedSolveNodes(const PlannerSettings& settings, const GridSpec& grid, 
   double nodes = 0;
   for (const GridSpec& g : sg.patches) nodes += double(widenedRegion(g, grid, kActiveRegionSlackCells).nodeCount());
   return nodes;
+}
+
+double plannedMaterialCells(const GridSpec& grid, const Vec3d* x, std::size_t count, double halfWidth) {
+  require(std::isfinite(halfWidth) && halfWidth >= 0, "material cells: the points' half-width must be finite and >= 0 (m), got ",
+          halfWidth);
+  if (count == 0 || grid.dims.i < 3 || grid.dims.j < 3 || grid.dims.k < 3) return 0;
+  // Stencil bases (quadraticBaseFloor) a point's cube reaches, per axis,
+  // clipped to the bases whose stencils fit the grid.
+  const double r = halfWidth / grid.dx;
+  const auto bases = [&](const Vec3d& p, int axis, int& b0, int& b1) {
+    const double u = (p[axis] - grid.origin[axis]) / grid.dx, last = double(grid.dims[axis] - 3);
+    b0 = int(std::clamp(quadraticBaseFloor(u - r), 0.0, last));
+    b1 = int(std::clamp(quadraticBaseFloor(u + r), 0.0, last));
+  };
+  int lo[2] = {std::numeric_limits<int>::max(), std::numeric_limits<int>::max()}, hi[2] = {-1, -1};
+  std::size_t finite = 0;
+  for (std::size_t p = 0; p < count; ++p) {
+    if (!isFinite(x[p])) continue;
+    ++finite;
+    for (int a = 1; a < 3; ++a) {
+      int b0 = 0, b1 = 0;
+      bases(x[p], a, b0, b1);
+      lo[a - 1] = std::min(lo[a - 1], b0);
+      hi[a - 1] = std::max(hi[a - 1], b1);
+    }
+  }
+  if (finite == 0) return 0;
+  // Each row's extent of bases [first, last] (first > last: none).
+  const int nbj = hi[0] - lo[0] + 1, nbk = hi[1] - lo[1] + 1;
+  std::vector<int> first(std::size_t(nbj) * std::size_t(nbk), std::numeric_limits<int>::max()), last(first.size(), -1);
+  for (std::size_t p = 0; p < count; ++p) {
+    if (!isFinite(x[p])) continue;
+    int i0, i1, j0, j1, k0, k1;
+    bases(x[p], 0, i0, i1);
+    bases(x[p], 1, j0, j1);
+    bases(x[p], 2, k0, k1);
+    for (int k = k0; k <= k1; ++k)
+      for (int j = j0; j <= j1; ++j) {
+        const std::size_t row = std::size_t(j - lo[0]) + std::size_t(nbj) * std::size_t(k - lo[1]);
+        first[row] = std::min(first[row], i0);
+        last[row] = std::max(last[row], i1);
+      }
+  }
+  // Base b makes cells b - 1 .. b + 2 material on each axis (the cells with
+  // a corner among its nodes b .. b + 2): cell row (j, k) takes the extents
+  // of base rows j - 2 .. j + 1 and k - 2 .. k + 1, widened by 1 below and 2
+  // above, within the grid's cells.
+  double cells = 0;
+  for (int k = std::max(0, lo[1] - 1); k <= std::min(grid.dims.k - 2, hi[1] + 2); ++k)
+    for (int j = std::max(0, lo[0] - 1); j <= std::min(grid.dims.j - 2, hi[0] + 2); ++j) {
+      int f = std::numeric_limits<int>::max(), l = -1;
+      for (int bk = std::max(lo[1], k - 2); bk <= std::min(hi[1], k + 1); ++bk)
+        for (int bj = std::max(lo[0], j - 2); bj <= std::min(hi[0], j + 1); ++bj) {
+          const std::size_t row = std::size_t(bj - lo[0]) + std::size_t(nbj) * std::size_t(bk - lo[1]);
+          f = std::min(f, first[row]);
+          l = std::max(l, last[row]);
+        }
+      if (l < f) continue;
+      cells += double(std::min(grid.dims.i - 2, l + 2) - std::max(0, f - 1) + 1);
+    }
+  return cells;
 }
 
 MagneticPlan planMagnetic(const PlannerSettings& settings, const PlannerInputs& in) {

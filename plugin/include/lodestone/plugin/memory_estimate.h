@@ -22,13 +22,22 @@ constexpr double kSurfaceTensionNodeBytes = 8;
 /// and total fields, M, B, the force, the Newton-PCG vectors and the
 /// multigrid levels (measured: 356 B at 2.6M nodes).
 constexpr double kFieldNodeBytes = 356;
+/// Further bytes per material cell of the field solve (a cell with a corner
+/// where n > 0): n and the applied field at its 8 Gauss points, its element
+/// matrix, mean tensor and moments, its rows of the material stencil and
+/// their single-precision copy in the multigrid. Fitted together with
+/// kMagneticParticleBytes to the peaks of magnetic bodies from a compact cube
+/// at 27 points a cell to a 2.4 cm slab and a 4 cm rod (docs/benchmarks.md,
+/// "Memory"; heaptrack counts 1.1-1.3 KB of arrays a cell).
+constexpr double kFieldMaterialCellBytes = 1300;
 /// Bytes per material point: its state (position, velocity, C, F, J, mass,
 /// volume, count, material, id, force: 260 B), its bin key and slot, and the
 /// copy a reordering makes (measured: 392 B at 1.0M particles).
 constexpr double kParticleBytes = 392;
-/// Further bytes per magnetic material point: the magnetic stage's transfer
-/// weights and stencils (measured: 277 B at 1.0M particles).
-constexpr double kMagneticParticleBytes = 277;
+/// Further bytes per magnetic material point: the magnetic stage's binning
+/// of the points on the field grid, their forces and weights (fitted with
+/// kFieldMaterialCellBytes).
+constexpr double kMagneticParticleBytes = 150;
 /// Further bytes per material point with surface tension (its capillary stress).
 constexpr double kSurfaceTensionParticleBytes = 72;
 /// Bytes per pixel of a frame preview: colour, depth, edge mask and the PNG
@@ -45,6 +54,7 @@ constexpr double kSurfaceParticleBytes = 560;
 struct MemoryCounts {
   double mpmNodes = 0;           ///< nodes of the MPM grid that hold memory: the box the material reaches
   double fieldNodes = 0;         ///< nodes of the field solve's grid (0: nothing magnetic ever)
+  double fieldMaterialCells = 0;  ///< of its cells, those the magnetic material makes material cells
   double particles = 0;          ///< material points, the most the run has at once
   double magneticParticles = 0;  ///< of them, magnetic
   double capillaryParticles = 0;  ///< of them, of a material with surface tension (the colour field is on when > 0)
@@ -71,8 +81,9 @@ struct MemoryEstimate {
 MemoryEstimate estimateMemory(const MemoryCounts& counts, double processBytes = 0);
 
 /// A conservative estimate, bytes, for a grid that may serve both the MPM and
-/// the field solve, and magnetic particles: nodes * (kMpmNodeBytes +
-/// kFieldNodeBytes) + particles * (kParticleBytes + kMagneticParticleBytes).
+/// the field solve, and magnetic particles at 8 a cell: nodes *
+/// (kMpmNodeBytes + kFieldNodeBytes) + particles * (kParticleBytes +
+/// kMagneticParticleBytes) + particles / 8 material cells.
 double estimatedMemoryBytes(double nodes, double particles);
 
 /// The part of the machine's memory a run may plan to use: the rest is the

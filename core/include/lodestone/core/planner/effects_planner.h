@@ -148,6 +148,16 @@ GridSpec widenedRegion(const GridSpec& region, const GridSpec& grid, int cells);
 /// counts before a run (from points sampled over the bodies).
 double plannedSolveNodes(const PlannerSettings& settings, const GridSpec& grid, const Vec3d* x, std::size_t count);
 
+/// The field-solve cells that material at x[0..count) (m) turns into
+/// material cells on `grid` (cells with a corner where the quadratic
+/// B-spline deposit of the points puts n > 0: 4 cells an axis around each
+/// stencil base), counted over each x-row from its first to its last such
+/// cell. Each point stands for the cube of half-width `halfWidth` (m) around
+/// it: 0 for material points, half the spacing for a lattice that samples a
+/// body (the points of every part of the cube count). What the memory
+/// estimate counts per material cell.
+double plannedMaterialCells(const GridSpec& grid, const Vec3d* x, std::size_t count, double halfWidth = 0);
+
 /// Decides the magnetic stages for the state `in` (see the header comment).
 MagneticPlan planMagnetic(const PlannerSettings& settings, const PlannerInputs& in);
 
