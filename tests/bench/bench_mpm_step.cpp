@@ -112,9 +112,10 @@ MpmCollider floorSlab(const std::string& kind, const MpmSolver& solver) {
 }
 
 Timing run(bool fluid, double targetParticles, int steps, int nodes, int reorder, int age, const std::string& collider,
-           bool projection) {
+           bool projection, bool dense) {
   MpmSettings s;
   s.reorderInterval = reorder;
+  s.denseGrid = dense;
   s.grid.dx = 7.8e-3;
   s.grid.dims = {nodes, nodes, nodes};
   s.colliderProjection = projection;
@@ -224,6 +225,7 @@ int main(int argc, char** argv) {
   try {
     std::vector<double> counts{1e5, 1e6};
     int steps = 20, nodes = 128, threads = 0, reorder = MpmSettings{}.reorderInterval, age = 0;
+    bool dense = false;
     std::string csvPath = "bench_mpm_step.csv", collider = "none";
     std::vector<double> bodies;
     double sigma = 0;
@@ -259,6 +261,7 @@ int main(int argc, char** argv) {
     cli::addNumber(app, "--surface-tension", sigma,
                    "also time a resting fluid drop without and with this surface tension (N/m, in (0, 10])")
         ->type_name("SIGMA");
+    app.add_flag("--dense", dense, "hold the MPM grid whole (MpmSettings::denseGrid) instead of the runs the particles reach");
     app.add_option("--csv", csvPath, "CSV output")->type_name("FILE")->capture_default_str();
     if (const std::optional<int> code = cli::parse(app, argc, argv)) return *code;
     for (double c : counts) require(c >= 8 && c <= 1e9, "--particles: ", c, " is not in 8..1e9");
@@ -267,19 +270,19 @@ int main(int argc, char** argv) {
     require(bool(csv), "cannot write ", csvPath);
     csv << "material,particles,grid_nodes_per_axis,steps,age_steps,reorder_interval,collider,collider_projection,dt_s,"
            "ms_per_step,ms_p2g,ms_binning,ms_grid_update,ms_g2p,ns_per_particle_step,threads,bytes_per_step,"
-           "gb_per_s,copy_gb_per_s,bandwidth_ratio\n";
+           "gb_per_s,copy_gb_per_s,bandwidth_ratio,dense_grid\n";
     if (threads == 0) threads = tbb::info::default_concurrency();
     tbb::global_control limit(tbb::global_control::max_allowed_parallelism, std::size_t(threads));
     std::printf(
         "Lodestone MPM step benchmark (%d threads, %d^3 grid, dx = 7.8 mm, %d timed substeps after %d, "
-        "reorder interval %d)\n",
-        threads, nodes, steps, age + 2, reorder);
+        "reorder interval %d%s)\n",
+        threads, nodes, steps, age + 2, reorder, dense ? ", grid held whole" : "");
     std::printf("%-8s %10s %10s %10s %9s %9s %9s %9s %9s %10s %7s %7s %6s\n", "material", "particles", "projection",
                 "dt s", "ms/step", "P2G", "(binning)", "grid", "G2P", "ns/p/step", "GB/s", "copy", "ratio");
     for (double c : counts)
       for (int fluid = 0; fluid < 2; ++fluid)
         for (int projection = collider == "none" ? 1 : 0; projection < 2; ++projection) {
-          const Timing t = run(fluid != 0, c, steps, nodes, reorder, age, collider, projection != 0);
+          const Timing t = run(fluid != 0, c, steps, nodes, reorder, age, collider, projection != 0, dense);
           const char* name = fluid ? "fluid" : "elastic";
           const char* proj = collider == "none" ? "-" : projection ? "on" : "off";
           const double ns = 1e9 * t.total / double(t.particles);
@@ -291,7 +294,7 @@ int main(int argc, char** argv) {
           csv << name << ',' << t.particles << ',' << nodes << ',' << t.steps << ',' << age << ',' << reorder << ','
               << collider << ',' << proj << ',' << t.dt << ',' << 1e3 * t.total << ',' << 1e3 * t.p2g << ','
               << 1e3 * t.binning << ',' << 1e3 * t.grid << ',' << 1e3 * t.g2p << ',' << ns << ',' << threads << ','
-              << t.bytes << ',' << gbs << ',' << copyGbs << ',' << gbs / copyGbs << '\n';
+              << t.bytes << ',' << gbs << ',' << copyGbs << ',' << gbs / copyGbs << ',' << int(dense) << '\n';
         }
     if (!bodies.empty()) {
       std::printf("\nrigid bodies in a fluid block of %.3g particles: ms per substep\n%8s %12s %12s %10s\n", counts.front(),

@@ -60,6 +60,10 @@ void MpmGrid::zeroBox(Index3 lo, Index3 hi) {
                 MpmNode{});
       std::fill(velocity_.begin() + std::ptrdiff_t(first), velocity_.begin() + std::ptrdiff_t(first + (hi.i - lo.i)),
                 Vec3d{});
+      // The colour's Hessian reads neighbours outside the runs, which must read 0.
+      if (!colour_.empty())
+        std::fill(colour_.begin() + std::ptrdiff_t(first), colour_.begin() + std::ptrdiff_t(first + (hi.i - lo.i)),
+                  0.0);
     }
   });
 }

@@ -562,6 +562,8 @@ void MpmSolver::particleToGrid(double dt, MpmStepReport& rep) {
     // Every window node now holds the mass deposited elsewhere too.
     partition_->sumNodes(grid_.nodes().data(), grid_.nodes().size());
     grid_.activateWholeGrid();
+  } else if (settings_.denseGrid) {
+    grid_.activateWholeGrid();
   }
   if (particleForces) {
     rep.magneticImpulse =
