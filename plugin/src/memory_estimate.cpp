@@ -82,7 +82,8 @@ std::string MemoryEstimate::describe() const {
 
 MemoryEstimate estimateMemory(const MemoryCounts& c, double processBytes) {
   MemoryEstimate e;
-  e.mpmGrid = c.mpmNodes * (kMpmNodeBytes + (c.capillaryParticles > 0 ? kSurfaceTensionNodeBytes : 0.0));
+  e.mpmGrid = c.mpmGridBytes > 0 ? c.mpmGridBytes
+                                  : c.mpmNodes * (kMpmNodeBytes + (c.capillaryParticles > 0 ? kSurfaceTensionNodeBytes : 0.0));
   e.fieldGrid = c.fieldNodes * kFieldNodeBytes + c.fieldMaterialCells * kFieldMaterialCellBytes;
   e.particles = c.particles * kParticleBytes + c.magneticParticles * kMagneticParticleBytes +
                 c.capillaryParticles * kSurfaceTensionParticleBytes;

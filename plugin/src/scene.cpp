@@ -378,13 +378,17 @@ std::unique_ptr<MpmSolver> buildSolver(const Scene& scene, std::shared_ptr<MpmPa
 
 namespace {
 
-// Nodes of the MPM grid's runs (mpm/grid.h: per x-row, from the first to
-// the last node a stencil reaches) for material in `count` boxes [lo, hi]
-// (m; boxOf(b, lo, hi) gives box b, a point's box is the point): the
-// stencil bases of each box fill their rows of bins, whose node runs
-// mpmNodeRuns gives as the grid takes them.
+// The MPM grid's runs (mpm/grid.h: per x-row, from the first to the last
+// node a stencil reaches) for material in `count` boxes [lo, hi] (m;
+// boxOf(b, lo, hi) gives box b, a point's box is the point): the stencil
+// bases of each box fill their rows of bins, whose node runs mpmNodeRuns
+// gives as the grid takes them. Their nodes, and the bytes the grid's pages
+// take for them (mpmHeldBytes; with the colour field when `colour`).
+struct RunMemory {
+  double nodes = 0, bytes = 0;
+};
 template <typename BoxOf>
-double mpmRunNodes(const GridSpec& g, std::size_t count, const BoxOf& boxOf) {
+RunMemory mpmRunMemory(const GridSpec& g, std::size_t count, bool colour, const BoxOf& boxOf) {
   const int bd[3] = {g.dims.i - 2, g.dims.j - 2, g.dims.k - 2};
   const auto base = [&](double x, int a) {
     return int(std::clamp(quadraticBaseFloor((x - g.origin[a]) / g.dx), 0.0, double(bd[a] - 1)));
@@ -398,7 +402,7 @@ double mpmRunNodes(const GridSpec& g, std::size_t count, const BoxOf& boxOf) {
       hi[a] = std::max(hi[a], base(bhi[a], a));
     }
   }
-  if (hi[0] < lo[0]) return 0;
+  if (hi[0] < lo[0]) return {};
   const int nbj = hi[1] - lo[1] + 1, nbk = hi[2] - lo[2] + 1;
   std::vector<std::uint32_t> first(std::size_t(nbj) * std::size_t(nbk), std::uint32_t(bd[0])), end(first.size(), 0);
   for (std::size_t b = 0; b < count; ++b) {
@@ -413,9 +417,11 @@ double mpmRunNodes(const GridSpec& g, std::size_t count, const BoxOf& boxOf) {
   }
   std::vector<std::int32_t> runFirst(std::size_t(nbj + 2) * std::size_t(nbk + 2)), runEnd(runFirst.size());
   mpmNodeRuns(first.data(), end.data(), nbj, nbk, runFirst.data(), runEnd.data());
-  double nodes = 0;
-  for (std::size_t q = 0; q < runFirst.size(); ++q) nodes += double(runEnd[q] - runFirst[q]);
-  return nodes;
+  RunMemory m;
+  for (std::size_t q = 0; q < runFirst.size(); ++q) m.nodes += double(runEnd[q] - runFirst[q]);
+  m.bytes = mpmHeldBytes(g, {lo[0], lo[1], lo[2]}, nbj, nbk, first.data(), end.data(), runFirst.data(), runEnd.data(),
+                         colour);
+  return m;
 }
 
 }  // namespace
@@ -427,21 +433,27 @@ MemoryCounts sceneMemory(const Scene& scene, const MpmSolver* solver) {
   // solver's particles), the whole grid when emitters will add material.
   const bool emitters = solver ? solver->emitterCount() > 0 : !scene.emitters.empty();
   const GridSpec& grid = scene.settings.grid;
+  const bool colour = std::any_of(scene.materials.begin(), scene.materials.end(),
+                                  [](const MpmMaterial& m) { return m.hasSurfaceTension(); });
+  RunMemory runs;
   if (emitters) {
-    c.mpmNodes = double(grid.nodeCount());
+    runs.nodes = double(grid.nodeCount());
   } else if (solver) {
     const std::vector<Vec3d>& x = solver->particles().x;
-    c.mpmNodes = mpmRunNodes(grid, x.size(), [&](std::size_t p, Vec3d& lo, Vec3d& hi) { lo = hi = x[p]; });
+    runs = mpmRunMemory(grid, x.size(), colour, [&](std::size_t p, Vec3d& lo, Vec3d& hi) { lo = hi = x[p]; });
   } else {
-    c.mpmNodes = mpmRunNodes(grid, scene.bodies.size(),
-                             [&](std::size_t b, Vec3d& lo, Vec3d& hi) { scene.bodies[b].shape.worldBounds(lo, hi); });
+    runs = mpmRunMemory(grid, scene.bodies.size(), colour,
+                        [&](std::size_t b, Vec3d& lo, Vec3d& hi) { scene.bodies[b].shape.worldBounds(lo, hi); });
   }
+  c.mpmNodes = runs.nodes;
+  c.mpmGridBytes = runs.bytes;
   // With a partition: this process's part (its window of the grid, which the
   // sums over the processes write whole, and its particles).
   const MpmPartition* split = solver ? solver->partition() : nullptr;
   if (split) {
     const Index3 wlo = split->windowLo(), whi = split->windowHi();
     c.mpmNodes = double(whi.i - wlo.i) * double(whi.j - wlo.j) * double(whi.k - wlo.k);
+    c.mpmGridBytes = 0;
   }
   c.previewPixels = double(scene.output.width) * double(scene.output.height);
   bool magnetic = false;

@@ -119,6 +119,64 @@ void zeroRowPieces(PageArray<T>& a, Index3 dims, Index3 lo, Index3 hi, const Zer
 
 }  // namespace
 
+namespace {
+
+// Distinct pages that runs of elements of `elementBytes` bytes take, the
+// runs given in increasing memory order.
+class PageCount {
+ public:
+  PageCount(std::size_t elementBytes, std::size_t pageBytes) : element_(elementBytes), page_(pageBytes) {}
+  // Elements [first, end) of the array.
+  void add(std::size_t first, std::size_t end) {
+    if (end <= first) return;
+    std::size_t p0 = first * element_ / page_;
+    const std::size_t p1 = (end * element_ - 1) / page_;
+    if (any_ && p0 <= last_) p0 = last_ + 1;
+    if (p1 >= p0) pages_ += double(p1 - p0 + 1);
+    if (!any_ || p1 > last_) last_ = p1;
+    any_ = true;
+  }
+  double bytes() const { return pages_ * double(page_); }
+
+ private:
+  std::size_t element_, page_, last_ = 0;
+  bool any_ = false;
+  double pages_ = 0;
+};
+
+}  // namespace
+
+double mpmHeldBytes(const GridSpec& spec, Index3 binLo, int nbj, int nbk, const std::uint32_t* rowFirst,
+                    const std::uint32_t* rowEnd, const std::int32_t* runFirst, const std::int32_t* runEnd,
+                    bool colour) {
+  const std::size_t page = PageMapping::pageSize();
+  PageCount nodes(sizeof(MpmNode), page), velocity(sizeof(Vec3d), page), colourField(sizeof(double), page),
+      bins(sizeof(std::uint32_t), page);
+  double binCount = 0;
+  const std::size_t bdi = std::size_t(spec.dims.i - 2), bdj = std::size_t(spec.dims.j - 2);
+  for (int bk = 0; bk < nbk; ++bk)
+    for (int bj = 0; bj < nbj; ++bj) {
+      const std::size_t row = std::size_t(bj) + std::size_t(nbj) * std::size_t(bk);
+      if (rowEnd[row] <= rowFirst[row]) continue;
+      const std::size_t at = bdi * (std::size_t(binLo.j + bj) + bdj * std::size_t(binLo.k + bk));
+      bins.add(at + rowFirst[row], at + rowEnd[row]);
+      binCount += double(rowEnd[row] - rowFirst[row]);
+    }
+  const int nj = nbj + 2, nk = nbk + 2;
+  for (int kk = 0; kk < nk; ++kk)
+    for (int jj = 0; jj < nj; ++jj) {
+      const std::size_t q = std::size_t(jj) + std::size_t(nj) * std::size_t(kk);
+      if (runEnd[q] <= runFirst[q]) continue;
+      const std::size_t at = spec.index(0, binLo.j + jj, binLo.k + kk);
+      const std::size_t first = at + std::size_t(runFirst[q]), end = at + std::size_t(runEnd[q]);
+      nodes.add(first, end);
+      velocity.add(first, end);
+      if (colour) colourField.add(first, end);
+    }
+  return nodes.bytes() + velocity.bytes() + colourField.bytes() + bins.bytes() + 4 * binCount +
+         32.0 * double(nj) * double(nk);
+}
+
 void MpmGrid::zeroRuns() {
   const Index3 lo = activeLo_, hi = activeHi_;
   if (emptyBox(lo, hi)) return;

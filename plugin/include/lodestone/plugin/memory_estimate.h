@@ -52,7 +52,10 @@ constexpr double kSurfaceParticleBytes = 560;
 
 /// What a simulation holds at its largest.
 struct MemoryCounts {
-  double mpmNodes = 0;           ///< nodes of the MPM grid that hold memory: the box the material reaches
+  double mpmNodes = 0;           ///< nodes of the MPM grid that hold memory: the runs the material reaches
+  /// The bytes the MPM grid's pages take for those runs (mpmHeldBytes); 0:
+  /// mpmNodes * kMpmNodeBytes (the whole grid or a partition's window, held whole).
+  double mpmGridBytes = 0;
   double fieldNodes = 0;         ///< nodes of the field solve's grid (0: nothing magnetic ever)
   double fieldMaterialCells = 0;  ///< of its cells, those the magnetic material makes material cells
   double particles = 0;          ///< material points, the most the run has at once

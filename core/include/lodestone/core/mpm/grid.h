@@ -95,6 +95,20 @@ constexpr std::uint64_t kMpmGridCountLimit = 0xFFFFFFFFu;  // 2^32 - 1
 void mpmNodeRuns(const std::uint32_t* rowFirst, const std::uint32_t* rowEnd, int nbj, int nbk, std::int32_t* runFirst,
                  std::int32_t* runEnd);
 
+/// The memory (bytes) the grid's arrays take for the runs of one P2G: bins
+/// [rowFirst, rowEnd) of the nbj x nbk rows of bins from base node row
+/// (binLo.j, binLo.k) (bi in grid indices, as mpmNodeRuns takes them) and
+/// the node runs runFirst/runEnd mpmNodeRuns gives for them. Whole pages
+/// (PageMapping::pageSize) of the node data (32 B a node), the velocities
+/// (24 B), the colour field (8 B, when `colour`) and the bin sizes (4 B a
+/// bin), each page counted once however many rows share it, plus the bins'
+/// offsets (4 B a bin) and the rows' bookkeeping (32 B a row). A run shorter
+/// than a page still takes a page: material thin along x costs a page a row
+/// of each array, where material spanning whole rows costs 64 B a node.
+double mpmHeldBytes(const GridSpec& spec, Index3 binLo, int nbj, int nbk, const std::uint32_t* rowFirst,
+                    const std::uint32_t* rowEnd, const std::int32_t* runFirst, const std::int32_t* runEnd,
+                    bool colour);
+
 class MpmGrid {
  public:
   MpmGrid() = default;
