@@ -182,6 +182,16 @@ plugin::MemoryEstimate printMemoryEstimate(const plugin::Scene& scene, const Mpm
                e.describe().c_str(), c.mpmNodes, c.fieldNodes, c.fieldMaterialCells, c.particles,
                solver.emitterCount() > 0 ? " (at the end, with the emitted ones)" : "",
                plugin::memoryLimitText().c_str());
+  // Runs shorter than a page take a page of each grid array per x-row: said
+  // where that is a tenth of the run's memory or more.
+  const double packed = plugin::kMpmNodeBytes * c.mpmNodes;
+  if (c.mpmGridBytes - packed > 0.1 * e.total())
+    std::fprintf(out,
+                 "  note: the MPM grid takes %.3g GiB for %.4g nodes (%.0f B a node, 64 B where the material spans "
+                 "its x-rows): the material is thin along x, and each x-row's run takes a page of each grid array; "
+                 "the same material thin along y or z would take %.3g GiB\n",
+                 c.mpmGridBytes / (1024.0 * 1024.0 * 1024.0), c.mpmNodes, c.mpmGridBytes / c.mpmNodes,
+                 packed / (1024.0 * 1024.0 * 1024.0));
   return e;
 }
 

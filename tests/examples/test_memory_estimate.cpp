@@ -205,4 +205,7 @@ TEST(MemoryEstimate, APlateThinAlongXCostsAPageARowOfEachArray) {
   std::ofstream(dir / "scene.json") << s.dump(1);
   const Memory m = run(dir / "scene.json", dir, "--no-png --no-ply");
   expectClose(m, m.mpmGrid, 0.6);
+  std::ifstream logFile(dir / "log.txt");
+  const std::string log((std::istreambuf_iterator<char>(logFile)), std::istreambuf_iterator<char>());
+  EXPECT_NE(log.find("the material is thin along x"), std::string::npos) << log;
 }
