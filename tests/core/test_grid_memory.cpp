@@ -226,3 +226,38 @@ TEST(MpmGridMemory, TwoBallsFarApartCostTheirOwnRowsAndDepositAsAlone) {
   // bytes per row of the box (625^2 rows: 9 MB), against 15 GiB for the box.
   EXPECT_LT(used, 30.0) << "the grid held the box between the balls";
 }
+
+TEST(MpmGridMemory, APlateThinAlongXHoldsAPageARowAsHeldBytesCounts) {
+  LODESTONE_SKIP_UNDER_STRICT_OVERCOMMIT();
+  // A plate of one point a cell, 2 cells thick and 200 x 200 cells across,
+  // in a 257^3 grid, thin along x and then along z: one P2G takes what
+  // heldBytes() (mpmHeldBytes) counts, a page of the node data and of the
+  // velocities per x-row crossing it when it is thin along x, 64 B a node
+  // when it is thin along z.
+  const GridSpec g{{0.0, 0.0, 0.0}, 0.01, {257, 257, 257}};
+  const std::vector<MpmMaterial> mats = {viscousFluid(0.1, 1e5, 1000.0)};
+  double held[2] = {0, 0}, measured[2] = {0, 0};
+  for (int thinAxis = 0; thinAxis < 2; ++thinAxis) {
+    MpmParticles p;
+    for (int a = 0; a < 2; ++a)
+      for (int b = 0; b < 200; ++b)
+        for (int c = 0; c < 200; ++c) {
+          const double thin = 1.28 + (a - 0.5) * g.dx, u = 0.28 + (b + 0.5) * g.dx, v = 0.28 + (c + 0.5) * g.dx;
+          p.add(thinAxis == 0 ? Vec3d{thin, u, v} : Vec3d{u, v, thin}, {}, 1e-3, g.dx * g.dx * g.dx, 0.0, 0);
+        }
+    MpmGrid grid(g);
+    const double r0 = residentMiB();
+    grid.particleToGrid(p, mats, 1e-4);
+    measured[thinAxis] = residentMiB() - r0;
+    held[thinAxis] = grid.heldBytes() / kMiB;
+    std::printf("plate thin along %c: %.1f MiB held after one P2G, heldBytes %.1f MiB\n", thinAxis == 0 ? 'x' : 'z',
+                measured[thinAxis], held[thinAxis]);
+  }
+  // Thin along x: 200^2 rows, each a page of each of the two node arrays at
+  // least (rows lie 8 KiB apart), and the bins' pages.
+  EXPECT_GT(held[0], 200.0 * 200.0 * 2 * 4096 / kMiB);
+  EXPECT_LT(held[1], 0.1 * held[0]);
+  if (!kResidentSetMeasures) return;
+  // The rest is the binning's per-point arrays (80,000 points, about 1.5 MiB).
+  for (int t = 0; t < 2; ++t) EXPECT_NEAR(measured[t], held[t], 0.1 * held[t] + 3.0) << "thin axis " << t;
+}

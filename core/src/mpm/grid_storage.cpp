@@ -177,6 +177,12 @@ double mpmHeldBytes(const GridSpec& spec, Index3 binLo, int nbj, int nbk, const 
          32.0 * double(nj) * double(nk);
 }
 
+double MpmGrid::heldBytes() const {
+  if (binDims_.j <= 0 || binDims_.k <= 0 || runFirst_.empty()) return 0;
+  return mpmHeldBytes(spec_, binLo_, binDims_.j, binDims_.k, rowFirst_.data(), rowEnd_.data(), runFirst_.data(),
+                      runEnd_.data(), !colour_.empty());
+}
+
 void MpmGrid::zeroRuns() {
   const Index3 lo = activeLo_, hi = activeHi_;
   if (emptyBox(lo, hi)) return;

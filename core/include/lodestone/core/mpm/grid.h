@@ -191,6 +191,12 @@ class MpmGrid {
   /// scene that has one (empty when none ever had).
   const PageArray<double>& colour() const { return colour_; }
 
+  /// The memory the grid's arrays hold for the runs of the last P2G, bytes
+  /// (mpmHeldBytes of its bins and runs; with the colour field once a scene
+  /// with surface tension used it). After activateWholeGrid, what the caller
+  /// wrote is its own and not counted.
+  double heldBytes() const;
+
   /// Seconds spent binning in the last particleToGrid.
   double lastBinningSeconds() const { return binningSeconds_; }
 
