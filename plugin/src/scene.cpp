@@ -435,9 +435,15 @@ MemoryCounts sceneMemory(const Scene& scene, const MpmSolver* solver) {
   const GridSpec& grid = scene.settings.grid;
   const bool colour = std::any_of(scene.materials.begin(), scene.materials.end(),
                                   [](const MpmMaterial& m) { return m.hasSurfaceTension(); });
+  // With a partition: this process's part (its window of the grid, which the
+  // sums over the processes write whole, and its particles).
+  const MpmPartition* split = solver ? solver->partition() : nullptr;
   RunMemory runs;
   if (emitters) {
     runs.nodes = double(grid.nodeCount());
+  } else if (split) {
+    const Index3 wlo = split->windowLo(), whi = split->windowHi();
+    runs.nodes = double(whi.i - wlo.i) * double(whi.j - wlo.j) * double(whi.k - wlo.k);
   } else if (solver) {
     const std::vector<Vec3d>& x = solver->particles().x;
     runs = mpmRunMemory(grid, x.size(), colour, [&](std::size_t p, Vec3d& lo, Vec3d& hi) { lo = hi = x[p]; });
@@ -447,14 +453,6 @@ MemoryCounts sceneMemory(const Scene& scene, const MpmSolver* solver) {
   }
   c.mpmNodes = runs.nodes;
   c.mpmGridBytes = runs.bytes;
-  // With a partition: this process's part (its window of the grid, which the
-  // sums over the processes write whole, and its particles).
-  const MpmPartition* split = solver ? solver->partition() : nullptr;
-  if (split) {
-    const Index3 wlo = split->windowLo(), whi = split->windowHi();
-    c.mpmNodes = double(whi.i - wlo.i) * double(whi.j - wlo.j) * double(whi.k - wlo.k);
-    c.mpmGridBytes = 0;
-  }
   c.previewPixels = double(scene.output.width) * double(scene.output.height);
   bool magnetic = false;
   // `n` points of scene material `material`.
@@ -464,6 +462,13 @@ MemoryCounts sceneMemory(const Scene& scene, const MpmSolver* solver) {
     c.magneticParticles += m.isMagnetic() ? n : 0;
     c.capillaryParticles += m.hasSurfaceTension() ? n : 0;
   };
+  // The volume (m^3) of the magnetic material emitters add over the run, all
+  // processes' (each solves the field of all of it).
+  double emittedMagneticVolume = 0;
+  const auto emitted = [&](const MpmMaterial& m, double points, const RateEmitterSettings& e) {
+    const double cell = e.lattice.cellSize;
+    if (m.isMagnetic()) emittedMagneticVolume += points * cell * cell * cell / e.lattice.particlesPerCell;
+  };
   if (solver) {
     const std::vector<MpmMaterial>& materials = solver->materials();
     const MpmParticles& p = solver->particles();
@@ -471,17 +476,22 @@ MemoryCounts sceneMemory(const Scene& scene, const MpmSolver* solver) {
     const double end = solver->time() + scene.frames * scene.frameDuration();
     for (std::size_t e = 0; e < solver->emitterCount(); ++e) {
       const RateEmitter& emitter = solver->emitter(e);
-      add(materials[emitter.materialIndex()], (emitter.particlesBy(end) - emitter.particlesBy(solver->time())) /
-                                                  (split ? split->ranks() : 1));
+      const MpmMaterial& m = materials[emitter.materialIndex()];
+      const double points = emitter.particlesBy(end) - emitter.particlesBy(solver->time());
+      add(m, points / (split ? split->ranks() : 1));
+      emitted(m, points, emitter.settings());
     }
     // Every process runs the field solve: whether there is one is the scene's.
     for (const SceneBody& b : scene.bodies) magnetic = magnetic || (split && scene.materials[b.material].isMagnetic());
   } else {
     for (const SceneBody& b : scene.bodies)
       add(scene.materials[b.material], estimatedParticles(b.shape.volume(), b.emit.cellSize, b.emit.particlesPerCell));
-    for (const SceneEmitter& e : scene.emitters)
-      add(scene.materials[e.material],
-          estimatedEmittedParticles(e.shape, e.settings, scene.startTime(), scene.frameTime(scene.lastFrame())));
+    for (const SceneEmitter& e : scene.emitters) {
+      const double points =
+          estimatedEmittedParticles(e.shape, e.settings, scene.startTime(), scene.frameTime(scene.lastFrame()));
+      add(scene.materials[e.material], points);
+      emitted(scene.materials[e.material], points, e.settings);
+    }
   }
   const bool sources = !scene.fields.empty() || !scene.magnets.empty();
   if (magnetic && sources) {
@@ -523,22 +533,10 @@ MemoryCounts sceneMemory(const Scene& scene, const MpmSolver* solver) {
     // lattice of one point per field cell filling each magnetic body; the
     // cells emitted material fills (its volume: how it spreads is not known
     // before the run).
-    const auto emittedCells = [&](double points, const RateEmitterSettings& e) {
-      const double cell = e.lattice.cellSize;
-      return points * cell * cell * cell / e.lattice.particlesPerCell / (mg.dx * mg.dx * mg.dx);
-    };
     if (solver) {
       // With a partition every process solves the field of all the material,
       // of which it holds about its share.
       c.fieldMaterialCells = plannedMaterialCells(mg, at.data(), at.size()) * (split ? split->ranks() : 1);
-      const double end = solver->time() + scene.frames * scene.frameDuration();
-      for (std::size_t e = 0; e < solver->emitterCount(); ++e) {
-        const RateEmitter& emitter = solver->emitter(e);
-        const MpmMaterial& m = solver->materials()[emitter.materialIndex()];
-        if (m.isMagnetic())
-          c.fieldMaterialCells +=
-              emittedCells(emitter.particlesBy(end) - emitter.particlesBy(solver->time()), emitter.settings());
-      }
     } else {
       std::vector<Vec3d> cells;
       double halfWidth = 0;
@@ -553,12 +551,8 @@ MemoryCounts sceneMemory(const Scene& scene, const MpmSolver* solver) {
         halfWidth = std::max({halfWidth, 0.5 * l.spacing.x, 0.5 * l.spacing.y, 0.5 * l.spacing.z});
       }
       c.fieldMaterialCells = plannedMaterialCells(mg, cells.data(), cells.size(), halfWidth);
-      for (const SceneEmitter& e : scene.emitters)
-        if (scene.materials[e.material].isMagnetic())
-          c.fieldMaterialCells += emittedCells(
-              estimatedEmittedParticles(e.shape, e.settings, scene.startTime(), scene.frameTime(scene.lastFrame())),
-              e.settings);
     }
+    c.fieldMaterialCells += emittedMagneticVolume / (mg.dx * mg.dx * mg.dx);
   } else {
     c.magneticParticles = 0;  // no stage runs: no transfer weights
   }

@@ -117,10 +117,6 @@ void zeroRowPieces(PageArray<T>& a, Index3 dims, Index3 lo, Index3 hi, const Zer
   flush();
 }
 
-}  // namespace
-
-namespace {
-
 // Distinct pages that runs of elements of `elementBytes` bytes take, the
 // runs given in increasing memory order.
 class PageCount {
