@@ -30,7 +30,7 @@ void mpmGridData(const MpmSolver& solver, DenseGrid<double>& mass, DenseGrid<Vec
       int first = 0, end = 0;  // every node outside the row's run is zero
       g.activeRun(j, k, first, end);
       for (int i = first; i < end; ++i) {
-        const std::size_t n = s.index(i, j, k);
+        const std::size_t n = g.nodeIndex(i, j, k);
         if (!(g.nodes()[n].mass > 0)) continue;
         mass(i, j, k) = g.nodes()[n].mass;
         velocity(i, j, k) = g.velocity()[n];

@@ -182,14 +182,17 @@ plugin::MemoryEstimate printMemoryEstimate(const plugin::Scene& scene, const Mpm
                e.describe().c_str(), c.mpmNodes, c.fieldNodes, c.fieldMaterialCells, c.particles,
                solver.emitterCount() > 0 ? " (at the end, with the emitted ones)" : "",
                plugin::memoryLimitText().c_str());
-  // Runs shorter than a page take a page of each grid array per x-row: said
-  // where that is a tenth of the run's memory or more.
+  // Runs shorter than a page in longer rows take a page of each grid array
+  // per x-row: said where that makes the grid four times its nodes' 64 B or
+  // more, and a tenth of the estimate. (The layout's margins and the pages'
+  // ends alone stay within about twice.)
   const double packed = plugin::kMpmNodeBytes * c.mpmNodes;
-  if (c.mpmGridBytes - packed > 0.1 * e.total())
+  if (c.mpmGridBytes > 4 * packed && c.mpmGridBytes - packed > 0.1 * e.total())
     std::fprintf(out,
-                 "  note: the MPM grid takes %.3g GiB for %.4g nodes (%.0f B a node, 64 B where the material spans "
-                 "its x-rows): the material is thin along x, and each x-row's run takes a page of each grid array; "
-                 "the same material thin along y or z would take %.3g GiB\n",
+                 "  note: the MPM grid takes %.3g GiB for %.4g nodes (%.0f B a node, 64 B where the material fills "
+                 "its box): its x-rows are short against the material's box along x (a thin sheet slanted across x, "
+                 "or bodies apart along x and y or z), and each x-row's run takes a page of each grid array; the "
+                 "same material filling its box would take %.3g GiB\n",
                  c.mpmGridBytes / (1024.0 * 1024.0 * 1024.0), c.mpmNodes, c.mpmGridBytes / c.mpmNodes,
                  packed / (1024.0 * 1024.0 * 1024.0));
   return e;

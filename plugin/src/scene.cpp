@@ -383,7 +383,8 @@ namespace {
 // boxOf(b, lo, hi) gives box b, a point's box is the point): the stencil
 // bases of each box fill their rows of bins, whose node runs mpmNodeRuns
 // gives as the grid takes them. Their nodes, and the bytes the grid's pages
-// take for them (mpmHeldBytes; with the colour field when `colour`).
+// take for them in the layout the grid takes for them (mpmHeldBytes; with
+// the colour field when `colour`).
 struct RunMemory {
   double nodes = 0, bytes = 0;
 };
@@ -419,8 +420,10 @@ RunMemory mpmRunMemory(const GridSpec& g, std::size_t count, bool colour, const 
   mpmNodeRuns(first.data(), end.data(), nbj, nbk, runFirst.data(), runEnd.data());
   RunMemory m;
   for (std::size_t q = 0; q < runFirst.size(); ++q) m.nodes += double(runEnd[q] - runFirst[q]);
-  m.bytes = mpmHeldBytes(g, {lo[0], lo[1], lo[2]}, nbj, nbk, first.data(), end.data(), runFirst.data(), runEnd.data(),
-                         colour);
+  // The layout the grid takes for this material (mpmGridLayout).
+  const MpmGridLayout layout = mpmGridLayout(g, {lo[0], lo[1], lo[2]}, {hi[0], hi[1], hi[2]});
+  m.bytes = mpmHeldBytes(layout, {lo[0], lo[1], lo[2]}, nbj, nbk, first.data(), end.data(), runFirst.data(),
+                         runEnd.data(), colour);
   return m;
 }
 

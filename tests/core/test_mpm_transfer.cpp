@@ -50,7 +50,7 @@ GridSums gridSums(const MpmGrid& grid) {
   for (int k = 0; k < g.dims.k; ++k)
     for (int j = 0; j < g.dims.j; ++j)
       for (int i = 0; i < g.dims.i; ++i) {
-        const MpmNode& n = grid.nodes()[g.index(i, j, k)];
+        const MpmNode n = grid.nodeAt(i, j, k);
         s.mass += n.mass;
         s.momentum += n.momentum;
         s.angular += cross(g.nodePosition(i, j, k), n.momentum);
@@ -154,10 +154,9 @@ TEST(MpmTransfer, AffineVelocityFieldIsReproducedExactly) {
   for (int k = 0; k < g.dims.k; ++k)
     for (int j = 0; j < g.dims.j; ++j)
       for (int i = 0; i < g.dims.i; ++i) {
-        const std::size_t n = g.index(i, j, k);
-        if (grid.nodes()[n].mass <= 0) continue;
+        if (grid.nodeAt(i, j, k).mass <= 0) continue;
         const Vec3d expect = a + B * g.nodePosition(i, j, k);
-        ASSERT_LT(norm(grid.velocity()[n] - expect), 1e-12) << i << " " << j << " " << k;
+        ASSERT_LT(norm(grid.velocityAt(i, j, k) - expect), 1e-12) << i << " " << j << " " << k;
       }
   const std::vector<Vec3d> x0 = p.x;
   grid.gridToParticle(p, mats, 0.0);
@@ -231,9 +230,18 @@ TEST(MpmTransfer, ParticleToGridIsTheScalarFormulaInTheDocumentedOrder) {
     MpmGrid grid(g);
     grid.particleToGrid(p, mats, dt);
     std::size_t differing = 0, first = 0;
-    for (std::size_t n = 0; n < expected.size(); ++n)
-      if (std::memcmp(&expected[n], &grid.nodes()[n], sizeof(MpmNode)) != 0 && differing++ == 0) first = n;
-    EXPECT_EQ(differing, 0u) << threads << " threads; first at node " << first << ": mass " << grid.nodes()[first].mass
+    MpmNode firstGot;
+    for (int k = 0; k < g.dims.k; ++k)
+      for (int j = 0; j < g.dims.j; ++j)
+        for (int i = 0; i < g.dims.i; ++i) {
+          const std::size_t n = g.index(i, j, k);
+          const MpmNode got = grid.nodeAt(i, j, k);
+          if (std::memcmp(&expected[n], &got, sizeof(MpmNode)) != 0 && differing++ == 0) {
+            first = n;
+            firstGot = got;
+          }
+        }
+    EXPECT_EQ(differing, 0u) << threads << " threads; first at node " << first << ": mass " << firstGot.mass
                              << " kg, expected " << expected[first].mass;
   }
 }
@@ -255,7 +263,9 @@ TEST(MpmTransfer, GridToParticleIsTheScalarGather) {
     const int b[3] = {int(quadraticBaseFloor(u[0])), int(quadraticBaseFloor(u[1])), int(quadraticBaseFloor(u[2]))};
     Vec3d vp;
     Mat3d C;
-    gatherApic<Vec3d>(grid.velocity().data(), std::size_t(g.dims.i), std::size_t(g.dims.j), u, b, 4.0 * invDx, vp, C);
+    const MpmGridLayout& L = grid.layout();
+    gatherApic<Vec3d>(grid.velocity().data() + grid.nodeIndex(b[0], b[1], b[2]), std::size_t(L.dims.i),
+                      std::size_t(L.dims.i) * std::size_t(L.dims.j), u, b, 4.0 * invDx, vp, C);
     if (mats[p.material[q]].isFluid()) {
       expected.J[q] *= 1.0 + dt * trace(C);
     } else {

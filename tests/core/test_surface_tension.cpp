@@ -319,7 +319,8 @@ FlatInterface flatInterface(int perAxis) {
         for (double x = kDx + h / 2; x < 15 * kDx; x += h) p.add({x, y, z}, {}, kRho * h * h * h, h * h * h, 0, 0);
     grid.particleToGrid(p, mats, 0.0);
     const double* colour = grid.colour().data();
-    const std::size_t sj = std::size_t(spec.dims.i), sk = sj * std::size_t(spec.dims.j);
+    const MpmGridLayout& L = grid.layout();
+    const std::size_t sj = std::size_t(L.dims.i), sk = sj * std::size_t(L.dims.j);
     double sumG = 0, sumGd = 0, sumVG = 0;
     for (std::size_t q = 0; q < p.size(); ++q) {
       const Vec3d x = p.x[q] / kDx;  // grid coordinates
@@ -328,7 +329,7 @@ FlatInterface flatInterface(int perAxis) {
       const QuadraticWeights<double> wx = quadraticWeightsAt(x.x, int(quadraticBaseFloor(x.x)), 1 / kDx);
       const QuadraticWeights<double> wy = quadraticWeightsAt(x.y, int(quadraticBaseFloor(x.y)), 1 / kDx);
       const QuadraticWeights<double> wz = quadraticWeightsAt(x.z, int(quadraticBaseFloor(x.z)), 1 / kDx);
-      const double g = norm(colourGradient(colour + spec.index(wx.base, wy.base, wz.base), sj, sk, wx, wy, wz));
+      const double g = norm(colourGradient(colour + L.index(wx.base, wy.base, wz.base), sj, sk, wx, wy, wz));
       sumG += g;
       sumGd += g * (surface - p.x[q].z) / kDx;
       sumVG += p.volume0[q] * g;

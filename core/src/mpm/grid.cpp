@@ -120,6 +120,7 @@ struct DepositKernel {
   const MaterialParams* params = nullptr;
   double dx = 0, invDx = 0, stressScale = 0, dt = 0;  // m, 1/m, s/m^2, s
   Vec3d o;                                            // grid origin, m
+  MpmGridLayout layout;                               // where the nodes are
   std::size_t sj = 0, sk = 0;                         // node strides of j and k
   const Vec3d *X = nullptr, *V = nullptr;
   const Mat3d *Cp = nullptr, *Fp = nullptr;
@@ -149,7 +150,7 @@ struct DepositKernel {
       const std::uint32_t* it = sorted + offsets[bin];
       const std::uint32_t* end = sorted + offsets[bin + 1];
       if (it == end) continue;
-      MpmNode* corner = nodes + (std::size_t(bi) + sj * std::size_t(bj) + sk * std::size_t(bk));
+      MpmNode* corner = nodes + layout.index(bi, bj, bk);
       for (; it != end; ++it) {
         const std::size_t p = *it;
         {
@@ -230,7 +231,7 @@ struct G2PKernel {
   const MaterialParams* params = nullptr;
   double dt = 0, invDx = 0, cScale = 0;  // s, 1/m, 4/dx (1/m)
   Vec3d o;                               // grid origin, m
-  std::size_t nx = 0, ny = 0;            // nodes along x and y
+  MpmGridLayout layout;                  // where the nodes are
   const Vec3d* vel = nullptr;            // node velocities, m/s
   Vec3d *X = nullptr, *V = nullptr;
   Mat3d *Cp = nullptr, *Fp = nullptr;
@@ -254,7 +255,8 @@ struct G2PKernel {
       const int b3[3] = {bi, bj, bk};
       Vec3d vp;
       Mat3d C;
-      gatherApic<Lanes4>(vel, nx, ny, u, b3, cScale, vp, C);
+      gatherApic<Lanes4>(vel + layout.index(bi, bj, bk), std::size_t(layout.dims.i),
+                         std::size_t(layout.dims.i) * std::size_t(layout.dims.j), u, b3, cScale, vp, C);
       // Step 6: MLS update of the deformation (F <- (I + dt C) F, or J alone for fluids);
       // the elastoplastic solid's trial F_E is returned to the yield surface.
       const MaterialParams& mp = params[mat[p]];
@@ -330,6 +332,7 @@ void MpmGrid::particleToGrid(const MpmParticles& particles, const std::vector<Mp
   particles.checkSizes();
   const auto t0 = Clock::now();
   const Index3 prevLo = activeLo_, prevHi = activeHi_;
+  const MpmGridLayout prevLayout = layout_;
   const Index3 prevBinLo = binLo_, prevBinHi{binLo_.i + binDims_.i, binLo_.j + binDims_.j, binLo_.k + binDims_.k};
   const bool wasWhole = wholeGrid_;
   wholeGrid_ = false;
@@ -340,12 +343,16 @@ void MpmGrid::particleToGrid(const MpmParticles& particles, const std::vector<Mp
   // them: every node outside the runs stays zero, and the memory follows
   // the material row by row. A grid whose caller wrote it whole after the
   // last P2G (a partition's sums) is zeroed whole and keeps its pages.
-  if (wasWhole) {
+  if (wasWhole && layout_ == prevLayout) {
     zeroBox({0, 0, 0}, spec_.dims);
+  } else if (wasWhole) {  // the whole layout given up since (setWholeLayout(false))
+    nodes_.clear();
+    velocity_.clear();
+    colour_.clear();
   } else {
     zeroRuns();
-    releaseOutsideRuns(prevLo, prevHi, prevRunFirst_, prevRunEnd_);
-    releaseBinsOutside(prevBinLo, prevBinHi, binLo_,
+    releaseOutsideRuns(prevLayout, prevLo, prevHi, prevRunFirst_, prevRunEnd_);
+    releaseBinsOutside(prevLayout, prevBinLo, prevBinHi, binLo_,
                        {binLo_.i + binDims_.i, binLo_.j + binDims_.j, binLo_.k + binDims_.k});
   }
   if (particles.empty()) {
@@ -365,8 +372,8 @@ void MpmGrid::particleToGrid(const MpmParticles& particles, const std::vector<Mp
   const double invDx = 1.0 / dx;
   const double stressScale = dt * 4.0 * invDx * invDx;  // dt D^-1, s/m^2
   const Vec3d o = spec_.origin;
-  const std::size_t sj = std::size_t(spec_.dims.i);
-  const std::size_t sk = sj * std::size_t(spec_.dims.j);
+  const std::size_t sj = std::size_t(layout_.dims.i);
+  const std::size_t sk = sj * std::size_t(layout_.dims.j);
 
   const Vec3d* X = particles.x.data();
   const Vec3d* V = particles.v.data();
@@ -402,6 +409,7 @@ void MpmGrid::particleToGrid(const MpmParticles& particles, const std::vector<Mp
   kernel.stressScale = stressScale;
   kernel.dt = dt;
   kernel.o = o;
+  kernel.layout = layout_;
   kernel.sj = sj;
   kernel.sk = sk;
   kernel.X = X;
@@ -431,8 +439,9 @@ void MpmGrid::computeCapillaryStress(const MpmParticles& particles, const std::v
   const double invDx = 1.0 / dx;
   const double invCell = invDx * invDx * invDx;  // 1/m^3
   const Vec3d o = spec_.origin;
-  const std::size_t sj = std::size_t(spec_.dims.i);
-  const std::size_t sk = sj * std::size_t(spec_.dims.j);
+  const MpmGridLayout L = layout_;
+  const std::size_t sj = std::size_t(L.dims.i);
+  const std::size_t sk = sj * std::size_t(L.dims.j);
   const Vec3d* X = particles.x.data();
   const double* Jp = particles.J.data();
   const double* V0 = particles.volume0.data();
@@ -452,7 +461,7 @@ void MpmGrid::computeCapillaryStress(const MpmParticles& particles, const std::v
         const int j = activeLo_.j + int(row % std::size_t(nj));
         const int k = activeLo_.k + int(row / std::size_t(nj));
         if (runEnd_[row] > runFirst_[row])
-          std::fill_n(colour + spec_.index(runFirst_[row], j, k), runEnd_[row] - runFirst_[row], 0.0);
+          std::fill_n(colour + L.index(runFirst_[row], j, k), runEnd_[row] - runFirst_[row], 0.0);
       }
     });
   }
@@ -461,7 +470,7 @@ void MpmGrid::computeCapillaryStress(const MpmParticles& particles, const std::v
     const int first = int(rowFirst_[row]), last = int(rowEnd_[row]);
     for (int bi = first; bi < last; ++bi) {
       const std::size_t bin = rowStart_[row] + std::size_t(bi - first);
-      double* corner = colour + spec_.index(bi, bj, bk);
+      double* corner = colour + L.index(bi, bj, bk);
       for (std::uint32_t s = offsets_[bin]; s != offsets_[bin + 1]; ++s) {
         const std::size_t p = sorted_[s];
         if (!(sigmaOf[mat[p]] > 0)) continue;
@@ -483,7 +492,9 @@ void MpmGrid::computeCapillaryStress(const MpmParticles& particles, const std::v
   if (colourSum_) colourSum_(colour_.data(), colour_.size());
 
   // Per particle: the colour's gradient and Hessian and the capillary stress
-  // (nodes outside the runs read 0, the colour there).
+  // (nodes outside the runs read 0, the colour there). The layout holds one
+  // node more than the stencils reach each side, or ends with the grid, so
+  // that its faces are the grid's faces to the Hessian.
   capillary_.resize(np);
   Mat3d* T = capillary_.data();
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, np, 2048), [&](const tbb::blocked_range<std::size_t>& r) {
@@ -498,8 +509,8 @@ void MpmGrid::computeCapillaryStress(const MpmParticles& particles, const std::v
       const QuadraticWeights<double> wx = quadraticWeightsAt(ux, int(quadraticBaseFloor(ux)), invDx);
       const QuadraticWeights<double> wy = quadraticWeightsAt(uy, int(quadraticBaseFloor(uy)), invDx);
       const QuadraticWeights<double> wz = quadraticWeightsAt(uz, int(quadraticBaseFloor(uz)), invDx);
-      T[p] = particleCapillaryStress(colour, spec_.dims.i, spec_.dims.j, spec_.dims.k, wx.base, wy.base, wz.base, wx,
-                                     wy, wz, sigma, invDx);
+      T[p] = particleCapillaryStress(colour, L.dims.i, L.dims.j, L.dims.k, wx.base - L.lo.i, wy.base - L.lo.j,
+                                     wz.base - L.lo.k, wx, wy, wz, sigma, invDx);
     }
   });
 }
@@ -519,8 +530,7 @@ GridToParticleReport MpmGrid::gridToParticle(MpmParticles& particles, const std:
   kernel.invDx = 1.0 / spec_.dx;
   kernel.cScale = 4.0 * kernel.invDx;  // D^-1 dx, 1/m
   kernel.o = spec_.origin;
-  kernel.nx = std::size_t(spec_.dims.i);
-  kernel.ny = std::size_t(spec_.dims.j);
+  kernel.layout = layout_;
   kernel.vel = velocity_.data();
   kernel.X = particles.x.data();
   kernel.V = particles.v.data();

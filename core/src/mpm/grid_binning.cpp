@@ -62,20 +62,23 @@ struct BinKernel {
   const Vec3d* X = nullptr;
   const std::uint32_t* mat = nullptr;
   std::size_t materialCount = 0;
-  Vec3d o;           // grid origin, m
-  double invDx = 0;  // 1/m
-  Index3 bd;         // stencil bases per axis
+  Vec3d o;              // grid origin, m
+  double invDx = 0;     // 1/m
+  Index3 bd;            // stencil bases per axis
+  MpmGridLayout bins;   // the layout's bins (binIndex)
   std::uint64_t* key = nullptr;
   std::uint32_t* rank = nullptr;
   std::atomic<std::uint32_t>* binSize = nullptr;
   std::atomic<std::uint32_t>*rowLow = nullptr, *rowHigh = nullptr;  // per row of bins: bd.i - first, end
   std::atomic<std::size_t>* firstBad = nullptr;
+  std::atomic<bool>* outside = nullptr;  // set when a bin lies outside the layout's
 
   // Bases, bin slots, each row's extent of bins and the box of bases of
   // particles [begin, end). Inlined into each instruction-set variant
   // (runKernel).
   __attribute__((always_inline)) inline void operator()(std::size_t begin, std::size_t end, BaseBox& acc) const {
     std::size_t runFlat = 0, runStart = 0, runLength = 0;
+    int runBase[3] = {0, 0, 0};
     std::size_t extentRow = kNone;
     std::uint32_t extentLo = 0, extentHi = 0;  // bins [extentLo, extentHi) of row extentRow
     auto endExtent = [&] {
@@ -86,10 +89,20 @@ struct BinKernel {
     };
     auto endRun = [&] {
       if (runLength == 0) return;
-      const std::uint32_t first = binSize[runFlat].fetch_add(std::uint32_t(runLength), std::memory_order_relaxed);
-      for (std::size_t q = 0; q < runLength; ++q) rank[runStart + q] = first + std::uint32_t(q);
+      // A bin outside the layout's takes no slots: the binning lays the grid
+      // out anew and runs this pass again. The rows' extents are the
+      // particles' own, kept.
+      const int b0 = runBase[0], b1 = runBase[1], b2 = runBase[2];
+      if (b0 >= bins.lo.i && b1 >= bins.lo.j && b2 >= bins.lo.k && b0 < bins.lo.i + bins.dims.i &&
+          b1 < bins.lo.j + bins.dims.j && b2 < bins.lo.k + bins.dims.k) {
+        const std::uint32_t first =
+            binSize[bins.index(b0, b1, b2)].fetch_add(std::uint32_t(runLength), std::memory_order_relaxed);
+        for (std::size_t q = 0; q < runLength; ++q) rank[runStart + q] = first + std::uint32_t(q);
+      } else {
+        outside->store(true, std::memory_order_relaxed);
+      }
       const std::size_t row = runFlat / std::size_t(bd.i);
-      const std::uint32_t bi = std::uint32_t(runFlat % std::size_t(bd.i));
+      const std::uint32_t bi = std::uint32_t(b0);
       if (row != extentRow) {
         endExtent();
         extentRow = row;
@@ -120,6 +133,9 @@ struct BinKernel {
       if (runLength == 0) {
         runFlat = flat;
         runStart = p;
+        runBase[0] = bi;
+        runBase[1] = bj;
+        runBase[2] = bk;
       }
       ++runLength;
       acc.add(bi, bj, bk);
@@ -154,6 +170,72 @@ void mpmNodeRuns(const std::uint32_t* rowFirst, const std::uint32_t* rowEnd, int
   });
 }
 
+bool MpmGrid::binPass1(const MpmParticles& particles, std::size_t materialCount, Index3& boxLo, Index3& boxHi) {
+  const std::size_t np = particles.size();
+  const Vec3d* X = particles.x.data();
+  const std::uint32_t* mat = particles.material.data();
+  std::atomic<std::size_t> firstBad{kNone};
+  std::atomic<bool> outside{false};
+
+  // Pass 1: base node of every particle (packed 21 bits per axis), a
+  // scheduling-dependent slot in its bin, and the box of bases in use
+  // (min/max are exact, so the reduction is deterministic). A run of
+  // consecutive particles in one bin (the usual case once the particles are
+  // ordered by cell) takes its slots with one atomic addition.
+  BinKernel kernel;
+  kernel.X = X;
+  kernel.mat = mat;
+  kernel.materialCount = materialCount;
+  kernel.o = spec_.origin;
+  kernel.invDx = 1.0 / spec_.dx;
+  kernel.bd = baseDims_;
+  kernel.bins = {layout_.lo, {layout_.dims.i - 2, layout_.dims.j - 2, layout_.dims.k - 2}};
+  if (layout_.empty()) kernel.bins = MpmGridLayout{};
+  kernel.key = key_.data();
+  kernel.rank = rank_.data();
+  kernel.binSize = binSizes();
+  kernel.rowLow = reinterpret_cast<std::atomic<std::uint32_t>*>(rowLow_.data());
+  kernel.rowHigh = reinterpret_cast<std::atomic<std::uint32_t>*>(rowHigh_.data());
+  kernel.firstBad = &firstBad;
+  kernel.outside = &outside;
+  const BaseBox box = reduceKernel<BaseBox>(kernel, np, 2048);
+
+  if (const std::size_t bad = firstBad.load(); bad != kNone) {
+    // Restore the invariants before throwing: bin sizes and row extents
+    // zero, and every node zero (no runs), in no layout.
+    binSize_.clear();
+    rowLow_.clear();
+    rowHigh_.clear();
+    nodes_.clear();
+    velocity_.clear();
+    colour_.clear();
+    key_.clear();
+    prevRunFirst_.clear();
+    prevRunEnd_.clear();
+    runFirst_.clear();
+    runEnd_.clear();
+    activeLo_ = activeHi_ = binLo_ = binDims_ = {0, 0, 0};
+    if (!wholeLayout_) layout_ = MpmGridLayout{};
+    const Vec3d x = X[bad];
+    const Vec3d o = spec_.origin;
+    if (mat[bad] >= materialCount)
+      throw InvalidArgument(concat("MPM particle ", bad, ": material index ", mat[bad], " is out of range (",
+                                   materialCount, " materials)"));
+    if (!isFinite(x))
+      throw InvalidArgument(
+          concat("MPM particle ", bad, ": position must be finite, got (", x.x, ", ", x.y, ", ", x.z, ") m"));
+    const Vec3d hi = spec_.maxCorner();
+    throw InvalidArgument(concat("MPM particle ", bad, " at (", x.x, ", ", x.y, ", ", x.z,
+                                 ") m is outside the MPM grid: its quadratic stencil needs (x - origin)/dx in "
+                                 "[1/2, dims - 3/2) per axis; the grid spans (",
+                                 o.x, ", ", o.y, ", ", o.z, ") to (", hi.x, ", ", hi.y, ", ", hi.z,
+                                 ") m with dx = ", spec_.dx, " m"));
+  }
+  boxLo = {box.lo[0], box.lo[1], box.lo[2]};
+  boxHi = {box.hi[0], box.hi[1], box.hi[2]};
+  return !outside.load();
+}
+
 void MpmGrid::bin(const MpmParticles& particles, std::size_t materialCount) {
   const std::size_t np = particles.size();
   require(np < std::size_t(kBadKey), "MPM grid: at most 2^32 - 2 particles are supported, got ", np);
@@ -169,49 +251,42 @@ void MpmGrid::bin(const MpmParticles& particles, std::size_t materialCount) {
   prevRunEnd_.swap(runEnd_);
   runFirst_.clear();
   runEnd_.clear();
-
-  const Vec3d* X = particles.x.data();
-  const std::uint32_t* mat = particles.material.data();
-  const double invDx = 1.0 / spec_.dx;
-  const Vec3d o = spec_.origin;
   const Index3 bd = baseDims_;
-  std::atomic<std::size_t> firstBad{kNone};
 
-  // Pass 1: base node of every particle (packed 21 bits per axis), a
-  // scheduling-dependent slot in its bin, and the box of bases in use
-  // (min/max are exact, so the reduction is deterministic). A run of
-  // consecutive particles in one bin (the usual case once the particles are
-  // ordered by cell) takes its slots with one atomic addition.
-  const BinKernel kernel{X,         mat,         materialCount, o,      invDx,  bd, key_.data(), rank_.data(),
-                        binSize,   rowLow,      rowHigh,       &firstBad};
-  const BaseBox box = reduceKernel<BaseBox>(kernel, np, 2048);
-
-  if (const std::size_t bad = firstBad.load(); bad != kNone) {
-    // Restore the invariants before throwing: bin sizes and row extents
-    // zero, and every node zero (no runs).
-    binSize_.clear();
-    rowLow_.clear();
-    rowHigh_.clear();
-    nodes_.clear();
-    velocity_.clear();
-    colour_.clear();
-    key_.clear();
-    prevRunFirst_.clear();
-    prevRunEnd_.clear();
-    activeLo_ = activeHi_ = binLo_ = binDims_ = {0, 0, 0};
-    const Vec3d x = X[bad];
-    if (mat[bad] >= materialCount)
-      throw InvalidArgument(concat("MPM particle ", bad, ": material index ", mat[bad], " is out of range (",
-                                   materialCount, " materials)"));
-    if (!isFinite(x))
-      throw InvalidArgument(
-          concat("MPM particle ", bad, ": position must be finite, got (", x.x, ", ", x.y, ", ", x.z, ") m"));
-    const Vec3d hi = spec_.maxCorner();
-    throw InvalidArgument(concat("MPM particle ", bad, " at (", x.x, ", ", x.y, ", ", x.z,
-                                 ") m is outside the MPM grid: its quadratic stencil needs (x - origin)/dx in "
-                                 "[1/2, dims - 3/2) per axis; the grid spans (",
-                                 o.x, ", ", o.y, ", ", o.z, ") to (", hi.x, ", ", hi.y, ", ", hi.z,
-                                 ") m with dx = ", spec_.dx, " m"));
+  // Pass 1 in the current layout. Where some bin lies outside it, or the
+  // layout has grown eight times the one the material needs, the grid takes
+  // the material's layout (mpmGridLayout), the slots taken are given back
+  // and pass 1 runs again.
+  Index3 boxLo, boxHi;
+  const bool fits = binPass1(particles, materialCount, boxLo, boxHi);
+  if (np > 0 && !wholeLayout_) {
+    const MpmGridLayout wanted = mpmGridLayout(spec_, boxLo, boxHi);
+    // The nodes the particles reach and one more each side (the colour's Hessian reads them).
+    const Index3 needLo{std::max(0, boxLo.i - 1), std::max(0, boxLo.j - 1), std::max(0, boxLo.k - 1)};
+    const Index3 needHi{std::min(spec_.dims.i, boxHi.i + 4), std::min(spec_.dims.j, boxHi.j + 4),
+                        std::min(spec_.dims.k, boxHi.k + 4)};
+    if (!fits || !layout_.holds(needLo, needHi) || layout_.count() > 8 * wanted.count()) {
+      if (!layout_.empty()) {
+        // Give back the slots pass 1 took (bins of the layout within the box).
+        const MpmGridLayout had{layout_.lo, {layout_.dims.i - 2, layout_.dims.j - 2, layout_.dims.k - 2}};
+        const Index3 lo{std::max(boxLo.i, had.lo.i), std::max(boxLo.j, had.lo.j), std::max(boxLo.k, had.lo.k)};
+        const Index3 hi{std::min(boxHi.i + 1, had.lo.i + had.dims.i), std::min(boxHi.j + 1, had.lo.j + had.dims.j),
+                        std::min(boxHi.k + 1, had.lo.k + had.dims.k)};
+        if (lo.i < hi.i && lo.j < hi.j && lo.k < hi.k) {
+          const int nj = hi.j - lo.j;
+          tbb::parallel_for(tbb::blocked_range<int>(0, nj * (hi.k - lo.k), 16), [&](const tbb::blocked_range<int>& r) {
+            for (int row = r.begin(); row != r.end(); ++row) {
+              std::atomic<std::uint32_t>* sizes = binSize + had.index(lo.i, lo.j + row % nj, lo.k + row / nj);
+              for (int i = 0; i < hi.i - lo.i; ++i)
+                if (sizes[i].load(std::memory_order_relaxed) != 0) sizes[i].store(0, std::memory_order_relaxed);
+            }
+          });
+        }
+      }
+      layout_ = wanted;
+      const bool again = binPass1(particles, materialCount, boxLo, boxHi);
+      require(again, "MPM grid: a particle's bin lies outside the layout taken for it");  // never: the same bases
+    }
   }
 
   if (np == 0) {
@@ -220,10 +295,11 @@ void MpmGrid::bin(const MpmParticles& particles, std::size_t materialCount) {
     sorted_.clear();
     return;
   }
-  binLo_ = {box.lo[0], box.lo[1], box.lo[2]};
-  binDims_ = {box.hi[0] - box.lo[0] + 1, box.hi[1] - box.lo[1] + 1, box.hi[2] - box.lo[2] + 1};
+  binLo_ = boxLo;
+  binDims_ = {boxHi.i - boxLo.i + 1, boxHi.j - boxLo.j + 1, boxHi.k - boxLo.k + 1};
   activeLo_ = binLo_;
-  activeHi_ = {box.hi[0] + 3, box.hi[1] + 3, box.hi[2] + 3};
+  activeHi_ = {boxHi.i + 3, boxHi.j + 3, boxHi.k + 3};
+  const MpmGridLayout bins{layout_.lo, {layout_.dims.i - 2, layout_.dims.j - 2, layout_.dims.k - 2}};
 
   // Each row's extent of bins (pass 1's atomics, reset here: zero between
   // calls) and the first offset slot of its bins.
@@ -261,12 +337,12 @@ void MpmGrid::bin(const MpmParticles& particles, std::size_t materialCount) {
         for (std::size_t row = r.begin(); row != r.end(); ++row) {
           const std::size_t bj = std::size_t(binLo_.j) + row % std::size_t(binDims_.j);
           const std::size_t bk = std::size_t(binLo_.k) + row / std::size_t(binDims_.j);
-          std::atomic<std::uint32_t>* sizes = binSize + std::size_t(bd.i) * (bj + std::size_t(bd.j) * bk);
+          std::atomic<std::uint32_t>* sizes = binSize + bins.index(int(rowFirst_[row]), int(bj), int(bk));
           std::uint32_t* off = offsets_.data() + rowStart_[row];
-          for (std::size_t i = rowFirst_[row]; i < rowEnd_[row]; ++i) {
+          for (std::size_t i = 0; i < rowEnd_[row] - rowFirst_[row]; ++i) {
             const std::uint32_t n = sizes[i].load(std::memory_order_relaxed);
             if (isFinal) {
-              off[i - rowFirst_[row]] = sum;
+              off[i] = sum;
               if (n != 0) sizes[i].store(0, std::memory_order_relaxed);  // empty bins' pages stay unwritten
             }
             sum += n;

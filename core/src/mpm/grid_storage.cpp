@@ -55,7 +55,7 @@ void MpmGrid::zeroBox(Index3 lo, Index3 hi) {
     for (std::size_t row = r.begin(); row != r.end(); ++row) {
       const int j = lo.j + int(row % std::size_t(nj));
       const int k = lo.k + int(row / std::size_t(nj));
-      const std::size_t first = spec_.index(lo.i, j, k);
+      const std::size_t first = layout_.index(lo.i, j, k);
       std::fill(nodes_.begin() + std::ptrdiff_t(first), nodes_.begin() + std::ptrdiff_t(first + (hi.i - lo.i)),
                 MpmNode{});
       std::fill(velocity_.begin() + std::ptrdiff_t(first), velocity_.begin() + std::ptrdiff_t(first + (hi.i - lo.i)),
@@ -68,29 +68,51 @@ void MpmGrid::zeroBox(Index3 lo, Index3 hi) {
   });
 }
 
+MpmGridLayout mpmGridLayout(const GridSpec& spec, Index3 baseLo, Index3 baseHi) {
+  MpmGridLayout out;
+  for (int a = 0; a < 3; ++a) {
+    const int lo = std::max(0, baseLo[a] - 1), hi = std::min(spec.dims[a], baseHi[a] + 4);  // nodes [lo, hi)
+    // Along x the margin shares the rows' pages with the material; along y
+    // and z it takes no memory until material reaches it.
+    const int margin = a == 0 ? 1 + (hi - lo) / 16 : 2 + (hi - lo) / 8;
+    const int l = std::max(0, lo - margin), h = std::min(spec.dims[a], hi + margin);
+    (a == 0 ? out.lo.i : a == 1 ? out.lo.j : out.lo.k) = l;
+    (a == 0 ? out.dims.i : a == 1 ? out.dims.j : out.dims.k) = h - l;
+  }
+  return out;
+}
+
 namespace {
 
 bool emptyBox(Index3 lo, Index3 hi) { return lo.i >= hi.i || lo.j >= hi.j || lo.k >= hi.k; }
 
+// The layout of the stencil bins of node layout `nodes`.
+MpmGridLayout binLayoutOf(const MpmGridLayout& nodes) {
+  return {nodes.lo, {nodes.dims.i - 2, nodes.dims.j - 2, nodes.dims.k - 2}};
+}
+
 // Zeroes the pieces [i0, i1) of each row (j, k) of box [lo, hi) that
-// `zeroRow(j, k, zero)` passes to zero(i0, i1), in an array over a grid of
-// `dims` (x fastest); `keep(j, k, f, e)` gives the run [f, e) of row (j, k)
-// whose pages must stay. Contiguous runs are merged, and since every element
-// outside what is kept is zero or about to be, a page holding nothing kept
-// goes back to the system whole.
+// `zeroRow(j, k, zero)` passes to zero(i0, i1), in an array laid out as
+// `at` (x fastest); `keep(j, k, f, e)` gives the run [f, e) of row (j, k)
+// whose pages must stay, in layout `kept`. Contiguous runs are merged, and
+// since every element outside what is kept is zero or about to be, a page
+// holding nothing kept goes back to the system whole.
 template <typename T, typename ZeroRow, typename Keep>
-void zeroRowPieces(PageArray<T>& a, Index3 dims, Index3 lo, Index3 hi, const ZeroRow& zeroRow, const Keep& keep) {
-  if (a.empty() || emptyBox(lo, hi)) return;
-  const std::size_t rowLength = std::size_t(dims.i), plane = rowLength * std::size_t(dims.j);
+void zeroRowPieces(PageArray<T>& a, const MpmGridLayout& at, Index3 lo, Index3 hi, const ZeroRow& zeroRow,
+                   const MpmGridLayout& kept, const Keep& keep) {
+  if (a.empty() || emptyBox(lo, hi) || at.empty()) return;
+  const std::size_t rowLength = std::size_t(kept.dims.i), plane = rowLength * std::size_t(kept.dims.j);
+  const std::size_t keptCount = kept.count();
   // Whether elements [e0, e1) all lie outside what is kept.
   const auto outsideKeep = [&](std::size_t e0, std::size_t e1) {
+    e1 = std::min(e1, keptCount);
     for (std::size_t e = e0; e < e1;) {
-      const std::size_t i = e % rowLength, j = (e / rowLength) % std::size_t(dims.j), k = e / plane;
+      const std::size_t i = e % rowLength, j = (e / rowLength) % std::size_t(kept.dims.j), k = e / plane;
       const std::size_t rowEnd = std::min(e1, e - i + rowLength);
-      const std::size_t iEnd = i + (rowEnd - e);
+      const int iLo = kept.lo.i + int(i), iHi = iLo + int(rowEnd - e);
       int f = 0, l = 0;
-      keep(int(j), int(k), f, l);
-      if (f < l && int(i) < l && int(iEnd) > f) return false;
+      keep(kept.lo.j + int(j), kept.lo.k + int(k), f, l);
+      if (f < l && iLo < l && iHi > f) return false;
       e = rowEnd;
     }
     return true;
@@ -109,9 +131,9 @@ void zeroRowPieces(PageArray<T>& a, Index3 dims, Index3 lo, Index3 hi, const Zer
   };
   for (int k = lo.k; k < hi.k; ++k)
     for (int j = lo.j; j < hi.j; ++j) {
-      const std::size_t row = std::size_t(j) * rowLength + std::size_t(k) * plane;
+      const std::size_t row = at.index(at.lo.i, j, k);
       zeroRow(j, k, [&](int i0, int i1) {
-        if (i1 > i0) zero(row + std::size_t(i0), std::size_t(i1 - i0));
+        if (i1 > i0) zero(row + std::size_t(i0 - at.lo.i), std::size_t(i1 - i0));
       });
     }
   flush();
@@ -142,20 +164,20 @@ class PageCount {
 
 }  // namespace
 
-double mpmHeldBytes(const GridSpec& spec, Index3 binLo, int nbj, int nbk, const std::uint32_t* rowFirst,
+double mpmHeldBytes(const MpmGridLayout& layout, Index3 binLo, int nbj, int nbk, const std::uint32_t* rowFirst,
                     const std::uint32_t* rowEnd, const std::int32_t* runFirst, const std::int32_t* runEnd,
                     bool colour) {
   const std::size_t page = PageMapping::pageSize();
   PageCount nodes(sizeof(MpmNode), page), velocity(sizeof(Vec3d), page), colourField(sizeof(double), page),
       bins(sizeof(std::uint32_t), page);
   double binCount = 0;
-  const std::size_t bdi = std::size_t(spec.dims.i - 2), bdj = std::size_t(spec.dims.j - 2);
+  const MpmGridLayout bins_ = binLayoutOf(layout);
   for (int bk = 0; bk < nbk; ++bk)
     for (int bj = 0; bj < nbj; ++bj) {
       const std::size_t row = std::size_t(bj) + std::size_t(nbj) * std::size_t(bk);
       if (rowEnd[row] <= rowFirst[row]) continue;
-      const std::size_t at = bdi * (std::size_t(binLo.j + bj) + bdj * std::size_t(binLo.k + bk));
-      bins.add(at + rowFirst[row], at + rowEnd[row]);
+      const std::size_t at = bins_.index(int(rowFirst[row]), binLo.j + bj, binLo.k + bk);
+      bins.add(at, at + (rowEnd[row] - rowFirst[row]));
       binCount += double(rowEnd[row] - rowFirst[row]);
     }
   const int nj = nbj + 2, nk = nbk + 2;
@@ -163,8 +185,8 @@ double mpmHeldBytes(const GridSpec& spec, Index3 binLo, int nbj, int nbk, const 
     for (int jj = 0; jj < nj; ++jj) {
       const std::size_t q = std::size_t(jj) + std::size_t(nj) * std::size_t(kk);
       if (runEnd[q] <= runFirst[q]) continue;
-      const std::size_t at = spec.index(0, binLo.j + jj, binLo.k + kk);
-      const std::size_t first = at + std::size_t(runFirst[q]), end = at + std::size_t(runEnd[q]);
+      const std::size_t first = layout.index(runFirst[q], binLo.j + jj, binLo.k + kk);
+      const std::size_t end = first + std::size_t(runEnd[q] - runFirst[q]);
       nodes.add(first, end);
       velocity.add(first, end);
       if (colour) colourField.add(first, end);
@@ -175,7 +197,7 @@ double mpmHeldBytes(const GridSpec& spec, Index3 binLo, int nbj, int nbk, const 
 
 double MpmGrid::heldBytes() const {
   if (binDims_.j <= 0 || binDims_.k <= 0 || runFirst_.empty()) return 0;
-  return mpmHeldBytes(spec_, binLo_, binDims_.j, binDims_.k, rowFirst_.data(), rowEnd_.data(), runFirst_.data(),
+  return mpmHeldBytes(layout_, binLo_, binDims_.j, binDims_.k, rowFirst_.data(), rowEnd_.data(), runFirst_.data(),
                       runEnd_.data(), !colour_.empty());
 }
 
@@ -188,7 +210,7 @@ void MpmGrid::zeroRuns() {
     for (std::size_t row = r.begin(); row != r.end(); ++row) {
       const int first = runFirst_[row], end = runEnd_[row];
       if (first >= end) continue;
-      const std::size_t at = spec_.index(first, lo.j + int(row % std::size_t(nj)), lo.k + int(row / std::size_t(nj)));
+      const std::size_t at = layout_.index(first, lo.j + int(row % std::size_t(nj)), lo.k + int(row / std::size_t(nj)));
       std::fill(nodes_.begin() + std::ptrdiff_t(at), nodes_.begin() + std::ptrdiff_t(at + std::size_t(end - first)),
                 MpmNode{});
       std::fill(velocity_.begin() + std::ptrdiff_t(at),
@@ -197,18 +219,20 @@ void MpmGrid::zeroRuns() {
   });
 }
 
-void MpmGrid::releaseOutsideRuns(Index3 lo, Index3 hi, const std::vector<std::int32_t>& first,
+void MpmGrid::releaseOutsideRuns(const MpmGridLayout& was, Index3 lo, Index3 hi, const std::vector<std::int32_t>& first,
                                  const std::vector<std::int32_t>& end) {
   if (emptyBox(lo, hi)) return;
   const int nj = hi.j - lo.j;
+  const bool sameLayout = was == layout_;
   const auto keep = [&](int j, int k, int& f, int& e) { activeRun(j, k, f, e); };
-  // The previous run of each row less the current one (up to two pieces).
+  // The previous run of each row less the current one (up to two pieces);
+  // the whole previous run where the layout changed (its nodes moved).
   const auto zeroRow = [&](int j, int k, const auto& zero) {
     const std::size_t row = std::size_t(j - lo.j) + std::size_t(nj) * std::size_t(k - lo.k);
     const int a = first[row], b = end[row];
     if (a >= b) return;
     int c = 0, d = 0;
-    activeRun(j, k, c, d);
+    if (sameLayout) activeRun(j, k, c, d);
     if (c >= d) {
       zero(a, b);
       return;
@@ -216,14 +240,15 @@ void MpmGrid::releaseOutsideRuns(Index3 lo, Index3 hi, const std::vector<std::in
     zero(a, std::min(b, c));
     zero(std::max(a, d), b);
   };
-  zeroRowPieces(nodes_, spec_.dims, lo, hi, zeroRow, keep);
-  zeroRowPieces(velocity_, spec_.dims, lo, hi, zeroRow, keep);
-  zeroRowPieces(colour_, spec_.dims, lo, hi, zeroRow, keep);
+  zeroRowPieces(nodes_, was, lo, hi, zeroRow, layout_, keep);
+  zeroRowPieces(velocity_, was, lo, hi, zeroRow, layout_, keep);
+  zeroRowPieces(colour_, was, lo, hi, zeroRow, layout_, keep);
 }
 
-void MpmGrid::releaseBinsOutside(Index3 lo, Index3 hi, Index3 keepLo, Index3 keepHi) {
+void MpmGrid::releaseBinsOutside(const MpmGridLayout& was, Index3 lo, Index3 hi, Index3 keepLo, Index3 keepHi) {
   // Every bin size is zero between calls: only pages go back.
   const bool kept = !emptyBox(keepLo, keepHi);
+  const bool sameLayout = was == layout_;
   const auto keep = [&](int j, int k, int& f, int& e) {
     f = e = 0;
     if (kept && j >= keepLo.j && j < keepHi.j && k >= keepLo.k && k < keepHi.k) {
@@ -233,7 +258,7 @@ void MpmGrid::releaseBinsOutside(Index3 lo, Index3 hi, Index3 keepLo, Index3 kee
   };
   const auto zeroRow = [&](int j, int k, const auto& zero) {
     int c = 0, d = 0;
-    keep(j, k, c, d);
+    if (sameLayout) keep(j, k, c, d);
     if (c >= d) {
       zero(lo.i, hi.i);
       return;
@@ -241,7 +266,42 @@ void MpmGrid::releaseBinsOutside(Index3 lo, Index3 hi, Index3 keepLo, Index3 kee
     zero(lo.i, std::min(hi.i, c));
     zero(std::max(lo.i, d), hi.i);
   };
-  zeroRowPieces(binSize_, baseDims_, lo, hi, zeroRow, keep);
+  zeroRowPieces(binSize_, binLayoutOf(was), lo, hi, zeroRow, binLayoutOf(layout_), keep);
+}
+
+void MpmGrid::setWholeLayout(bool whole) {
+  wholeLayout_ = whole;
+  const MpmGridLayout all{{0, 0, 0}, spec_.dims};
+  if (!whole || layout_ == all) return;
+  if (!layout_.empty()) moveToLayout(all);
+  layout_ = all;
+}
+
+void MpmGrid::moveToLayout(const MpmGridLayout& to) {
+  // Node (i, j, k) moves from layout_.index to to.index, never lower (`to`
+  // holds the layout with rows at least as long): walking the runs from the
+  // last node down, each node is read before anything lands on it. The bin
+  // sizes are zero between calls and stay so.
+  const Index3 lo = activeLo_, hi = activeHi_;
+  if (emptyBox(lo, hi) || wholeGrid_) return;
+  const int nj = hi.j - lo.j;
+  const bool colour = !colour_.empty();
+  for (int k = hi.k - 1; k >= lo.k; --k)
+    for (int j = hi.j - 1; j >= lo.j; --j) {
+      const std::size_t row = std::size_t(j - lo.j) + std::size_t(nj) * std::size_t(k - lo.k);
+      for (int i = runEnd_[row] - 1; i >= runFirst_[row]; --i) {
+        const std::size_t s = layout_.index(i, j, k), d = to.index(i, j, k);
+        if (s == d) continue;
+        nodes_[d] = nodes_[s];
+        nodes_[s] = MpmNode{};
+        velocity_[d] = velocity_[s];
+        velocity_[s] = Vec3d{};
+        if (colour) {
+          colour_[d] = colour_[s];
+          colour_[s] = 0.0;
+        }
+      }
+    }
 }
 
 }  // namespace mpm

@@ -206,7 +206,6 @@ void MpmSolver::predictRigidBodies(double dt) {
 
 void MpmSolver::exchangeWithRigidBodies(double dt) {
   const GridSpec& g = settings_.grid;
-  const GridSpec& w = grid_.spec();  // the window, with a partition
   const Index3 off = partition_ ? partition_->windowLo() : Index3{0, 0, 0};
   const Index3 boxLo = partition_ ? partition_->boxLo() : Index3{0, 0, 0};
   const Index3 boxHi = partition_ ? partition_->boxHi() : g.dims;
@@ -245,7 +244,7 @@ void MpmSolver::exchangeWithRigidBodies(double dt) {
     for (int k = from[2]; k < to[2]; ++k)
       for (int j = from[1]; j < to[1]; ++j)
         for (int i = from[0]; i < to[0]; ++i) {
-          const std::size_t n = w.index(i - off.i, j - off.j, k - off.k);
+          const std::size_t n = grid_.nodeIndex(i - off.i, j - off.j, k - off.k);
           if (!(nodes[n].mass > 0)) continue;
           const Vec3d x = g.nodePosition(i, j, k);
           const Vec3d xb = pose.pose.toLocal(x);

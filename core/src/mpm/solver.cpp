@@ -29,7 +29,6 @@ inline namespace mpm {
 namespace {
 using Clock = std::chrono::steady_clock;
 
-constexpr std::size_t kNoNode = ~std::size_t(0);  // no node (checkFiniteGrid)
 
 bool finiteMat(const Mat3d& m) {
   for (int r = 0; r < 3; ++r)
@@ -115,6 +114,7 @@ MpmSolver::MpmSolver(const MpmSettings& settings) : settings_(settings) {
   magneticGrid_ = settings_.magneticGrid ? *settings_.magneticGrid : settings_.grid;
   sameGrid_ = magneticGrid_ == settings_.grid;
   grid_ = MpmGrid(settings_.grid);
+  grid_.setWholeLayout(settings_.denseGrid);
   scene_ = std::make_unique<SceneField>(sources_, magnets_);
   // magneticForce_ is allocated by the first field solve on the MPM grid.
 }
@@ -320,8 +320,7 @@ std::size_t MpmSolver::enforceDomain(std::size_t& removedOut, std::size_t& nonFi
 
 void MpmSolver::gridUpdate(double dt, MpmStepReport& rep) {
   const GridSpec& g = settings_.grid;
-  const GridSpec& w = grid_.spec();  // the window (mpm/partition.h); the whole grid without a partition
-  // `off` takes window indices to the grid's (mpm/partition.h).
+  // `off` takes window indices (mpm/partition.h; the grid's own without a partition) to the grid's.
   const Index3 off = partition_ ? partition_->windowLo() : Index3{0, 0, 0};
   const Index3 boxLo = partition_ ? partition_->boxLo() : Index3{0, 0, 0};
   const Index3 boxHi = partition_ ? partition_->boxHi() : g.dims;
@@ -354,7 +353,7 @@ void MpmSolver::gridUpdate(double dt, MpmStepReport& rep) {
       int first = 0, end = 0;  // the row's run: every other node is zero (mpm/grid.h)
       grid_.activeRun(j, k, first, end);
       for (int i = first; i < end; ++i) {
-        const std::size_t n = w.index(i, j, k);
+        const std::size_t n = grid_.nodeIndex(i, j, k);
         const double m = nodes[n].mass;
         if (!(m > 0)) {
           vel[n] = Vec3d{};
@@ -426,28 +425,29 @@ void MpmSolver::checkFiniteGrid(const char* where) const {
   const Index3 lo = grid_.activeLo(), hi = grid_.activeHi();
   if (lo.i >= hi.i || lo.j >= hi.j || lo.k >= hi.k) return;
   const std::size_t nj = std::size_t(hi.j - lo.j), rows = nj * std::size_t(hi.k - lo.k);
-  const auto bad = [&](std::size_t i) {
-    return !std::isfinite(nodes[i].mass) || !isFinite(nodes[i].momentum) || !isFinite(vel[i]) ||
-           (fmag && !isFinite(fmag[i]));
+  // Node n of the arrays, f of the magnetic force's grid.
+  const auto bad = [&](std::size_t n, std::size_t f) {
+    return !std::isfinite(nodes[n].mass) || !isFinite(nodes[n].momentum) || !isFinite(vel[n]) ||
+           (fmag && !isFinite(fmag[f]));
   };
-  // The first bad node of a row (its index), or none.
-  const auto firstInRow = [&](std::size_t row) -> std::size_t {
+  // The first bad node of a row (its i), or -1.
+  const auto firstInRow = [&](std::size_t row) -> int {
     const int j = lo.j + int(row % nj), k = lo.k + int(row / nj);
     int first = 0, end = 0;
     grid_.activeRun(j, k, first, end);
     for (int i = first; i < end; ++i)
-      if (bad(g.index(i, j, k))) return g.index(i, j, k);
-    return kNoNode;
+      if (bad(grid_.nodeIndex(i, j, k), g.index(i, j, k))) return i;
+    return -1;
   };
-  const std::size_t row = firstIndexWhere(rows, [&](std::size_t r) { return firstInRow(r) != kNoNode; });
+  const std::size_t row = firstIndexWhere(rows, [&](std::size_t r) { return firstInRow(r) >= 0; });
   if (row == rows) return;
-  const std::size_t n = firstInRow(row);
+  const std::size_t i = std::size_t(firstInRow(row)), j = std::size_t(lo.j) + row % nj,
+                    k = std::size_t(lo.k) + row / nj;
+  const std::size_t n = grid_.nodeIndex(int(i), int(j), int(k));
   const char* what = !std::isfinite(nodes[n].mass)      ? "mass (kg)"
                      : !isFinite(nodes[n].momentum)      ? "momentum (kg m/s)"
                      : !isFinite(vel[n])                 ? "velocity (m/s)"
                                                          : "magnetic nodal force (N)";
-  const std::size_t plane = std::size_t(g.dims.i) * std::size_t(g.dims.j);
-  const std::size_t k = n / plane, j = (n % plane) / std::size_t(g.dims.i), i = n % std::size_t(g.dims.i);
   const Index3 off = partition_ ? partition_->windowLo() : Index3{0, 0, 0};
   throw Error(concat("MPM finite check: non-finite grid ", what, " at node (", i + std::size_t(off.i), ", ",
                      j + std::size_t(off.j), ", ", k + std::size_t(off.k), ") ", where,

@@ -26,6 +26,7 @@ void MpmSolver::setPartition(std::shared_ptr<MpmPartition> partition) {
   window.origin = g.nodePosition(lo.i, lo.j, lo.k);
   window.dims = {hi.i - lo.i, hi.j - lo.j, hi.k - lo.k};
   grid_ = MpmGrid(window);
+  grid_.setWholeLayout(true);  // the processes add whole arrays (sumNodes)
   grid_.setColourSum([p = partition_.get()](double* colour, std::size_t count) { p->sumScalars(colour, count); });
   std::size_t removed = 0, nonFinite = 0;
   enforceDomain(removed, nonFinite);  // every process the same: owners are decided inside the domain

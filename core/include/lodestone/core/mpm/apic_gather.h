@@ -41,20 +41,19 @@ LODESTONE_HOSTDEV inline void apicLine(const Vec3d* line, L& n0, L& n1, L& n2) {
   n2 = apicLanes<L>(line[2]);
 }
 
-/// `vel`: the nodal velocities (m/s) of a grid of nx x ny nodes; u: the
-/// particle's grid coordinates (cells, (x - origin) / dx) and b the stencil's
-/// base node (from the same u); cScale = 4/dx (1/m). Sets vp (m/s) and C (1/s).
+/// `corner`: the nodal velocity (m/s) of the stencil's base node in an array
+/// with strides sj and sk along j and k (x fastest); u: the particle's grid
+/// coordinates (cells, (x - origin) / dx) and b the stencil's base node (from
+/// the same u); cScale = 4/dx (1/m). Sets vp (m/s) and C (1/s).
 /// The sums run in L lane by lane (component-wise the same arithmetic for any
 /// L, so the same bits).
 template <typename L = Vec3d>
-LODESTONE_HOSTDEV inline void gatherApic(const Vec3d* vel, std::size_t nx, std::size_t ny, const double u[3],
+LODESTONE_HOSTDEV inline void gatherApic(const Vec3d* corner, std::size_t sj, std::size_t sk, const double u[3],
                                          const int b3[3], double cScale, Vec3d& vp, Mat3d& C) {
   const QuadraticWeights<double> wx = quadraticWeightsAt(u[0], b3[0]);
   const QuadraticWeights<double> wy = quadraticWeightsAt(u[1], b3[1]);
   const QuadraticWeights<double> wz = quadraticWeightsAt(u[2], b3[2]);
   const double f[3] = {u[0] - b3[0], u[1] - b3[1], u[2] - b3[2]};
-  const std::size_t sj = nx, sk = nx * ny;
-  const Vec3d* corner = vel + (std::size_t(b3[0]) + nx * (std::size_t(b3[1]) + ny * std::size_t(b3[2])));
   // v_p = sum w v_i; S_a = sum w v_i (node offset index along a).
   L S0{}, S1{}, S2{}, v{};
   for (int c = 0; c < 3; ++c) {

@@ -82,6 +82,47 @@ struct GridToParticleReport {
   std::size_t nonFinite = 0;  ///< particles whose position, velocity or J became non-finite (left as they are)
 };
 
+/// Where an MpmGrid keeps its nodes: the box [lo, lo + dims) of the grid's
+/// nodes, x fastest, node (i, j, k) at index(i, j, k) of each node array.
+/// Its stencil bins (base nodes) are the box [lo, lo + dims - 2), binIndex.
+/// The box follows the material (mpmGridLayout), so that the arrays' rows
+/// are as long as the material's box is wide, not the whole grid: material
+/// thin along x packs its rows into shared pages.
+struct MpmGridLayout {
+  Index3 lo{0, 0, 0}, dims{0, 0, 0};
+  bool empty() const { return dims.i <= 0 || dims.j <= 0 || dims.k <= 0; }
+  /// Nodes in the box.
+  std::size_t count() const { return empty() ? 0 : std::size_t(dims.i) * std::size_t(dims.j) * std::size_t(dims.k); }
+  /// Whether node (i, j, k) lies in the box.
+  bool holds(int i, int j, int k) const {
+    return i >= lo.i && j >= lo.j && k >= lo.k && i < lo.i + dims.i && j < lo.j + dims.j && k < lo.k + dims.k;
+  }
+  /// Whether the box of nodes [a, b) lies in the box.
+  bool holds(Index3 a, Index3 b) const {
+    return a.i >= lo.i && a.j >= lo.j && a.k >= lo.k && b.i <= lo.i + dims.i && b.j <= lo.j + dims.j &&
+           b.k <= lo.k + dims.k;
+  }
+  /// Index of node (i, j, k), which the box must hold.
+  std::size_t index(int i, int j, int k) const {
+    return std::size_t(i - lo.i) + std::size_t(dims.i) * (std::size_t(j - lo.j) + std::size_t(dims.j) * std::size_t(k - lo.k));
+  }
+  /// Index of stencil bin (base node) (bi, bj, bk), in [lo, lo + dims - 2).
+  std::size_t binIndex(int bi, int bj, int bk) const {
+    return std::size_t(bi - lo.i) +
+           std::size_t(dims.i - 2) * (std::size_t(bj - lo.j) + std::size_t(dims.j - 2) * std::size_t(bk - lo.k));
+  }
+  friend bool operator==(const MpmGridLayout& a, const MpmGridLayout& b) { return a.lo == b.lo && a.dims == b.dims; }
+};
+
+/// The layout an MpmGrid on `spec` takes for particles whose stencil bases
+/// span [baseLo, baseHi] (inclusive, grid indices): the nodes they reach,
+/// [baseLo, baseHi + 3), one more each side (the colour field's Hessian
+/// reads them) and a margin each side, so that moving material keeps its
+/// layout for a while, all within the grid: along x 1 + a sixteenth of that
+/// extent (it shares the rows' pages), along y and z 2 + an eighth (it takes
+/// no memory until material reaches it).
+MpmGridLayout mpmGridLayout(const GridSpec& spec, Index3 baseLo, Index3 baseHi);
+
 /// An MpmGrid holds fewer stencil bins (base nodes: dims - 2 per axis) than
 /// this, and fewer particles: its binning counts them in 32 bits.
 constexpr std::uint64_t kMpmGridCountLimit = 0xFFFFFFFFu;  // 2^32 - 1
@@ -95,17 +136,18 @@ constexpr std::uint64_t kMpmGridCountLimit = 0xFFFFFFFFu;  // 2^32 - 1
 void mpmNodeRuns(const std::uint32_t* rowFirst, const std::uint32_t* rowEnd, int nbj, int nbk, std::int32_t* runFirst,
                  std::int32_t* runEnd);
 
-/// The memory (bytes) the grid's arrays take for the runs of one P2G: bins
-/// [rowFirst, rowEnd) of the nbj x nbk rows of bins from base node row
-/// (binLo.j, binLo.k) (bi in grid indices, as mpmNodeRuns takes them) and
-/// the node runs runFirst/runEnd mpmNodeRuns gives for them. Whole pages
-/// (PageMapping::pageSize) of the node data (32 B a node), the velocities
-/// (24 B), the colour field (8 B, when `colour`) and the bin sizes (4 B a
-/// bin), each page counted once however many rows share it, plus the bins'
-/// offsets (4 B a bin) and the rows' bookkeeping (32 B a row). A run shorter
-/// than a page still takes a page: material thin along x costs a page a row
-/// of each array, where material spanning whole rows costs 64 B a node.
-double mpmHeldBytes(const GridSpec& spec, Index3 binLo, int nbj, int nbk, const std::uint32_t* rowFirst,
+/// The memory (bytes) the grid's arrays take for the runs of one P2G in
+/// `layout`: bins [rowFirst, rowEnd) of the nbj x nbk rows of bins from
+/// base node row (binLo.j, binLo.k) (bi in grid indices, as mpmNodeRuns
+/// takes them) and the node runs runFirst/runEnd mpmNodeRuns gives for them.
+/// Whole pages (PageMapping::pageSize) of the node data (32 B a node), the
+/// velocities (24 B), the colour field (8 B, when `colour`) and the bin
+/// sizes (4 B a bin), each page counted once however many rows share it,
+/// plus the bins' offsets (4 B a bin) and the rows' bookkeeping (32 B a
+/// row). Rows of the layout shorter than a page share pages; a run shorter
+/// than a page in a longer row still takes a page (a sheet slanted across a
+/// wide box).
+double mpmHeldBytes(const MpmGridLayout& layout, Index3 binLo, int nbj, int nbk, const std::uint32_t* rowFirst,
                     const std::uint32_t* rowEnd, const std::int32_t* runFirst, const std::int32_t* runEnd,
                     bool colour);
 
@@ -136,15 +178,38 @@ class MpmGrid {
   GridToParticleReport gridToParticle(MpmParticles& particles, const std::vector<MpmMaterial>& materials, double dt,
                                       const ParticleBounds* bounds = nullptr) const;
 
-  /// Node data of the last P2G (one entry per node, x fastest). Memory is
-  /// taken only for the pages written (base/page_array.h): the runs of
-  /// nodes the particles reach on each x-row (activeRun), handed back when
-  /// the runs move off them.
+  /// Node data of the last P2G, node (i, j, k) at nodeIndex(i, j, k) (the
+  /// layout's box, x fastest; nodes outside it are zero and not stored).
+  /// Memory is taken only for the pages written (base/page_array.h): the
+  /// runs of nodes the particles reach on each x-row (activeRun), handed
+  /// back when the runs move off them.
   PageArray<MpmNode>& nodes() { return nodes_; }
   const PageArray<MpmNode>& nodes() const { return nodes_; }
-  /// Node velocities (m/s) used by G2P; written by the grid update.
+  /// Node velocities (m/s) used by G2P, at nodeIndex; written by the grid
+  /// update.
   PageArray<Vec3d>& velocity() { return velocity_; }
   const PageArray<Vec3d>& velocity() const { return velocity_; }
+
+  /// The box of nodes the arrays hold (mpmGridLayout of the last P2G's
+  /// particles; kept while the material stays inside it). It holds the
+  /// active box. The whole grid with setWholeLayout.
+  const MpmGridLayout& layout() const { return layout_; }
+  /// Index of node (i, j, k) in nodes(), velocity() and colour(); the
+  /// layout must hold it (every node of the active box).
+  std::size_t nodeIndex(int i, int j, int k) const { return layout_.index(i, j, k); }
+  /// Node (i, j, k) of the last P2G, zero outside the layout.
+  MpmNode nodeAt(int i, int j, int k) const {
+    return layout_.holds(i, j, k) ? nodes_[layout_.index(i, j, k)] : MpmNode{};
+  }
+  /// Velocity (m/s) of node (i, j, k), zero outside the layout.
+  Vec3d velocityAt(int i, int j, int k) const {
+    return layout_.holds(i, j, k) ? velocity_[layout_.index(i, j, k)] : Vec3d{};
+  }
+  /// Holds the whole grid from the next P2G on (whole = true): node
+  /// (i, j, k) at spec().index(i, j, k), for callers that add whole arrays
+  /// (a partition's sums, setColourSum) or want the grid dense. Data
+  /// already written moves with it.
+  void setWholeLayout(bool whole);
 
   /// The box of nodes the last P2G could touch: [activeLo, activeHi) per
   /// axis (empty when there were no particles).
@@ -170,13 +235,19 @@ class MpmGrid {
   /// A sum of the colour field over processes (mpm/partition.h): called
   /// after the colour scatter with the field on the whole grid (zero outside
   /// what this grid's particles reach), it must leave every node holding the
-  /// total over the processes. Empty (the default): none.
-  void setColourSum(std::function<void(double* colour, std::size_t count)> sum) { colourSum_ = std::move(sum); }
+  /// total over the processes. Empty (the default): none. A sum sets the
+  /// whole layout (setWholeLayout).
+  void setColourSum(std::function<void(double* colour, std::size_t count)> sum) {
+    if (sum) setWholeLayout(true);
+    colourSum_ = std::move(sum);
+  }
 
   /// Widens the active box to the whole grid: for a caller that wrote node
   /// data outside it (a partition's sums, mpm/partition.h), so that the grid
   /// update covers those nodes and the next particleToGrid zeroes them.
+  /// Sets the whole layout (setWholeLayout) if the grid has another.
   void activateWholeGrid() {
+    setWholeLayout(true);
     activeLo_ = {0, 0, 0};
     activeHi_ = spec_.dims;
     wholeGrid_ = true;
@@ -202,15 +273,23 @@ class MpmGrid {
 
  private:
   void bin(const MpmParticles& particles, std::size_t materialCount);
+  // Pass 1 of the binning in the current layout; false when some particle's
+  // bin lies outside it (`box` then still spans every particle).
+  bool binPass1(const MpmParticles& particles, std::size_t materialCount, Index3& boxLo, Index3& boxHi);
+  // Moves the node data of the runs from the layout to `to`, zeroing what
+  // they leave (the whole layout's indices are never below the box's).
+  void moveToLayout(const MpmGridLayout& to);
   void zeroBox(Index3 lo, Index3 hi);
   // Zeroes the node data of the runs (activeRun) of the active box.
   void zeroRuns();
-  // Zeroes the node data of the previous runs (of box [lo, hi)) outside the
-  // current ones and hands back the pages that hold nothing of those.
-  void releaseOutsideRuns(Index3 lo, Index3 hi, const std::vector<std::int32_t>& first,
+  // Zeroes the node data of the previous runs (of box [lo, hi), in layout
+  // `was`) outside the current ones and hands back the pages that hold
+  // nothing of those.
+  void releaseOutsideRuns(const MpmGridLayout& was, Index3 lo, Index3 hi, const std::vector<std::int32_t>& first,
                           const std::vector<std::int32_t>& end);
-  // Hands back the bin sizes' pages of base box [lo, hi) outside base box [keepLo, keepHi).
-  void releaseBinsOutside(Index3 lo, Index3 hi, Index3 keepLo, Index3 keepHi);
+  // Hands back the bin sizes' pages of base box [lo, hi) (in layout `was`)
+  // outside base box [keepLo, keepHi) (in the current layout).
+  void releaseBinsOutside(const MpmGridLayout& was, Index3 lo, Index3 hi, Index3 keepLo, Index3 keepHi);
   // Runs rowFn(bj, bk) on every row of bins of the active box, in the nine
   // colours of disjoint nodes (grid.cpp).
   template <typename RowFn>
@@ -227,6 +306,8 @@ class MpmGrid {
   std::vector<Mat3d> capillary_;  // surface tension: capillary Cauchy stress per particle, Pa
   std::function<void(double*, std::size_t)> colourSum_;  // setColourSum
   Index3 activeLo_{0, 0, 0}, activeHi_{0, 0, 0};
+  MpmGridLayout layout_;     // where the node arrays and bin sizes keep their entries
+  bool wholeLayout_ = false;  // setWholeLayout
   bool wholeGrid_ = false;  // activateWholeGrid since the last P2G: the caller writes the whole grid
   // The node runs of the active box's rows (activeRun), and those of the
   // previous P2G (handed back where the new ones do not reach).
@@ -251,8 +332,8 @@ class MpmGrid {
   PageArray<std::uint32_t> rowLow_, rowHigh_;
   std::vector<std::uint64_t> key_;   // per particle: base node, 21 bits per axis
   std::vector<std::uint32_t> rank_;  // per particle: slot in its bin (scheduling-dependent, re-sorted)
-  // Per base node (dims - 2 per axis): the particles in each bin, zero between
-  // calls; used as std::atomic<std::uint32_t> (binSizes()).
+  // Per base node of the layout (MpmGridLayout::binIndex): the particles in
+  // each bin, zero between calls; used as std::atomic<std::uint32_t> (binSizes()).
   PageArray<std::uint32_t> binSize_;
   std::atomic<std::uint32_t>* binSizes() { return reinterpret_cast<std::atomic<std::uint32_t>*>(binSize_.data()); }
   std::vector<std::uint32_t> offsets_;  // the rows' bins + 1 prefix sums
