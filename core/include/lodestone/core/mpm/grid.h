@@ -38,6 +38,13 @@
 // count or schedule: the grid is bitwise identical for any number of
 // threads. G2P writes only its own particle.
 //
+// Storage. The node arrays and the bins' sizes are laid out over a box
+// that holds the material's (MpmGridLayout, chosen by mpmGridLayout and
+// kept while the material stays inside it), x-rows as long as that box is
+// wide, and take memory page by page where the runs are written
+// (base/page_array.h). The layout changes where nodes lie in memory, never
+// what is added to them or in what order: any layout gives the same bits.
+//
 // Particles must lie where their stencil fits the grid: grid coordinate
 // u = (x - origin)/dx in [1/2, dims - 3/2) per axis (transfer.h). The solver
 // keeps them there; the transfers throw InvalidArgument otherwise.

@@ -119,10 +119,11 @@ struct MpmSettings {
 
   int reorderInterval = 20;  ///< substeps between sorts of the particles by grid cell, for memory locality in P2G
                              ///< (0 = never: indices stay stable; MpmParticles::id survives either way)
-  /// Hold the MPM grid whole: the grid update visits every node and P2G
-  /// zeroes them all, as a process of a partition does with its window.
-  /// Off (the default), the grid holds and visits only the runs of nodes
-  /// the particles' stencils reach on each x-row (mpm/grid.h). The particles
+  /// Hold the MPM grid whole: laid out over the whole grid, the grid update
+  /// visits every node and P2G zeroes them all, as a process of a partition
+  /// does with its window. Off (the default), the grid is laid out over the
+  /// material's box (MpmGridLayout) and holds and visits only the runs of
+  /// nodes the particles' stencils reach on each x-row (mpm/grid.h). The particles
   /// are the same bit for bit either way; dense takes the whole grid's
   /// memory and is never faster (docs/benchmarks.md, "The MPM grid against
   /// particle count and domain size"): the reference the sparse grid is
