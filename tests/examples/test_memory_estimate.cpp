@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <array>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -185,6 +186,29 @@ TEST(MemoryEstimate, TwoMagneticBodiesFarApartCostTheirPatches) {
   expectClose(m, m.fieldSolve, 0.0);
 }
 
+namespace {
+
+/// A box of material, one point a cell, no magnetism or gravity, in a
+/// 257^3 grid over a 2 m box: half-size `half` (cells), its z axis along
+/// `axis`. Returns the scene file.
+fs::path slabScene(const fs::path& dir, const std::array<double, 3>& half, const std::array<double, 3>& axis) {
+  nlohmann::json s = readJson(fs::path(LODESTONE_SCENES_DIR) / "cube_langevin.json");
+  const double dx = 2.0 / 256;
+  s["domain"] = {{"min", {0, 0, 0}}, {"max", {2, 2, 2}}, {"dx", dx}};
+  s["materials"][0].erase("magnetic");
+  s["magnets"] = nlohmann::json::array();
+  s.erase("magnetic");
+  s["gravity"] = {0, 0, 0};
+  s["bodies"][0]["center"] = {1.0, 1.0, 1.0};
+  s["bodies"][0]["half_size"] = {half[0] * dx, half[1] * dx, half[2] * dx};
+  s["bodies"][0]["axis"] = {axis[0], axis[1], axis[2]};
+  s["bodies"][0]["particles_per_cell"] = 1;
+  std::ofstream(dir / "scene.json") << s.dump(1);
+  return dir / "scene.json";
+}
+
+}  // namespace
+
 TEST(MemoryEstimate, ASheetSlantedAcrossXCostsAPageARowOfEachArray) {
   // A sheet 2 cells thick, 250 x 250 cells across, one point a cell, in a
   // 257^3 grid, its normal at 45 degrees between x and z: the grid's layout
@@ -194,19 +218,7 @@ TEST(MemoryEstimate, ASheetSlantedAcrossXCostsAPageARowOfEachArray) {
   // would count 30 MB. The estimate counts the pages (mpmHeldBytes), and
   // the CLI says why they cost that.
   const fs::path dir = scratch("sheet");
-  nlohmann::json s = readJson(fs::path(LODESTONE_SCENES_DIR) / "cube_langevin.json");
-  const double dx = 2.0 / 256;
-  s["domain"] = {{"min", {0, 0, 0}}, {"max", {2, 2, 2}}, {"dx", dx}};
-  s["materials"][0].erase("magnetic");
-  s["magnets"] = nlohmann::json::array();
-  s.erase("magnetic");
-  s["gravity"] = {0, 0, 0};
-  s["bodies"][0]["center"] = {1.0, 1.0, 1.0};
-  s["bodies"][0]["half_size"] = {90 * dx, 125 * dx, dx};
-  s["bodies"][0]["axis"] = {1, 0, 1};
-  s["bodies"][0]["particles_per_cell"] = 1;
-  std::ofstream(dir / "scene.json") << s.dump(1);
-  const Memory m = run(dir / "scene.json", dir, "--no-png --no-ply");
+  const Memory m = run(slabScene(dir, {90, 125, 1}, {1, 0, 1}), dir, "--no-png --no-ply");
   expectClose(m, m.mpmGrid, 0.5);
   std::ifstream logFile(dir / "log.txt");
   const std::string log((std::istreambuf_iterator<char>(logFile)), std::istreambuf_iterator<char>());
@@ -220,18 +232,7 @@ TEST(MemoryEstimate, APlateThinAlongXCostsItsBox) {
   // in a layout as wide as the grid would be 0.5 GB). Estimated within 20%,
   // and no note.
   const fs::path dir = scratch("plate");
-  nlohmann::json s = readJson(fs::path(LODESTONE_SCENES_DIR) / "cube_langevin.json");
-  const double dx = 2.0 / 256;
-  s["domain"] = {{"min", {0, 0, 0}}, {"max", {2, 2, 2}}, {"dx", dx}};
-  s["materials"][0].erase("magnetic");
-  s["magnets"] = nlohmann::json::array();
-  s.erase("magnetic");
-  s["gravity"] = {0, 0, 0};
-  s["bodies"][0]["center"] = {1.0, 1.0, 1.0};
-  s["bodies"][0]["half_size"] = {dx, 125 * dx, 125 * dx};
-  s["bodies"][0]["particles_per_cell"] = 1;
-  std::ofstream(dir / "scene.json") << s.dump(1);
-  const Memory m = run(dir / "scene.json", dir, "--no-png --no-ply");
+  const Memory m = run(slabScene(dir, {1, 125, 125}, {0, 0, 1}), dir, "--no-png --no-ply");
   expectClose(m, m.mpmGrid, 0.15);
   EXPECT_LT(m.mpmGrid, 60e6) << "the plate's rows took a page each";
   std::ifstream logFile(dir / "log.txt");
