@@ -4,6 +4,7 @@
 #include <cmath>
 #include <limits>
 
+#include "lodestone/core/base/bspline.h"
 #include "lodestone/core/base/constants.h"
 #include "lodestone/core/base/error.h"
 #include "lodestone/core/base/number_text.h"
@@ -11,6 +12,44 @@
 #include "lodestone/plugin/node_builders.h"
 
 namespace lodestone::examples {
+
+namespace {
+
+// How the MPM grid holds its nodes: the runs the material reaches in a
+// layout over its box (mpm/grid.h), or whole (MpmSettings::denseGrid).
+StageDecision mpmGridDecision(const MpmSolver& solver) {
+  const GridSpec& g = solver.settings().grid;
+  const std::string domain = concat(g.dims.i, " x ", g.dims.j, " x ", g.dims.k);
+  const char* measured = "docs/benchmarks.md, \"The MPM grid against particle count and domain size\"";
+  if (solver.settings().denseGrid)
+    return {"MPM grid", true, "dense",
+            concat("dense: held whole (dense_grid), P2G zeroes and the grid update visits all ", domain,
+                   " nodes every substep, the same particles bit for bit as sparse and never measured faster (",
+                   measured, ")"),
+            0, 0};
+  const MpmParticles& p = solver.particles();
+  Index3 lo{g.dims.i, g.dims.j, g.dims.k}, hi{-1, -1, -1};
+  for (const Vec3d& x : p.x)
+    for (int a = 0; a < 3; ++a) {
+      const int b = int(std::clamp(quadraticBaseFloor((x[a] - g.origin[a]) / g.dx), 0.0, double(g.dims[a] - 3)));
+      (a == 0 ? lo.i : a == 1 ? lo.j : lo.k) = std::min(lo[a], b);
+      (a == 0 ? hi.i : a == 1 ? hi.j : hi.k) = std::max(hi[a], b);
+    }
+  const std::string layout =
+      p.empty() ? std::string("laid out when material arrives")
+                : [&] {
+                    const MpmGridLayout L = mpmGridLayout(g, lo, hi);
+                    return concat("laid out over the material's box, ", L.dims.i, " x ", L.dims.j, " x ", L.dims.k,
+                                  " nodes now");
+                  }();
+  return {"MPM grid", true, "sparse",
+          concat("sparse: the runs of nodes the material's stencils reach on each x-row, ", layout, ", of the domain's ", domain,
+                 "; held whole (dense_grid) it would zero and visit every node each substep, never measured faster (",
+                 measured, ")"),
+          0, 0};
+}
+
+}  // namespace
 
 std::vector<StageDecision> mechanicsDecisions(const plugin::Scene& scene, const MpmSolver& solver) {
   std::vector<StageDecision> d;
@@ -72,6 +111,7 @@ std::vector<StageDecision> mechanicsDecisions(const plugin::Scene& scene, const 
                : solver.emitterCount() > 0 ? "no emitter is on during the run"
                                            : "no emitter",
                0, 0});
+  d.push_back(mpmGridDecision(solver));
   return d;
 }
 
