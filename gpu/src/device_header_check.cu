@@ -66,7 +66,7 @@ __global__ void headerCheckKernel(double* out, float* outf, MagnetizationLaw<dou
   const int b3[3] = {0, 0, 0};
   Vec3d vp;
   Mat3d C;
-  gatherApic(vel, 4, 16, u, b3, 40.0, vp, C);
+  gatherApic(vel, 4, 4, u, b3, 40.0, vp, C);
   out[7] = vp.x + C(1, 2);
 }
 

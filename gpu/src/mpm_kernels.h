@@ -206,8 +206,7 @@ LODESTONE_HOSTDEV inline G2POutcome g2pParticle(const MpmDims& g, const MpmMater
   const int b3[3] = {bi, bj, bk};
   Vec3d vp;
   Mat3d C;
-  const std::size_t sj = std::size_t(g.nx), sk = sj * std::size_t(g.ny);
-  gatherApic(vel + (std::size_t(bi) + sj * std::size_t(bj) + sk * std::size_t(bk)), sj, sk, u, b3, cScale, vp, C);
+  gatherApic(vel, std::size_t(g.nx), std::size_t(g.ny), u, b3, cScale, vp, C);
   if (materials[P.material[p]].fluid) {
     P.J[p] *= 1.0 + dt * trace(C);
   } else {

@@ -246,7 +246,7 @@ TEST(MpmTransfer, ParticleToGridIsTheScalarFormulaInTheDocumentedOrder) {
   }
 }
 
-// G2P against the scalar gather (gatherApic in Vec3d, as on the device) and
+// G2P against the scalar gather (gatherApicAt in Vec3d, as on the device) and
 // the scalar F, J and position updates of mpm/grid.h: bitwise.
 TEST(MpmTransfer, GridToParticleIsTheScalarGather) {
   const GridSpec g = testGrid(12, 0.05);
@@ -264,8 +264,8 @@ TEST(MpmTransfer, GridToParticleIsTheScalarGather) {
     Vec3d vp;
     Mat3d C;
     const MpmGridLayout& L = grid.layout();
-    gatherApic<Vec3d>(grid.velocity().data() + grid.nodeIndex(b[0], b[1], b[2]), std::size_t(L.dims.i),
-                      std::size_t(L.dims.i) * std::size_t(L.dims.j), u, b, 4.0 * invDx, vp, C);
+    gatherApicAt<Vec3d>(grid.velocity().data() + grid.nodeIndex(b[0], b[1], b[2]), std::size_t(L.dims.i),
+                        std::size_t(L.dims.i) * std::size_t(L.dims.j), u, b, 4.0 * invDx, vp, C);
     if (mats[p.material[q]].isFluid()) {
       expected.J[q] *= 1.0 + dt * trace(C);
     } else {

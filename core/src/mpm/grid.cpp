@@ -255,7 +255,7 @@ struct G2PKernel {
       const int b3[3] = {bi, bj, bk};
       Vec3d vp;
       Mat3d C;
-      gatherApic<Lanes4>(vel + layout.index(bi, bj, bk), std::size_t(layout.dims.i),
+      gatherApicAt<Lanes4>(vel + layout.index(bi, bj, bk), std::size_t(layout.dims.i),
                          std::size_t(layout.dims.i) * std::size_t(layout.dims.j), u, b3, cScale, vp, C);
       // Step 6: MLS update of the deformation (F <- (I + dt C) F, or J alone for fluids);
       // the elastoplastic solid's trial F_E is returned to the yield surface.

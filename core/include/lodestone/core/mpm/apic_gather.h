@@ -48,8 +48,8 @@ LODESTONE_HOSTDEV inline void apicLine(const Vec3d* line, L& n0, L& n1, L& n2) {
 /// The sums run in L lane by lane (component-wise the same arithmetic for any
 /// L, so the same bits).
 template <typename L = Vec3d>
-LODESTONE_HOSTDEV inline void gatherApic(const Vec3d* corner, std::size_t sj, std::size_t sk, const double u[3],
-                                         const int b3[3], double cScale, Vec3d& vp, Mat3d& C) {
+LODESTONE_HOSTDEV inline void gatherApicAt(const Vec3d* corner, std::size_t sj, std::size_t sk, const double u[3],
+                                           const int b3[3], double cScale, Vec3d& vp, Mat3d& C) {
   const QuadraticWeights<double> wx = quadraticWeightsAt(u[0], b3[0]);
   const QuadraticWeights<double> wy = quadraticWeightsAt(u[1], b3[1]);
   const QuadraticWeights<double> wz = quadraticWeightsAt(u[2], b3[2]);
@@ -80,6 +80,15 @@ LODESTONE_HOSTDEV inline void gatherApic(const Vec3d* corner, std::size_t sj, st
     C(1, a) = col[a].y;
     C(2, a) = col[a].z;
   }
+}
+
+/// gatherApicAt on `vel`, the nodal velocities (m/s) of a whole grid of
+/// nx x ny x (any) nodes, x fastest.
+template <typename L = Vec3d>
+LODESTONE_HOSTDEV inline void gatherApic(const Vec3d* vel, std::size_t nx, std::size_t ny, const double u[3],
+                                         const int b3[3], double cScale, Vec3d& vp, Mat3d& C) {
+  const Vec3d* corner = vel + (std::size_t(b3[0]) + nx * (std::size_t(b3[1]) + ny * std::size_t(b3[2])));
+  gatherApicAt<L>(corner, nx, nx * ny, u, b3, cScale, vp, C);
 }
 
 }  // namespace mpm
