@@ -214,7 +214,6 @@ TEST(GpuCoreParity, MpmTransfersMatchTheCore) {
   }
   const double dt = 1e-4;
   MpmGrid core(grid);
-  core.setWholeLayout(true);  // node m at grid.index, as on the host stepper
   core.particleToGrid(p, mats, dt);
   g::MpmStepper host(grid, params, g::Backend::Cpu);
   host.upload({p.x.data(), p.v.data(), p.C.data(), p.F.data(), p.J.data(), p.mass.data(), p.volume0.data(), nullptr,
@@ -286,7 +285,6 @@ TEST(GpuCoreParity, SurfaceTensionMatchesTheCoreOverFortySteps) {
   host.upload(input(p));
   plain.upload(input(p));
   MpmGrid core(grid);
-  core.setWholeLayout(true);  // node m at grid.index, as on the host stepper
   g::MpmStepSettings s;
   s.wallNodes = 0;
   s.gravity = Vec3d{};

@@ -36,6 +36,7 @@ MpmGrid::MpmGrid(const GridSpec& spec) : spec_(spec) {
   binSize_ = PageArray<std::uint32_t>(nb);
   rowLow_ = PageArray<std::uint32_t>(std::size_t(baseDims_.j) * std::size_t(baseDims_.k));
   rowHigh_ = PageArray<std::uint32_t>(std::size_t(baseDims_.j) * std::size_t(baseDims_.k));
+  layout_ = {{0, 0, 0}, spec_.dims};
 }
 
 static_assert(sizeof(std::atomic<std::uint32_t>) == sizeof(std::uint32_t) &&
@@ -272,8 +273,13 @@ void MpmGrid::releaseBinsOutside(const MpmGridLayout& was, Index3 lo, Index3 hi,
 void MpmGrid::setWholeLayout(bool whole) {
   wholeLayout_ = whole;
   const MpmGridLayout all{{0, 0, 0}, spec_.dims};
-  if (!whole || layout_ == all) return;
-  if (!layout_.empty()) moveToLayout(all);
+  const bool written = !emptyBox(activeLo_, activeHi_) || wholeGrid_;
+  if (!whole) {
+    if (!written) layout_ = MpmGridLayout{};  // the first P2G lays it out
+    return;
+  }
+  if (layout_ == all) return;
+  if (written && !layout_.empty()) moveToLayout(all);
   layout_ = all;
 }
 

@@ -38,10 +38,11 @@
 // count or schedule: the grid is bitwise identical for any number of
 // threads. G2P writes only its own particle.
 //
-// Storage. The node arrays and the bins' sizes are laid out over a box
-// that holds the material's (MpmGridLayout, chosen by mpmGridLayout and
-// kept while the material stays inside it), x-rows as long as that box is
-// wide, and take memory page by page where the runs are written
+// Storage. The node arrays and the bins' sizes are laid out over the whole
+// grid or (setWholeLayout(false), as MpmSolver's grid) over a box that holds
+// the material's (MpmGridLayout, chosen by mpmGridLayout and kept while the
+// material stays inside it), x-rows as long as that box is wide, and take
+// memory page by page where the runs are written
 // (base/page_array.h). The layout changes where nodes lie in memory, never
 // what is added to them or in what order: any layout gives the same bits.
 //
@@ -92,9 +93,9 @@ struct GridToParticleReport {
 /// Where an MpmGrid keeps its nodes: the box [lo, lo + dims) of the grid's
 /// nodes, x fastest, node (i, j, k) at index(i, j, k) of each node array.
 /// Its stencil bins (base nodes) are the box [lo, lo + dims - 2), binIndex.
-/// The box follows the material (mpmGridLayout), so that the arrays' rows
-/// are as long as the material's box is wide, not the whole grid: material
-/// thin along x packs its rows into shared pages.
+/// The whole grid, or a box that follows the material (mpmGridLayout), so
+/// that the arrays' rows are as long as the material's box is wide: material
+/// thin along x then packs its rows into shared pages.
 struct MpmGridLayout {
   Index3 lo{0, 0, 0}, dims{0, 0, 0};
   bool empty() const { return dims.i <= 0 || dims.j <= 0 || dims.k <= 0; }
@@ -197,9 +198,9 @@ class MpmGrid {
   PageArray<Vec3d>& velocity() { return velocity_; }
   const PageArray<Vec3d>& velocity() const { return velocity_; }
 
-  /// The box of nodes the arrays hold (mpmGridLayout of the last P2G's
-  /// particles; kept while the material stays inside it). It holds the
-  /// active box. The whole grid with setWholeLayout.
+  /// The box of nodes the arrays hold: the whole grid (the default), or,
+  /// after setWholeLayout(false), mpmGridLayout of the last P2G's particles,
+  /// kept while the material stays inside it. It holds the active box.
   const MpmGridLayout& layout() const { return layout_; }
   /// Index of node (i, j, k) in nodes(), velocity() and colour(); the
   /// layout must hold it (every node of the active box).
@@ -212,10 +213,13 @@ class MpmGrid {
   Vec3d velocityAt(int i, int j, int k) const {
     return layout_.holds(i, j, k) ? velocity_[layout_.index(i, j, k)] : Vec3d{};
   }
-  /// Holds the whole grid from the next P2G on (whole = true): node
-  /// (i, j, k) at spec().index(i, j, k), for callers that add whole arrays
-  /// (a partition's sums, setColourSum) or want the grid dense. Data
-  /// already written moves with it.
+  /// whole = true (the default): the arrays are laid out over the whole
+  /// grid, node (i, j, k) at spec().index(i, j, k); data already written
+  /// moves with it. whole = false: over the material's box from the next
+  /// P2G on, so that memory follows the material's box rather than the
+  /// grid's rows (material thin along x packs its rows; MpmSolver's grid
+  /// does this unless MpmSettings::denseGrid). A partition's sums and
+  /// setColourSum, which add whole arrays, need the whole layout.
   void setWholeLayout(bool whole);
 
   /// The box of nodes the last P2G could touch: [activeLo, activeHi) per
@@ -314,7 +318,7 @@ class MpmGrid {
   std::function<void(double*, std::size_t)> colourSum_;  // setColourSum
   Index3 activeLo_{0, 0, 0}, activeHi_{0, 0, 0};
   MpmGridLayout layout_;     // where the node arrays and bin sizes keep their entries
-  bool wholeLayout_ = false;  // setWholeLayout
+  bool wholeLayout_ = true;  // setWholeLayout
   bool wholeGrid_ = false;  // activateWholeGrid since the last P2G: the caller writes the whole grid
   // The node runs of the active box's rows (activeRun), and those of the
   // previous P2G (handed back where the new ones do not reach).
