@@ -269,8 +269,9 @@ class MpmGrid {
   const std::vector<std::uint32_t>& binnedOrder() const { return sorted_; }
 
   /// The colour field c_i = sum_p w_ip V_p / dx^3 (dimensionless) of the
-  /// liquids with surface tension, valid on the active box after a P2G of a
-  /// scene that has one (empty when none ever had).
+  /// liquids with surface tension, node (i, j, k) at nodeIndex, valid on the
+  /// active box after a P2G of a scene that has one (empty when none ever
+  /// had).
   const PageArray<double>& colour() const { return colour_; }
 
   /// The memory the grid's arrays hold for the runs of the last P2G, bytes
