@@ -23,6 +23,9 @@
 #include <cmath>
 #include <cstddef>
 #include <cstring>
+#if defined(__x86_64__)
+#include <immintrin.h>
+#endif
 #include <functional>
 #include <limits>
 #include <utility>
@@ -55,6 +58,29 @@ inline void store4(double* p, const Lanes4& v) { std::memcpy(p, &v, sizeof v); }
 
 static_assert(sizeof(MpmNode) == 4 * sizeof(double) && offsetof(MpmNode, mass) == 3 * sizeof(double),
               "MpmNode: momentum x, y, z then mass, packed");
+
+// G2P's write-only outputs (a particle's velocity and C), stored without
+// first reading their cache lines: the particles go by in index order, so
+// the write-combining buffers fill whole lines, and the next P2G reads them
+// from memory either way. The same bits land; fenceStreamed makes them
+// visible before the chunk's task ends.
+template <int N>
+inline void streamDoubles(double* dst, const double* src) {
+#if defined(__x86_64__)
+  for (int i = 0; i < N; ++i) {
+    long long bits;
+    std::memcpy(&bits, src + i, sizeof bits);
+    _mm_stream_si64(reinterpret_cast<long long*>(dst + i), bits);
+  }
+#else
+  std::memcpy(dst, src, N * sizeof(double));
+#endif
+}
+inline void fenceStreamed() {
+#if defined(__x86_64__)
+  _mm_sfence();
+#endif
+}
 
 }  // namespace
 
@@ -270,7 +296,8 @@ struct G2PKernel {
         if (mp.elastoplastic) Fp[p] = vonMisesReturn(Fp[p], mp.mu, mp.yieldStress);
         Jp[p] = determinant(Fp[p]);
       }
-      Cp[p] = C;
+      static_assert(sizeof(Mat3d) == 9 * sizeof(double) && sizeof(Vec3d) == 3 * sizeof(double), "packed");
+      streamDoubles<9>(&Cp[p](0, 0), &C(0, 0));
       // Step 7: advection.
       Vec3d xn = x + dt * vp;
       if (!(isFinite(xn) && isFinite(vp) && std::isfinite(Jp[p]))) {
@@ -291,10 +318,11 @@ struct G2PKernel {
           ++acc.outside;
         }
       }
-      V[p] = vp;
+      streamDoubles<3>(&V[p].x, &vp.x);
       X[p] = xn;
       acc.maxSpeed2 = std::max(acc.maxSpeed2, norm2(vp));
     }
+    fenceStreamed();
   }
 };
 
