@@ -76,6 +76,8 @@ inline void streamDoubles(double* dst, const double* src) {
   std::memcpy(dst, src, N * sizeof(double));
 #endif
 }
+static_assert(sizeof(Mat3d) == 9 * sizeof(double) && sizeof(Vec3d) == 3 * sizeof(double),
+              "Mat3d and Vec3d: packed doubles (streamDoubles)");
 inline void fenceStreamed() {
 #if defined(__x86_64__)
   _mm_sfence();
@@ -296,7 +298,6 @@ struct G2PKernel {
         if (mp.elastoplastic) Fp[p] = vonMisesReturn(Fp[p], mp.mu, mp.yieldStress);
         Jp[p] = determinant(Fp[p]);
       }
-      static_assert(sizeof(Mat3d) == 9 * sizeof(double) && sizeof(Vec3d) == 3 * sizeof(double), "packed");
       streamDoubles<9>(&Cp[p](0, 0), &C(0, 0));
       // Step 7: advection.
       Vec3d xn = x + dt * vp;

@@ -65,7 +65,7 @@ struct BinKernel {
   Vec3d o;              // grid origin, m
   double invDx = 0;     // 1/m
   Index3 bd;            // stencil bases per axis
-  MpmGridLayout bins;   // the layout's bins (binIndex)
+  MpmGridLayout bins;   // the layout's bins (MpmGridLayout::binLayout)
   std::uint64_t* key = nullptr;
   std::uint32_t* rank = nullptr;
   std::atomic<std::uint32_t>* binSize = nullptr;
@@ -189,8 +189,7 @@ bool MpmGrid::binPass1(const MpmParticles& particles, std::size_t materialCount,
   kernel.o = spec_.origin;
   kernel.invDx = 1.0 / spec_.dx;
   kernel.bd = baseDims_;
-  kernel.bins = {layout_.lo, {layout_.dims.i - 2, layout_.dims.j - 2, layout_.dims.k - 2}};
-  if (layout_.empty()) kernel.bins = MpmGridLayout{};
+  kernel.bins = layout_.binLayout();
   kernel.key = key_.data();
   kernel.rank = rank_.data();
   kernel.binSize = binSizes();
@@ -268,7 +267,7 @@ void MpmGrid::bin(const MpmParticles& particles, std::size_t materialCount) {
     if (!fits || !layout_.holds(needLo, needHi) || layout_.count() > 8 * wanted.count()) {
       if (!layout_.empty()) {
         // Give back the slots pass 1 took (bins of the layout within the box).
-        const MpmGridLayout had{layout_.lo, {layout_.dims.i - 2, layout_.dims.j - 2, layout_.dims.k - 2}};
+        const MpmGridLayout had = layout_.binLayout();
         const Index3 lo{std::max(boxLo.i, had.lo.i), std::max(boxLo.j, had.lo.j), std::max(boxLo.k, had.lo.k)};
         const Index3 hi{std::min(boxHi.i + 1, had.lo.i + had.dims.i), std::min(boxHi.j + 1, had.lo.j + had.dims.j),
                         std::min(boxHi.k + 1, had.lo.k + had.dims.k)};
@@ -299,7 +298,7 @@ void MpmGrid::bin(const MpmParticles& particles, std::size_t materialCount) {
   binDims_ = {boxHi.i - boxLo.i + 1, boxHi.j - boxLo.j + 1, boxHi.k - boxLo.k + 1};
   activeLo_ = binLo_;
   activeHi_ = {boxHi.i + 3, boxHi.j + 3, boxHi.k + 3};
-  const MpmGridLayout bins{layout_.lo, {layout_.dims.i - 2, layout_.dims.j - 2, layout_.dims.k - 2}};
+  const MpmGridLayout bins = layout_.binLayout();
 
   // Each row's extent of bins (pass 1's atomics, reset here: zero between
   // calls) and the first offset slot of its bins.

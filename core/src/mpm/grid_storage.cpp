@@ -87,11 +87,6 @@ namespace {
 
 bool emptyBox(Index3 lo, Index3 hi) { return lo.i >= hi.i || lo.j >= hi.j || lo.k >= hi.k; }
 
-// The layout of the stencil bins of node layout `nodes`.
-MpmGridLayout binLayoutOf(const MpmGridLayout& nodes) {
-  return {nodes.lo, {nodes.dims.i - 2, nodes.dims.j - 2, nodes.dims.k - 2}};
-}
-
 // Zeroes the pieces [i0, i1) of each row (j, k) of box [lo, hi) that
 // `zeroRow(j, k, zero)` passes to zero(i0, i1), in an array laid out as
 // `at` (x fastest); `keep(j, k, f, e)` gives the run [f, e) of row (j, k)
@@ -172,12 +167,12 @@ double mpmHeldBytes(const MpmGridLayout& layout, Index3 binLo, int nbj, int nbk,
   PageCount nodes(sizeof(MpmNode), page), velocity(sizeof(Vec3d), page), colourField(sizeof(double), page),
       bins(sizeof(std::uint32_t), page);
   double binCount = 0;
-  const MpmGridLayout bins_ = binLayoutOf(layout);
+  const MpmGridLayout binLayout = layout.binLayout();
   for (int bk = 0; bk < nbk; ++bk)
     for (int bj = 0; bj < nbj; ++bj) {
       const std::size_t row = std::size_t(bj) + std::size_t(nbj) * std::size_t(bk);
       if (rowEnd[row] <= rowFirst[row]) continue;
-      const std::size_t at = bins_.index(int(rowFirst[row]), binLo.j + bj, binLo.k + bk);
+      const std::size_t at = binLayout.index(int(rowFirst[row]), binLo.j + bj, binLo.k + bk);
       bins.add(at, at + (rowEnd[row] - rowFirst[row]));
       binCount += double(rowEnd[row] - rowFirst[row]);
     }
@@ -267,7 +262,7 @@ void MpmGrid::releaseBinsOutside(const MpmGridLayout& was, Index3 lo, Index3 hi,
     zero(lo.i, std::min(hi.i, c));
     zero(std::max(lo.i, d), hi.i);
   };
-  zeroRowPieces(binSize_, binLayoutOf(was), lo, hi, zeroRow, binLayoutOf(layout_), keep);
+  zeroRowPieces(binSize_, was.binLayout(), lo, hi, zeroRow, layout_.binLayout(), keep);
 }
 
 void MpmGrid::setWholeLayout(bool whole) {

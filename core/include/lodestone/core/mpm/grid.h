@@ -92,7 +92,7 @@ struct GridToParticleReport {
 
 /// Where an MpmGrid keeps its nodes: the box [lo, lo + dims) of the grid's
 /// nodes, x fastest, node (i, j, k) at index(i, j, k) of each node array.
-/// Its stencil bins (base nodes) are the box [lo, lo + dims - 2), binIndex.
+/// Its stencil bins (base nodes) are the box [lo, lo + dims - 2), binLayout.
 /// The whole grid, or a box that follows the material (mpmGridLayout), so
 /// that the arrays' rows are as long as the material's box is wide: material
 /// thin along x then packs its rows into shared pages.
@@ -114,10 +114,11 @@ struct MpmGridLayout {
   std::size_t index(int i, int j, int k) const {
     return std::size_t(i - lo.i) + std::size_t(dims.i) * (std::size_t(j - lo.j) + std::size_t(dims.j) * std::size_t(k - lo.k));
   }
-  /// Index of stencil bin (base node) (bi, bj, bk), in [lo, lo + dims - 2).
-  std::size_t binIndex(int bi, int bj, int bk) const {
-    return std::size_t(bi - lo.i) +
-           std::size_t(dims.i - 2) * (std::size_t(bj - lo.j) + std::size_t(dims.j - 2) * std::size_t(bk - lo.k));
+  /// The layout of its stencil bins (base nodes): [lo, lo + dims - 2), none
+  /// for an empty one. binLayout().index(bi, bj, bk) is bin (bi, bj, bk)'s.
+  MpmGridLayout binLayout() const {
+    if (empty()) return {};
+    return {lo, {dims.i - 2, dims.j - 2, dims.k - 2}};
   }
   friend bool operator==(const MpmGridLayout& a, const MpmGridLayout& b) { return a.lo == b.lo && a.dims == b.dims; }
 };
