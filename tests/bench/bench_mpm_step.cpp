@@ -13,6 +13,9 @@
 // difference. With --surface-tension SIGMA a further table times a resting
 // fluid drop (no gravity) with sigma = 0 and with SIGMA (N/m) at the same dt:
 // the price of the capillary stress (colour scatter and gradient pass) is the
+// difference. With --slide V a further table times an elastic block (no
+// gravity) at rest and sliding along x at V m/s at the same dt: the price of
+// the motion, the grid's layouts after the block among it, is the
 // difference. Prints tables and writes CSV. Not a test: timings are
 // machine-dependent.
 //
@@ -219,6 +222,38 @@ double dropRun(double particles, double sigma, double dt, int steps, int nodes, 
   return total / steps;
 }
 
+/// Mean seconds per substep of an elastic block (about `particles`, no
+/// gravity) sliding along x at `speed` (m/s) from the domain's low x side, at
+/// the substep dt (s), and that dt in *dtOut: the solver's grid, laid out
+/// over the material's box, is laid out anew each time the block leaves it.
+double slideRun(double particles, double speed, int steps, int nodes, bool dense, double* dtOut) {
+  MpmSettings s;
+  s.grid.dx = 7.8e-3;
+  s.grid.dims = {nodes, nodes, nodes};
+  s.gravity = {0, 0, 0};
+  s.denseGrid = dense;
+  MpmSolver solver(s);
+  const std::uint32_t m = solver.addMaterial(neoHookeanSolid(1e5, 0.3, 1000));
+  const int n = std::max(2, int(std::lround(std::cbrt(particles / 8.0))));
+  const double half = 0.5 * n * s.grid.dx;
+  const Vec3d lo = solver.domainLower(), hi = solver.domainUpper();
+  require(2 * half < 0.6 * (hi.x - lo.x), "bench: a sliding block of ", particles, " particles does not fit a ", nodes,
+          "^3 grid");
+  EmitterSettings e;
+  e.velocity = {speed, 0, 0};
+  solver.emit(EmitterShape::box(Pose::at({lo.x + half + 4 * s.grid.dx, 0.5 * (lo.y + hi.y), 0.5 * (lo.z + hi.z)}),
+                                {half, half, half}),
+              m, e);
+  // The slowest speed's dt for every speed, so that only the motion differs.
+  const double dt = std::min(solver.suggestedDt(), 0.25 * s.grid.dx / 20.0);
+  for (int w = 0; w < 2; ++w) solver.step(dt);
+  double total = 0;
+  for (int k = 0; k < steps; ++k) total += solver.step(dt).secondsTotal;
+  require(solver.particles().size() > 0, "bench: the sliding block left the grid");
+  *dtOut = dt;
+  return total / steps;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -228,7 +263,7 @@ int main(int argc, char** argv) {
     bool dense = false;
     std::string csvPath = "bench_mpm_step.csv", collider = "none";
     std::vector<double> bodies;
-    double sigma = 0;
+    double sigma = 0, slide = 0;
     CLI::App app("lodestone-bench-mpm-step: times one MLS-MPM substep (no magnetism)", "lodestone-bench-mpm-step");
     cli::helpLayout(app, 28);
     cli::addNumberList(app, "--particles", counts, "target particle counts, 8 per cell (each 8..1e9)");
@@ -261,6 +296,10 @@ int main(int argc, char** argv) {
     cli::addNumber(app, "--surface-tension", sigma,
                    "also time a resting fluid drop without and with this surface tension (N/m, in (0, 10])")
         ->type_name("SIGMA");
+    cli::addNumber(app, "--slide", slide,
+                   "also time an elastic block sliding along x at this speed (m/s, in (0, 20]) against the same "
+                   "block at rest, at one dt")
+        ->type_name("V");
     app.add_flag("--dense", dense, "hold the MPM grid whole (MpmSettings::denseGrid) instead of the runs the particles reach");
     app.add_option("--csv", csvPath, "CSV output")->type_name("FILE")->capture_default_str();
     if (const std::optional<int> code = cli::parse(app, argc, argv)) return *code;
@@ -309,6 +348,23 @@ int main(int argc, char** argv) {
             << ",kinematic,0," << 1e3 * k << ",,,,,," << threads << '\n';
         csv << "fluid+bodies," << counts.front() << ',' << nodes << ',' << steps << ",0," << reorder << ",spheres:" << nb
             << ",dynamic,0," << 1e3 * d << ",,,,,," << threads << '\n';
+      }
+    }
+    if (slide != 0) {
+      require(std::isfinite(slide) && slide > 0 && slide <= 20, "--slide: ", slide, " m/s is not in (0, 20]");
+      std::printf("\nan elastic block sliding along x, no gravity: ms per substep%s\n%10s %10s %14s %10s %10s\n",
+                  dense ? " (grid held whole)" : "", "particles", "m/s", "cells/substep", "ms/step", "ratio");
+      for (double c : counts) {
+        double dt = 0;
+        const double t0 = slideRun(c, 0.0, steps, nodes, dense, &dt);
+        const double t1 = slideRun(c, slide, steps, nodes, dense, &dt);
+        std::printf("%10.3g %10s %14s %10.2f\n%10s %10.3g %14.3f %10.2f %9.2fx\n", c, "0", "0", 1e3 * t0, "", slide,
+                    slide * dt / 7.8e-3, 1e3 * t1, t1 / t0);
+        std::fflush(stdout);
+        csv << "slide," << c << ',' << nodes << ',' << steps << ",0," << reorder << ",speed:0,-," << dt << ','
+            << 1e3 * t0 << ",,,,,," << threads << ",,,,," << int(dense) << '\n';
+        csv << "slide," << c << ',' << nodes << ',' << steps << ",0," << reorder << ",speed:" << slide << ",-," << dt
+            << ',' << 1e3 * t1 << ",,,,,," << threads << ",,,,," << int(dense) << '\n';
       }
     }
     if (sigma != 0) {
