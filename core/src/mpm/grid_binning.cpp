@@ -260,11 +260,9 @@ void MpmGrid::bin(const MpmParticles& particles, std::size_t materialCount) {
   const bool fits = binPass1(particles, materialCount, boxLo, boxHi);
   if (np > 0 && !wholeLayout_) {
     const MpmGridLayout wanted = mpmGridLayout(spec_, boxLo, boxHi);
-    // The nodes the particles reach and one more each side (the colour's Hessian reads them).
-    const Index3 needLo{std::max(0, boxLo.i - 1), std::max(0, boxLo.j - 1), std::max(0, boxLo.k - 1)};
-    const Index3 needHi{std::min(spec_.dims.i, boxHi.i + 4), std::min(spec_.dims.j, boxHi.j + 4),
-                        std::min(spec_.dims.k, boxHi.k + 4)};
-    if (!fits || !layout_.holds(needLo, needHi) || layout_.count() > 8 * wanted.count()) {
+    const MpmGridLayout reach = mpmGridReach(spec_, boxLo, boxHi);
+    const Index3 reachHi{reach.lo.i + reach.dims.i, reach.lo.j + reach.dims.j, reach.lo.k + reach.dims.k};
+    if (!fits || !layout_.holds(reach.lo, reachHi) || layout_.count() > 8 * wanted.count()) {
       if (!layout_.empty()) {
         // Give back the slots pass 1 took (bins of the layout within the box).
         const MpmGridLayout had = layout_.binLayout();

@@ -69,18 +69,24 @@ void MpmGrid::zeroBox(Index3 lo, Index3 hi) {
   });
 }
 
+MpmGridLayout mpmGridReach(const GridSpec& spec, Index3 baseLo, Index3 baseHi) {
+  const Index3 lo{std::max(0, baseLo.i - 1), std::max(0, baseLo.j - 1), std::max(0, baseLo.k - 1)};
+  const Index3 hi{std::min(spec.dims.i, baseHi.i + 4), std::min(spec.dims.j, baseHi.j + 4),
+                  std::min(spec.dims.k, baseHi.k + 4)};
+  return {lo, {hi.i - lo.i, hi.j - lo.j, hi.k - lo.k}};
+}
+
 MpmGridLayout mpmGridLayout(const GridSpec& spec, Index3 baseLo, Index3 baseHi) {
-  MpmGridLayout out;
+  const MpmGridLayout reach = mpmGridReach(spec, baseLo, baseHi);
+  // Along x the margin shares the rows' pages with the material; along y
+  // and z it takes no memory until material reaches it.
+  int lo[3], extent[3];
   for (int a = 0; a < 3; ++a) {
-    const int lo = std::max(0, baseLo[a] - 1), hi = std::min(spec.dims[a], baseHi[a] + 4);  // nodes [lo, hi)
-    // Along x the margin shares the rows' pages with the material; along y
-    // and z it takes no memory until material reaches it.
-    const int margin = a == 0 ? 1 + (hi - lo) / 16 : 2 + (hi - lo) / 8;
-    const int l = std::max(0, lo - margin), h = std::min(spec.dims[a], hi + margin);
-    (a == 0 ? out.lo.i : a == 1 ? out.lo.j : out.lo.k) = l;
-    (a == 0 ? out.dims.i : a == 1 ? out.dims.j : out.dims.k) = h - l;
+    const int margin = a == 0 ? 1 + reach.dims[a] / 16 : 2 + reach.dims[a] / 8;
+    lo[a] = std::max(0, reach.lo[a] - margin);
+    extent[a] = std::min(spec.dims[a], reach.lo[a] + reach.dims[a] + margin) - lo[a];
   }
-  return out;
+  return {{lo[0], lo[1], lo[2]}, {extent[0], extent[1], extent[2]}};
 }
 
 namespace {

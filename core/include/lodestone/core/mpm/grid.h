@@ -123,10 +123,15 @@ struct MpmGridLayout {
   friend bool operator==(const MpmGridLayout& a, const MpmGridLayout& b) { return a.lo == b.lo && a.dims == b.dims; }
 };
 
+/// The nodes a P2G of particles whose stencil bases span [baseLo, baseHi]
+/// (inclusive, grid indices) reads or writes: those the stencils reach,
+/// [baseLo, baseHi + 3), and one more each side (the colour field's Hessian
+/// reads them), within the grid. A layout must hold them.
+MpmGridLayout mpmGridReach(const GridSpec& spec, Index3 baseLo, Index3 baseHi);
+
 /// The layout an MpmGrid on `spec` takes for particles whose stencil bases
-/// span [baseLo, baseHi] (inclusive, grid indices): the nodes they reach,
-/// [baseLo, baseHi + 3), one more each side (the colour field's Hessian
-/// reads them) and a margin each side, so that moving material keeps its
+/// span [baseLo, baseHi] (inclusive, grid indices): their mpmGridReach and
+/// a margin each side, so that moving material keeps its
 /// layout for a while, all within the grid: along x 1 + a sixteenth of that
 /// extent (it shares the rows' pages), along y and z 2 + an eighth (it takes
 /// no memory until material reaches it).
@@ -345,7 +350,7 @@ class MpmGrid {
   PageArray<std::uint32_t> rowLow_, rowHigh_;
   std::vector<std::uint64_t> key_;   // per particle: base node, 21 bits per axis
   std::vector<std::uint32_t> rank_;  // per particle: slot in its bin (scheduling-dependent, re-sorted)
-  // Per base node of the layout (MpmGridLayout::binIndex): the particles in
+  // Per base node of the layout (MpmGridLayout::binLayout): the particles in
   // each bin, zero between calls; used as std::atomic<std::uint32_t> (binSizes()).
   PageArray<std::uint32_t> binSize_;
   std::atomic<std::uint32_t>* binSizes() { return reinterpret_cast<std::atomic<std::uint32_t>*>(binSize_.data()); }
