@@ -332,6 +332,7 @@ void MpmGrid::bin(const MpmParticles& particles, std::size_t materialCount) {
       tbb::blocked_range<std::size_t>(0, rows, 64), std::uint32_t(0),
       [&](const tbb::blocked_range<std::size_t>& r, std::uint32_t sum, bool isFinal) {
         for (std::size_t row = r.begin(); row != r.end(); ++row) {
+          if (rowEnd_[row] <= rowFirst_[row]) continue;  // an empty row: no bins (its first bin may lie before the layout)
           const std::size_t bj = std::size_t(binLo_.j) + row % std::size_t(binDims_.j);
           const std::size_t bk = std::size_t(binLo_.k) + row / std::size_t(binDims_.j);
           std::atomic<std::uint32_t>* sizes = binSize + bins.index(int(rowFirst_[row]), int(bj), int(bk));
