@@ -4,7 +4,6 @@
 #include <cmath>
 #include <limits>
 
-#include "lodestone/core/base/bspline.h"
 #include "lodestone/core/base/constants.h"
 #include "lodestone/core/base/error.h"
 #include "lodestone/core/base/number_text.h"
@@ -31,7 +30,7 @@ StageDecision mpmGridDecision(const MpmSolver& solver) {
   Index3 lo{g.dims.i, g.dims.j, g.dims.k}, hi{-1, -1, -1};
   for (const Vec3d& x : p.x)
     for (int a = 0; a < 3; ++a) {
-      const int b = int(std::clamp(quadraticBaseFloor((x[a] - g.origin[a]) / g.dx), 0.0, double(g.dims[a] - 3)));
+      const int b = mpmStencilBase(g, x[a], a);
       (a == 0 ? lo.i : a == 1 ? lo.j : lo.k) = std::min(lo[a], b);
       (a == 0 ? hi.i : a == 1 ? hi.j : hi.k) = std::max(hi[a], b);
     }

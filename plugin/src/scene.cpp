@@ -6,7 +6,6 @@
 #include <limits>
 #include <utility>
 
-#include "lodestone/core/base/bspline.h"
 #include "lodestone/core/base/error.h"
 #include "lodestone/core/base/hash.h"
 #include "lodestone/core/planner/accuracy_preset.h"
@@ -391,9 +390,7 @@ struct RunMemory {
 template <typename BoxOf>
 RunMemory mpmRunMemory(const GridSpec& g, std::size_t count, bool colour, const BoxOf& boxOf) {
   const int bd[3] = {g.dims.i - 2, g.dims.j - 2, g.dims.k - 2};
-  const auto base = [&](double x, int a) {
-    return int(std::clamp(quadraticBaseFloor((x - g.origin[a]) / g.dx), 0.0, double(bd[a] - 1)));
-  };
+  const auto base = [&](double x, int a) { return mpmStencilBase(g, x, a); };
   int lo[3] = {bd[0], bd[1], bd[2]}, hi[3] = {-1, -1, -1};
   Vec3d blo, bhi;
   for (std::size_t b = 0; b < count; ++b) {

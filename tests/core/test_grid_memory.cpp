@@ -293,7 +293,20 @@ TEST(MpmGridLayoutFollowing, MovingLiquidDepositsAndGathersAsTheWholeGrid) {
     const Vec3d step = (s < 120 ? 1.0 : -1.0) * Vec3d{0.006, 0.005, 0.0055};
     follow.particleToGrid(p, mats, 1e-4);
     whole.particleToGrid(p, mats, 1e-4);
-    if (!(follow.layout() == last)) ++layouts;
+    if (!(follow.layout() == last)) {
+      ++layouts;
+      // Laid out anew: the layout of the particles' stencil bases.
+      Index3 blo{g.dims.i, g.dims.j, g.dims.k}, bhi{-1, -1, -1};
+      for (const Vec3d& x : p.x) {
+        const int b[3] = {mpmStencilBase(g, x.x, 0), mpmStencilBase(g, x.y, 1), mpmStencilBase(g, x.z, 2)};
+        blo = {std::min(blo.i, b[0]), std::min(blo.j, b[1]), std::min(blo.k, b[2])};
+        bhi = {std::max(bhi.i, b[0]), std::max(bhi.j, b[1]), std::max(bhi.k, b[2])};
+      }
+      const MpmGridLayout want = mpmGridLayout(g, blo, bhi);
+      ASSERT_TRUE(follow.layout() == want) << "call " << s << ": laid out from (" << follow.layout().lo.i << ", "
+                                           << follow.layout().lo.j << ", " << follow.layout().lo.k << "), the bases give ("
+                                           << want.lo.i << ", " << want.lo.j << ", " << want.lo.k << ")";
+    }
     last = follow.layout();
     ASSERT_TRUE(follow.layout().holds(follow.activeLo(), follow.activeHi()));
     const Index3 lo = whole.activeLo(), hi = whole.activeHi();

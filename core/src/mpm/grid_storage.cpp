@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "grid_kernels.h"
+#include "lodestone/core/base/bspline.h"
 
 #include "lodestone/core/base/error.h"
 
@@ -87,6 +88,11 @@ MpmGridLayout mpmGridLayout(const GridSpec& spec, Index3 baseLo, Index3 baseHi) 
     extent[a] = std::min(spec.dims[a], reach.lo[a] + reach.dims[a] + margin) - lo[a];
   }
   return {{lo[0], lo[1], lo[2]}, {extent[0], extent[1], extent[2]}};
+}
+
+int mpmStencilBase(const GridSpec& spec, double x, int axis) {
+  const double u = (x - spec.origin[axis]) / spec.dx;
+  return int(std::clamp(quadraticBaseFloor(u), 0.0, double(spec.dims[axis] - 3)));
 }
 
 namespace {

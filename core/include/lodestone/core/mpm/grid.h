@@ -137,6 +137,12 @@ MpmGridLayout mpmGridReach(const GridSpec& spec, Index3 baseLo, Index3 baseHi);
 /// no memory until material reaches it).
 MpmGridLayout mpmGridLayout(const GridSpec& spec, Index3 baseLo, Index3 baseHi);
 
+/// The stencil base node (quadraticBaseFloor) along `axis` (0, 1, 2 for x,
+/// y, z) of a point whose coordinate on that axis is x (m), clamped to the
+/// grid's bins [0, dims - 3]: the bin a particle there lands in, and the
+/// bounds of a box's bins for mpmGridLayout.
+int mpmStencilBase(const GridSpec& spec, double x, int axis);
+
 /// An MpmGrid holds fewer stencil bins (base nodes: dims - 2 per axis) than
 /// this, and fewer particles: its binning counts them in 32 bits.
 constexpr std::uint64_t kMpmGridCountLimit = 0xFFFFFFFFu;  // 2^32 - 1
