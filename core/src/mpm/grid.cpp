@@ -173,6 +173,19 @@ struct DepositKernel {
     // arrays are asked for kAhead particles early, so that their cache
     // lines arrive while the ones before are deposited.
     const std::uint32_t* rowLast = sorted + offsets[rowStart[row] + std::size_t(last - first)] - 1;
+    constexpr std::ptrdiff_t kAhead = 8;
+    const auto prefetch = [&](std::size_t q) __attribute__((always_inline)) {
+      __builtin_prefetch(&Cp[q]);
+      __builtin_prefetch(reinterpret_cast<const char*>(&Cp[q]) + 64);
+      __builtin_prefetch(&Fp[q]);
+      __builtin_prefetch(reinterpret_cast<const char*>(&Fp[q]) + 64);
+      __builtin_prefetch(&X[q]);
+      __builtin_prefetch(&V[q]);
+    };
+    // The row's first kAhead particles, asked for together: a short row
+    // (material thin along x) would otherwise wait on each in turn.
+    const std::uint32_t* rowFirstParticle = sorted + offsets[rowStart[row]];
+    for (const std::uint32_t* q = rowFirstParticle; q <= rowLast && q - rowFirstParticle < kAhead; ++q) prefetch(*q);
     for (int bi = first; bi < last; ++bi) {
       const std::size_t bin = rowStart[row] + std::size_t(bi - first);
       const std::uint32_t* it = sorted + offsets[bin];
@@ -181,16 +194,7 @@ struct DepositKernel {
       MpmNode* corner = nodes + layout.index(bi, bj, bk);
       for (; it != end; ++it) {
         const std::size_t p = *it;
-        {
-          constexpr std::ptrdiff_t kAhead = 8;
-          const std::size_t q = rowLast - it > kAhead ? it[kAhead] : *rowLast;
-          __builtin_prefetch(&Cp[q]);
-          __builtin_prefetch(reinterpret_cast<const char*>(&Cp[q]) + 64);
-          __builtin_prefetch(&Fp[q]);
-          __builtin_prefetch(reinterpret_cast<const char*>(&Fp[q]) + 64);
-          __builtin_prefetch(&X[q]);
-          __builtin_prefetch(&V[q]);
-        }
+        prefetch(rowLast - it > kAhead ? it[kAhead] : *rowLast);
         const Vec3d x = X[p];
         const double ux = (x.x - o.x) * invDx, uy = (x.y - o.y) * invDx, uz = (x.z - o.z) * invDx;
         const QuadraticWeights<double> wx = quadraticWeightsAt(ux, bi);
