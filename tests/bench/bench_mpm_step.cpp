@@ -61,6 +61,8 @@ using namespace lodestone;
 
 namespace {
 
+constexpr double kDx = 7.8e-3;  // m, the grid spacing of every case
+
 struct Timing {
   std::size_t particles = 0;
   int steps = 0;
@@ -119,7 +121,7 @@ Timing run(bool fluid, double targetParticles, int steps, int nodes, int reorder
   MpmSettings s;
   s.reorderInterval = reorder;
   s.denseGrid = dense;
-  s.grid.dx = 7.8e-3;
+  s.grid.dx = kDx;
   s.grid.dims = {nodes, nodes, nodes};
   s.colliderProjection = projection;
   MpmSolver solver(s);
@@ -168,7 +170,7 @@ Timing run(bool fluid, double targetParticles, int steps, int nodes, int reorder
 /// `bodies` spheres of 1 cm radius on a lattice inside it, dynamic or kinematic.
 double bodiesRun(double particles, int bodies, bool dynamic, int steps, int nodes) {
   MpmSettings s;
-  s.grid.dx = 7.8e-3;
+  s.grid.dx = kDx;
   s.grid.dims = {nodes, nodes, nodes};
   MpmSolver solver(s);
   const std::uint32_t m = solver.addMaterial(viscousFluid(1.0, 1e5, 1000));
@@ -199,7 +201,7 @@ double bodiesRun(double particles, int bodies, bool dynamic, int steps, int node
 /// dt (s); P2G (including the capillary passes) in *p2g.
 double dropRun(double particles, double sigma, double dt, int steps, int nodes, double* p2g) {
   MpmSettings s;
-  s.grid.dx = 7.8e-3;
+  s.grid.dx = kDx;
   s.grid.dims = {nodes, nodes, nodes};
   s.gravity = {0, 0, 0};
   MpmSolver solver(s);
@@ -228,7 +230,7 @@ double dropRun(double particles, double sigma, double dt, int steps, int nodes, 
 /// over the material's box, is laid out anew each time the block leaves it.
 double slideRun(double particles, double speed, int steps, int nodes, bool dense, double* dtOut) {
   MpmSettings s;
-  s.grid.dx = 7.8e-3;
+  s.grid.dx = kDx;
   s.grid.dims = {nodes, nodes, nodes};
   s.gravity = {0, 0, 0};
   s.denseGrid = dense;
@@ -359,7 +361,7 @@ int main(int argc, char** argv) {
         const double t0 = slideRun(c, 0.0, steps, nodes, dense, &dt);
         const double t1 = slideRun(c, slide, steps, nodes, dense, &dt);
         std::printf("%10.3g %10s %14s %10.2f\n%10s %10.3g %14.3f %10.2f %9.2fx\n", c, "0", "0", 1e3 * t0, "", slide,
-                    slide * dt / 7.8e-3, 1e3 * t1, t1 / t0);
+                    slide * dt / kDx, 1e3 * t1, t1 / t0);
         std::fflush(stdout);
         csv << "slide," << c << ',' << nodes << ',' << steps << ",0," << reorder << ",speed:0,-," << dt << ','
             << 1e3 * t0 << ",,,,,," << threads << ",,,,," << int(dense) << '\n';
