@@ -382,13 +382,14 @@ namespace {
 // boxOf(b, lo, hi) gives box b, a point's box is the point): the stencil
 // bases of each box fill their rows of bins, whose node runs mpmNodeRuns
 // gives as the grid takes them. Their nodes, and the bytes the grid's pages
-// take for them in the layout the grid takes for them (mpmHeldBytes; with
+// take for them, packed or (MpmSettings::denseGrid) in the whole grid, with
+// the bin sizes in the layout the grid takes for them (mpmHeldBytes; with
 // the colour field when `colour`).
 struct RunMemory {
   double nodes = 0, bytes = 0;
 };
 template <typename BoxOf>
-RunMemory mpmRunMemory(const GridSpec& g, std::size_t count, bool colour, const BoxOf& boxOf) {
+RunMemory mpmRunMemory(const GridSpec& g, std::size_t count, bool colour, bool packed, const BoxOf& boxOf) {
   const int bd[3] = {g.dims.i - 2, g.dims.j - 2, g.dims.k - 2};
   const auto base = [&](double x, int a) { return mpmStencilBase(g, x, a); };
   int lo[3] = {bd[0], bd[1], bd[2]}, hi[3] = {-1, -1, -1};
@@ -417,10 +418,11 @@ RunMemory mpmRunMemory(const GridSpec& g, std::size_t count, bool colour, const 
   mpmNodeRuns(first.data(), end.data(), nbj, nbk, runFirst.data(), runEnd.data());
   RunMemory m;
   for (std::size_t q = 0; q < runFirst.size(); ++q) m.nodes += double(runEnd[q] - runFirst[q]);
-  // The layout the grid takes for this material (mpmGridLayout).
-  const MpmGridLayout layout = mpmGridLayout(g, {lo[0], lo[1], lo[2]}, {hi[0], hi[1], hi[2]});
+  // The layout the grid takes for this material (mpmGridLayout, or whole).
+  const MpmGridLayout layout = packed ? mpmGridLayout(g, {lo[0], lo[1], lo[2]}, {hi[0], hi[1], hi[2]})
+                                      : MpmGridLayout{{0, 0, 0}, g.dims};
   m.bytes = mpmHeldBytes(layout, {lo[0], lo[1], lo[2]}, nbj, nbk, first.data(), end.data(), runFirst.data(),
-                         runEnd.data(), colour);
+                         runEnd.data(), colour, packed);
   return m;
 }
 
@@ -433,6 +435,7 @@ MemoryCounts sceneMemory(const Scene& scene, const MpmSolver* solver) {
   // solver's particles), the whole grid when emitters will add material.
   const bool emitters = solver ? solver->emitterCount() > 0 : !scene.emitters.empty();
   const GridSpec& grid = scene.settings.grid;
+  const bool packed = !scene.settings.denseGrid;  // MpmSolver's grid packs its runs (mpm/grid.h)
   const bool colour = std::any_of(scene.materials.begin(), scene.materials.end(),
                                   [](const MpmMaterial& m) { return m.hasSurfaceTension(); });
   // With a partition: this process's part (its window of the grid, which the
@@ -446,9 +449,9 @@ MemoryCounts sceneMemory(const Scene& scene, const MpmSolver* solver) {
     runs.nodes = double(whi.i - wlo.i) * double(whi.j - wlo.j) * double(whi.k - wlo.k);
   } else if (solver) {
     const std::vector<Vec3d>& x = solver->particles().x;
-    runs = mpmRunMemory(grid, x.size(), colour, [&](std::size_t p, Vec3d& lo, Vec3d& hi) { lo = hi = x[p]; });
+    runs = mpmRunMemory(grid, x.size(), colour, packed, [&](std::size_t p, Vec3d& lo, Vec3d& hi) { lo = hi = x[p]; });
   } else {
-    runs = mpmRunMemory(grid, scene.bodies.size(), colour,
+    runs = mpmRunMemory(grid, scene.bodies.size(), colour, packed,
                         [&](std::size_t b, Vec3d& lo, Vec3d& hi) { scene.bodies[b].shape.worldBounds(lo, hi); });
   }
   c.mpmNodes = runs.nodes;

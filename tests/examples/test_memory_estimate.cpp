@@ -209,31 +209,32 @@ fs::path slabScene(const fs::path& dir, const std::array<double, 3>& half, const
 
 }  // namespace
 
-TEST(MemoryEstimate, ASheetSlantedAcrossXCostsAPageARowOfEachArray) {
+TEST(MemoryEstimate, ASheetSlantedAcrossXCostsItsRuns) {
   // A sheet 2 cells thick, 250 x 250 cells across, one point a cell, in a
-  // 257^3 grid, its normal at 45 degrees between x and z: the grid's layout
-  // is the sheet's box, about 180 nodes along x, and each x-row's run of
-  // about 5 nodes takes a page of the node data and one of the velocities
-  // (rows are 5.6 KiB apart), about 0.4 GB where 64 B a node of the runs
-  // would count 30 MB. The estimate counts the pages (mpmHeldBytes), and
-  // the CLI says why they cost that.
+  // 257^3 grid, its normal at 45 degrees between x and z: each x-row's run
+  // is about 5 nodes of a box about 180 nodes wide along x. The runs are
+  // packed (mpm/grid.h), so the grid costs its runs' 56 B a node and the
+  // bins' sizes over the sheet's box, about 34 MB, where a page a row of
+  // each node array would be 0.4 GB. Estimated within 20% (mpmHeldBytes),
+  // and no note.
   const fs::path dir = scratch("sheet");
   const Memory m = run(slabScene(dir, {90, 125, 1}, {1, 0, 1}), dir, "--no-png --no-ply");
-  expectClose(m, m.mpmGrid, 0.5);
+  expectClose(m, m.mpmGrid, 0.2);
+  EXPECT_LT(m.mpmGrid, 60e6) << "the sheet's runs took a page each";
   std::ifstream logFile(dir / "log.txt");
   const std::string log((std::istreambuf_iterator<char>(logFile)), std::istreambuf_iterator<char>());
-  EXPECT_NE(log.find("short against the material's box along x"), std::string::npos) << log;
+  EXPECT_EQ(log.find("note: the MPM grid"), std::string::npos) << log;
 }
 
 TEST(MemoryEstimate, APlateThinAlongXCostsItsBox) {
   // A plate 2 cells thick along x, 250 x 250 cells across, one point a cell,
-  // in a 257^3 grid: the grid's layout is the plate's box, 8 nodes along x,
-  // so that its x-rows share pages (about 30 MB; a page a row of each array
-  // in a layout as wide as the grid would be 0.5 GB). Estimated within 20%,
-  // and no note.
+  // in a 257^3 grid: its x-rows' runs of 5 nodes are packed, and the bins'
+  // sizes are laid out over the plate's box, 8 nodes along x (about 20 MB;
+  // a page a row of each array in rows as wide as the grid would be
+  // 0.5 GB). Estimated within 20%, and no note.
   const fs::path dir = scratch("plate");
   const Memory m = run(slabScene(dir, {1, 125, 125}, {0, 0, 1}), dir, "--no-png --no-ply");
-  expectClose(m, m.mpmGrid, 0.15);
+  expectClose(m, m.mpmGrid, 0.1);
   EXPECT_LT(m.mpmGrid, 60e6) << "the plate's rows took a page each";
   std::ifstream logFile(dir / "log.txt");
   const std::string log((std::istreambuf_iterator<char>(logFile)), std::istreambuf_iterator<char>());

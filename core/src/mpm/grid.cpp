@@ -112,6 +112,33 @@ inline void apicLine<Lanes4>(const Vec3d* line, Lanes4& n0, Lanes4& n1, Lanes4& 
 namespace {
 
 using Clock = std::chrono::steady_clock;
+
+/// Where the node arrays keep the runs of the active box (MpmGrid's
+/// rowOrigin_): node (i, j, k) at origin[row(j, k)] + i, packed or whole.
+struct NodeRows {
+  const std::ptrdiff_t* origin = nullptr;
+  Index3 lo;           // the active box's first node
+  std::size_t nj = 0;  // its rows along j
+  std::size_t row(int j, int k) const { return std::size_t(j - lo.j) + nj * std::size_t(k - lo.k); }
+  /// The origins of the nine rows of a stencil from base row (bj, bk): row
+  /// (bj + b, bk + c) at out[b + 3 c].
+  void stencilRows(int bj, int bk, std::ptrdiff_t out[9]) const {
+    const std::ptrdiff_t* r = origin + row(bj, bk);
+    for (int c = 0; c < 3; ++c)
+      for (int b = 0; b < 3; ++b) out[b + 3 * c] = r[std::size_t(b) + nj * std::size_t(c)];
+  }
+};
+
+/// gatherApicLines' lines of a stencil with base node bi on rows from
+/// `origin` (NodeRows::origin at the base row).
+template <typename T>
+struct NodeRowLines {
+  const T* data;
+  const std::ptrdiff_t* origin;
+  std::size_t nj;
+  int bi;
+  const T* operator()(int b, int c) const { return data + (origin[std::size_t(b) + nj * std::size_t(c)] + bi); }
+};
 /// The constants of one material the kernels need.
 struct MaterialParams {
   bool fluid = false;
@@ -148,8 +175,7 @@ struct DepositKernel {
   const MaterialParams* params = nullptr;
   double dx = 0, invDx = 0, stressScale = 0, dt = 0;  // m, 1/m, s/m^2, s
   Vec3d o;                                            // grid origin, m
-  MpmGridLayout layout;                               // where the nodes are
-  std::size_t sj = 0, sk = 0;                         // node strides of j and k
+  NodeRows rows;                                      // where the nodes are
   const Vec3d *X = nullptr, *V = nullptr;
   const Mat3d *Cp = nullptr, *Fp = nullptr;
   const double *Jp = nullptr, *M = nullptr, *V0 = nullptr;
@@ -186,12 +212,14 @@ struct DepositKernel {
     // (material thin along x) would otherwise wait on each in turn.
     const std::uint32_t* rowFirstParticle = sorted + offsets[rowStart[row]];
     for (const std::uint32_t* q = rowFirstParticle; q <= rowLast && q - rowFirstParticle < kAhead; ++q) prefetch(*q);
+    // Node (i, bj + b, bk + c) at nodes[origin[b + 3 c] + i].
+    std::ptrdiff_t origin[9];
+    rows.stencilRows(bj, bk, origin);
     for (int bi = first; bi < last; ++bi) {
       const std::size_t bin = rowStart[row] + std::size_t(bi - first);
       const std::uint32_t* it = sorted + offsets[bin];
       const std::uint32_t* end = sorted + offsets[bin + 1];
       if (it == end) continue;
-      MpmNode* corner = nodes + layout.index(bi, bj, bk);
       for (; it != end; ++it) {
         const std::size_t p = *it;
         prefetch(rowLast - it > kAhead ? it[kAhead] : *rowLast);
@@ -235,7 +263,7 @@ struct DepositKernel {
           for (int b = 0; b < 3; ++b) {
             const double wbc = wy.w[b] * wz.w[c];
             const Lanes4 q = q0m + double(b) * A1 + double(c) * A2;
-            double* line = reinterpret_cast<double*>(corner + std::size_t(b) * sj + std::size_t(c) * sk);
+            double* line = reinterpret_cast<double*>(nodes + (origin[b + 3 * c] + bi));
             const double w0 = wx.w[0] * wbc, w1 = wx.w[1] * wbc, w2 = wx.w[2] * wbc;
             store4(line, load4(line) + w0 * q);
             store4(line + 4, load4(line + 4) + w1 * (q + A0));
@@ -263,7 +291,7 @@ struct G2PKernel {
   const MaterialParams* params = nullptr;
   double dt = 0, invDx = 0, cScale = 0;  // s, 1/m, 4/dx (1/m)
   Vec3d o;                               // grid origin, m
-  MpmGridLayout layout;                  // where the nodes are
+  NodeRows rows;                         // where the nodes are
   const Vec3d* vel = nullptr;            // node velocities, m/s
   Vec3d *X = nullptr, *V = nullptr;
   Mat3d *Cp = nullptr, *Fp = nullptr;
@@ -287,8 +315,8 @@ struct G2PKernel {
       const int b3[3] = {bi, bj, bk};
       Vec3d vp;
       Mat3d C;
-      gatherApicAt<Lanes4>(vel + layout.index(bi, bj, bk), std::size_t(layout.dims.i),
-                         std::size_t(layout.dims.i) * std::size_t(layout.dims.j), u, b3, cScale, vp, C);
+      gatherApicLines<Lanes4>(NodeRowLines<Vec3d>{vel, rows.origin + rows.row(bj, bk), rows.nj, bi}, u, b3, cScale,
+                              vp, C);
       // Step 6: MLS update of the deformation (F <- (I + dt C) F, or J alone for fluids);
       // the elastoplastic solid's trial F_E is returned to the yield surface.
       const MaterialParams& mp = params[mat[p]];
@@ -367,24 +395,32 @@ void MpmGrid::particleToGrid(const MpmParticles& particles, const std::vector<Mp
   const Index3 prevLo = activeLo_, prevHi = activeHi_;
   const MpmGridLayout prevLayout = layout_;
   const Index3 prevBinLo = binLo_, prevBinHi{binLo_.i + binDims_.i, binLo_.j + binDims_.j, binLo_.k + binDims_.k};
-  const bool wasWhole = wholeGrid_;
+  const bool wasWhole = wholeGrid_, wasPacked = packed_;
+  const std::size_t wasPackedCount = packedCount_;
   wholeGrid_ = false;
   bin(particles, materials.size());
+  packed_ = !wholeLayout_;
+  placeRuns();
   binningSeconds_ = std::chrono::duration<double>(Clock::now() - t0).count();
 
   // Zero the new runs and hand back what the previous ones held outside
-  // them: every node outside the runs stays zero, and the memory follows
-  // the material row by row. A grid whose caller wrote it whole after the
-  // last P2G (a partition's sums) is zeroed whole and keeps its pages.
-  if (wasWhole && layout_ == prevLayout) {
+  // them: every node outside the runs stays zero (or, packed, is not
+  // stored), and the memory follows the material. A grid whose caller wrote
+  // it whole after the last P2G (a partition's sums) is zeroed whole and
+  // keeps its pages.
+  if (wasWhole && !packed_) {
     zeroBox({0, 0, 0}, spec_.dims);
-  } else if (wasWhole) {  // the whole layout given up since (setWholeLayout(false))
+  } else if (wasWhole || (packed_ && !wasPacked)) {  // the whole grid given up since (setWholeLayout(false))
     nodes_.clear();
     velocity_.clear();
     colour_.clear();
+    zeroRuns();
   } else {
     zeroRuns();
-    releaseOutsideRuns(prevLayout, prevLo, prevHi, prevRunFirst_, prevRunEnd_);
+    if (packed_)
+      releasePackedTail(wasPackedCount);
+    else
+      releaseOutsideRuns(prevLo, prevHi, prevRunFirst_, prevRunEnd_);
     releaseBinsOutside(prevLayout, prevBinLo, prevBinHi, binLo_,
                        {binLo_.i + binDims_.i, binLo_.j + binDims_.j, binLo_.k + binDims_.k});
   }
@@ -405,8 +441,6 @@ void MpmGrid::particleToGrid(const MpmParticles& particles, const std::vector<Mp
   const double invDx = 1.0 / dx;
   const double stressScale = dt * 4.0 * invDx * invDx;  // dt D^-1, s/m^2
   const Vec3d o = spec_.origin;
-  const std::size_t sj = std::size_t(layout_.dims.i);
-  const std::size_t sk = sj * std::size_t(layout_.dims.j);
 
   const Vec3d* X = particles.x.data();
   const Vec3d* V = particles.v.data();
@@ -442,9 +476,7 @@ void MpmGrid::particleToGrid(const MpmParticles& particles, const std::vector<Mp
   kernel.stressScale = stressScale;
   kernel.dt = dt;
   kernel.o = o;
-  kernel.layout = layout_;
-  kernel.sj = sj;
-  kernel.sk = sk;
+  kernel.rows = NodeRows{rowOrigin_.data(), activeLo_, std::size_t(activeHi_.j - activeLo_.j)};
   kernel.X = X;
   kernel.V = V;
   kernel.Cp = Cp;
@@ -472,9 +504,7 @@ void MpmGrid::computeCapillaryStress(const MpmParticles& particles, const std::v
   const double invDx = 1.0 / dx;
   const double invCell = invDx * invDx * invDx;  // 1/m^3
   const Vec3d o = spec_.origin;
-  const MpmGridLayout L = layout_;
-  const std::size_t sj = std::size_t(L.dims.i);
-  const std::size_t sk = sj * std::size_t(L.dims.j);
+  const NodeRows rows = NodeRows{rowOrigin_.data(), activeLo_, std::size_t(activeHi_.j - activeLo_.j)};
   const Vec3d* X = particles.x.data();
   const double* Jp = particles.J.data();
   const double* V0 = particles.volume0.data();
@@ -486,24 +516,24 @@ void MpmGrid::computeCapillaryStress(const MpmParticles& particles, const std::v
   double* colour = colour_.data();
   if (colourSum_) {
     std::fill(colour_.begin(), colour_.end(), 0.0);
+  } else if (packed_) {
+    std::fill_n(colour, packedCount_, 0.0);
   } else {
-    const int nj = activeHi_.j - activeLo_.j;
-    const std::size_t rows = std::size_t(nj) * std::size_t(activeHi_.k - activeLo_.k);
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, rows, 16), [&](const tbb::blocked_range<std::size_t>& r) {
-      for (std::size_t row = r.begin(); row != r.end(); ++row) {
-        const int j = activeLo_.j + int(row % std::size_t(nj));
-        const int k = activeLo_.k + int(row / std::size_t(nj));
-        if (runEnd_[row] > runFirst_[row])
-          std::fill_n(colour + L.index(runFirst_[row], j, k), runEnd_[row] - runFirst_[row], 0.0);
-      }
-    });
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, runFirst_.size(), 16),
+                      [&](const tbb::blocked_range<std::size_t>& r) {
+                        for (std::size_t row = r.begin(); row != r.end(); ++row)
+                          if (runEnd_[row] > runFirst_[row])
+                            std::fill_n(colour + (rowOrigin_[row] + runFirst_[row]), runEnd_[row] - runFirst_[row],
+                                        0.0);
+                      });
   }
   forEachRow([&](int bj, int bk) {
     const std::size_t row = std::size_t(bj - binLo_.j) + std::size_t(binDims_.j) * std::size_t(bk - binLo_.k);
     const int first = int(rowFirst_[row]), last = int(rowEnd_[row]);
+    std::ptrdiff_t origin[9];  // node (i, bj + b, bk + c) at colour[origin[b + 3 c] + i]
+    if (first < last) rows.stencilRows(bj, bk, origin);
     for (int bi = first; bi < last; ++bi) {
       const std::size_t bin = rowStart_[row] + std::size_t(bi - first);
-      double* corner = colour + L.index(bi, bj, bk);
       for (std::uint32_t s = offsets_[bin]; s != offsets_[bin + 1]; ++s) {
         const std::size_t p = sorted_[s];
         if (!(sigmaOf[mat[p]] > 0)) continue;
@@ -514,7 +544,7 @@ void MpmGrid::computeCapillaryStress(const MpmParticles& particles, const std::v
         const double fraction = V0[p] * Jp[p] * invCell;  // V_p / dx^3
         for (int c = 0; c < 3; ++c)
           for (int b = 0; b < 3; ++b) {
-            double* line = corner + std::size_t(b) * sj + std::size_t(c) * sk;
+            double* line = colour + (origin[b + 3 * c] + bi);
             const double wbc = fraction * wy.w[b] * wz.w[c];
             for (int a = 0; a < 3; ++a) line[a] += wx.w[a] * wbc;
           }
@@ -524,10 +554,32 @@ void MpmGrid::computeCapillaryStress(const MpmParticles& particles, const std::v
 
   if (colourSum_) colourSum_(colour_.data(), colour_.size());
 
-  // Per particle: the colour's gradient and Hessian and the capillary stress
-  // (nodes outside the runs read 0, the colour there). The layout holds one
-  // node more than the stencils reach each side, or ends with the grid, so
-  // that its faces are the grid's faces to the Hessian.
+  // Per particle: the colour's gradient and Hessian and the capillary stress,
+  // from the colour of the nodes the Hessian reads, one beyond the stencil
+  // each side within the grid (so that the block's faces are the grid's),
+  // copied into a block of at most 5^3: colourAt of each, 0 outside the runs
+  // (with a sum over processes, whatever the sum left on the whole grid).
+  const auto stencilColour = [&](const int base[3], double* block, int n[3], int b[3]) {
+    int lo[3];
+    for (int a = 0; a < 3; ++a) {
+      lo[a] = std::max(0, base[a] - 1);
+      n[a] = std::min(spec_.dims[a], base[a] + 4) - lo[a];
+      b[a] = base[a] - lo[a];
+    }
+    for (int kk = 0; kk < n[2]; ++kk)
+      for (int jj = 0; jj < n[1]; ++jj) {
+        const int j = lo[1] + jj, k = lo[2] + kk;
+        double* out = block + std::size_t(n[0]) * (std::size_t(jj) + std::size_t(n[1]) * std::size_t(kk));
+        int first = 0, end = spec_.dims.i;
+        if (!colourSum_) activeRun(j, k, first, end);
+        const std::ptrdiff_t origin =
+            first < end ? (packed_ ? rowOrigin_[activeRow(j, k)] : std::ptrdiff_t(spec_.index(0, j, k))) : 0;
+        for (int ii = 0; ii < n[0]; ++ii) {
+          const int i = lo[0] + ii;
+          out[ii] = i >= first && i < end ? colour[origin + i] : 0.0;
+        }
+      }
+  };
   capillary_.resize(np);
   Mat3d* T = capillary_.data();
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, np, 2048), [&](const tbb::blocked_range<std::size_t>& r) {
@@ -542,8 +594,11 @@ void MpmGrid::computeCapillaryStress(const MpmParticles& particles, const std::v
       const QuadraticWeights<double> wx = quadraticWeightsAt(ux, int(quadraticBaseFloor(ux)), invDx);
       const QuadraticWeights<double> wy = quadraticWeightsAt(uy, int(quadraticBaseFloor(uy)), invDx);
       const QuadraticWeights<double> wz = quadraticWeightsAt(uz, int(quadraticBaseFloor(uz)), invDx);
-      T[p] = particleCapillaryStress(colour, L.dims.i, L.dims.j, L.dims.k, wx.base - L.lo.i, wy.base - L.lo.j,
-                                     wz.base - L.lo.k, wx, wy, wz, sigma, invDx);
+      const int base[3] = {wx.base, wy.base, wz.base};
+      double block[125];
+      int n[3], b[3];
+      stencilColour(base, block, n, b);
+      T[p] = particleCapillaryStress(block, n[0], n[1], n[2], b[0], b[1], b[2], wx, wy, wz, sigma, invDx);
     }
   });
 }
@@ -563,7 +618,7 @@ GridToParticleReport MpmGrid::gridToParticle(MpmParticles& particles, const std:
   kernel.invDx = 1.0 / spec_.dx;
   kernel.cScale = 4.0 * kernel.invDx;  // D^-1 dx, 1/m
   kernel.o = spec_.origin;
-  kernel.layout = layout_;
+  kernel.rows = NodeRows{rowOrigin_.data(), activeLo_, std::size_t(activeHi_.j - activeLo_.j)};
   kernel.vel = velocity_.data();
   kernel.X = particles.x.data();
   kernel.V = particles.v.data();

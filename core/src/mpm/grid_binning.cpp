@@ -213,6 +213,8 @@ bool MpmGrid::binPass1(const MpmParticles& particles, std::size_t materialCount,
     prevRunEnd_.clear();
     runFirst_.clear();
     runEnd_.clear();
+    rowOrigin_.clear();
+    packedCount_ = 0;
     activeLo_ = activeHi_ = binLo_ = binDims_ = {0, 0, 0};
     if (!wholeLayout_) layout_ = MpmGridLayout{};
     const Vec3d x = X[bad];

@@ -57,7 +57,7 @@ void MpmGrid::zeroBox(Index3 lo, Index3 hi) {
     for (std::size_t row = r.begin(); row != r.end(); ++row) {
       const int j = lo.j + int(row % std::size_t(nj));
       const int k = lo.k + int(row / std::size_t(nj));
-      const std::size_t first = layout_.index(lo.i, j, k);
+      const std::size_t first = spec_.index(lo.i, j, k);
       std::fill(nodes_.begin() + std::ptrdiff_t(first), nodes_.begin() + std::ptrdiff_t(first + (hi.i - lo.i)),
                 MpmNode{});
       std::fill(velocity_.begin() + std::ptrdiff_t(first), velocity_.begin() + std::ptrdiff_t(first + (hi.i - lo.i)),
@@ -174,7 +174,7 @@ class PageCount {
 
 double mpmHeldBytes(const MpmGridLayout& layout, Index3 binLo, int nbj, int nbk, const std::uint32_t* rowFirst,
                     const std::uint32_t* rowEnd, const std::int32_t* runFirst, const std::int32_t* runEnd,
-                    bool colour) {
+                    bool colour, bool packed) {
   const std::size_t page = PageMapping::pageSize();
   PageCount nodes(sizeof(MpmNode), page), velocity(sizeof(Vec3d), page), colourField(sizeof(double), page),
       bins(sizeof(std::uint32_t), page);
@@ -189,36 +189,64 @@ double mpmHeldBytes(const MpmGridLayout& layout, Index3 binLo, int nbj, int nbk,
       binCount += double(rowEnd[row] - rowFirst[row]);
     }
   const int nj = nbj + 2, nk = nbk + 2;
+  std::size_t packedAt = 0;  // packed: where the next run starts
   for (int kk = 0; kk < nk; ++kk)
     for (int jj = 0; jj < nj; ++jj) {
       const std::size_t q = std::size_t(jj) + std::size_t(nj) * std::size_t(kk);
       if (runEnd[q] <= runFirst[q]) continue;
-      const std::size_t first = layout.index(runFirst[q], binLo.j + jj, binLo.k + kk);
+      const std::size_t first = packed ? packedAt : layout.index(runFirst[q], binLo.j + jj, binLo.k + kk);
       const std::size_t end = first + std::size_t(runEnd[q] - runFirst[q]);
+      packedAt = end;
       nodes.add(first, end);
       velocity.add(first, end);
       if (colour) colourField.add(first, end);
     }
   return nodes.bytes() + velocity.bytes() + colourField.bytes() + bins.bytes() + 4 * binCount +
-         32.0 * double(nj) * double(nk);
+         40.0 * double(nj) * double(nk);
 }
 
 double MpmGrid::heldBytes() const {
   if (binDims_.j <= 0 || binDims_.k <= 0 || runFirst_.empty()) return 0;
   return mpmHeldBytes(layout_, binLo_, binDims_.j, binDims_.k, rowFirst_.data(), rowEnd_.data(), runFirst_.data(),
-                      runEnd_.data(), !colour_.empty());
+                      runEnd_.data(), !colour_.empty(), packed_);
+}
+
+void MpmGrid::placeRuns() {
+  packedCount_ = 0;
+  if (!packed_) {
+    const int nj = activeHi_.j - activeLo_.j;
+    const std::size_t rows = emptyBox(activeLo_, activeHi_) ? 0 : std::size_t(nj) * std::size_t(activeHi_.k - activeLo_.k);
+    rowOrigin_.resize(rows);
+    for (std::size_t row = 0; row < rows; ++row)
+      rowOrigin_[row] = std::ptrdiff_t(
+          spec_.index(0, activeLo_.j + int(row % std::size_t(nj)), activeLo_.k + int(row / std::size_t(nj))));
+    return;
+  }
+  const std::size_t rows = runFirst_.size();
+  rowOrigin_.resize(rows);
+  std::size_t at = 0;
+  for (std::size_t row = 0; row < rows; ++row) {
+    rowOrigin_[row] = std::ptrdiff_t(at) - std::ptrdiff_t(runFirst_[row]);
+    if (runEnd_[row] > runFirst_[row]) at += std::size_t(runEnd_[row] - runFirst_[row]);
+  }
+  packedCount_ = at;
 }
 
 void MpmGrid::zeroRuns() {
-  const Index3 lo = activeLo_, hi = activeHi_;
-  if (emptyBox(lo, hi)) return;
-  const int nj = hi.j - lo.j;
-  const std::size_t rows = std::size_t(nj) * std::size_t(hi.k - lo.k);
+  if (packed_) {
+    const std::size_t n = packedCount_;
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 1 << 14), [&](const tbb::blocked_range<std::size_t>& r) {
+      std::fill(nodes_.begin() + std::ptrdiff_t(r.begin()), nodes_.begin() + std::ptrdiff_t(r.end()), MpmNode{});
+      std::fill(velocity_.begin() + std::ptrdiff_t(r.begin()), velocity_.begin() + std::ptrdiff_t(r.end()), Vec3d{});
+    });
+    return;
+  }
+  const std::size_t rows = runFirst_.size();
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, rows, 16), [&](const tbb::blocked_range<std::size_t>& r) {
     for (std::size_t row = r.begin(); row != r.end(); ++row) {
       const int first = runFirst_[row], end = runEnd_[row];
       if (first >= end) continue;
-      const std::size_t at = layout_.index(first, lo.j + int(row % std::size_t(nj)), lo.k + int(row / std::size_t(nj)));
+      const std::size_t at = std::size_t(rowOrigin_[row] + first);
       std::fill(nodes_.begin() + std::ptrdiff_t(at), nodes_.begin() + std::ptrdiff_t(at + std::size_t(end - first)),
                 MpmNode{});
       std::fill(velocity_.begin() + std::ptrdiff_t(at),
@@ -227,20 +255,26 @@ void MpmGrid::zeroRuns() {
   });
 }
 
-void MpmGrid::releaseOutsideRuns(const MpmGridLayout& was, Index3 lo, Index3 hi, const std::vector<std::int32_t>& first,
+void MpmGrid::releasePackedTail(std::size_t was) {
+  if (was <= packedCount_) return;
+  nodes_.zero(packedCount_, was - packedCount_);
+  velocity_.zero(packedCount_, was - packedCount_);
+  if (!colour_.empty()) colour_.zero(packedCount_, was - packedCount_);
+}
+
+void MpmGrid::releaseOutsideRuns(Index3 lo, Index3 hi, const std::vector<std::int32_t>& first,
                                  const std::vector<std::int32_t>& end) {
   if (emptyBox(lo, hi)) return;
+  const MpmGridLayout all{{0, 0, 0}, spec_.dims};
   const int nj = hi.j - lo.j;
-  const bool sameLayout = was == layout_;
   const auto keep = [&](int j, int k, int& f, int& e) { activeRun(j, k, f, e); };
-  // The previous run of each row less the current one (up to two pieces);
-  // the whole previous run where the layout changed (its nodes moved).
+  // The previous run of each row less the current one (up to two pieces).
   const auto zeroRow = [&](int j, int k, const auto& zero) {
     const std::size_t row = std::size_t(j - lo.j) + std::size_t(nj) * std::size_t(k - lo.k);
     const int a = first[row], b = end[row];
     if (a >= b) return;
     int c = 0, d = 0;
-    if (sameLayout) activeRun(j, k, c, d);
+    activeRun(j, k, c, d);
     if (c >= d) {
       zero(a, b);
       return;
@@ -248,9 +282,9 @@ void MpmGrid::releaseOutsideRuns(const MpmGridLayout& was, Index3 lo, Index3 hi,
     zero(a, std::min(b, c));
     zero(std::max(a, d), b);
   };
-  zeroRowPieces(nodes_, was, lo, hi, zeroRow, layout_, keep);
-  zeroRowPieces(velocity_, was, lo, hi, zeroRow, layout_, keep);
-  zeroRowPieces(colour_, was, lo, hi, zeroRow, layout_, keep);
+  zeroRowPieces(nodes_, all, lo, hi, zeroRow, all, keep);
+  zeroRowPieces(velocity_, all, lo, hi, zeroRow, all, keep);
+  zeroRowPieces(colour_, all, lo, hi, zeroRow, all, keep);
 }
 
 void MpmGrid::releaseBinsOutside(const MpmGridLayout& was, Index3 lo, Index3 hi, Index3 keepLo, Index3 keepHi) {
@@ -285,25 +319,29 @@ void MpmGrid::setWholeLayout(bool whole) {
     if (!written) layout_ = MpmGridLayout{};  // the first P2G lays it out
     return;
   }
-  if (layout_ == all) return;
-  if (written && !layout_.empty()) moveToLayout(all);
-  layout_ = all;
+  if (packed_) unpack();
+  layout_ = all;  // the bin sizes are zero between calls: nothing moves
 }
 
-void MpmGrid::moveToLayout(const MpmGridLayout& to) {
-  // Node (i, j, k) moves from layout_.index to to.index, never lower (`to`
-  // holds the layout with rows at least as long): walking the runs from the
-  // last node down, each node is read before anything lands on it. The bin
-  // sizes are zero between calls and stay so.
+void MpmGrid::unpack() {
+  // Node (i, j, k) moves from its packed index to spec_.index(i, j, k),
+  // never lower (the packed runs of the rows before it are at most the
+  // whole rows before it): walking the runs from the last node down, each
+  // node is read before anything lands on it. The packed places left keep
+  // their pages (zero) until the arrays are cleared.
   const Index3 lo = activeLo_, hi = activeHi_;
-  if (emptyBox(lo, hi) || wholeGrid_) return;
+  packed_ = false;
+  packedCount_ = 0;
+  if (emptyBox(lo, hi)) return;
   const int nj = hi.j - lo.j;
   const bool colour = !colour_.empty();
   for (int k = hi.k - 1; k >= lo.k; --k)
     for (int j = hi.j - 1; j >= lo.j; --j) {
       const std::size_t row = std::size_t(j - lo.j) + std::size_t(nj) * std::size_t(k - lo.k);
+      const std::ptrdiff_t origin = rowOrigin_[row];
+      rowOrigin_[row] = std::ptrdiff_t(spec_.index(0, j, k));
       for (int i = runEnd_[row] - 1; i >= runFirst_[row]; --i) {
-        const std::size_t s = layout_.index(i, j, k), d = to.index(i, j, k);
+        const std::size_t s = std::size_t(origin + i), d = spec_.index(i, j, k);
         if (s == d) continue;
         nodes_[d] = nodes_[s];
         nodes_[s] = MpmNode{};

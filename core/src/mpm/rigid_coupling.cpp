@@ -242,8 +242,10 @@ void MpmSolver::exchangeWithRigidBodies(double dt) {
     ownedKeys.clear();
     owned.clear();
     for (int k = from[2]; k < to[2]; ++k)
-      for (int j = from[1]; j < to[1]; ++j)
-        for (int i = from[0]; i < to[0]; ++i) {
+      for (int j = from[1]; j < to[1]; ++j) {
+        int first = 0, end = 0;  // the row's run: every other node is zero (mpm/grid.h)
+        grid_.activeRun(j - off.j, k - off.k, first, end);
+        for (int i = std::max(from[0], first + off.i); i < std::min(to[0], end + off.i); ++i) {
           const std::size_t n = grid_.nodeIndex(i - off.i, j - off.j, k - off.k);
           if (!(nodes[n].mass > 0)) continue;
           const Vec3d x = g.nodePosition(i, j, k);
@@ -260,6 +262,7 @@ void MpmSolver::exchangeWithRigidBodies(double dt) {
             owned.push_back(inside.back());
           }
         }
+      }
     if (partition_) {
       // Each node once, from its owner; every window that holds it takes its velocity.
       GatheredPoints all = gatherPoints(*partition_, ownedKeys, owned);

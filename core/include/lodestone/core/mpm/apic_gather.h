@@ -41,15 +41,26 @@ LODESTONE_HOSTDEV inline void apicLine(const Vec3d* line, L& n0, L& n1, L& n2) {
   n2 = apicLanes<L>(line[2]);
 }
 
-/// `corner`: the nodal velocity (m/s) of the stencil's base node in an array
-/// with strides sj and sk along j and k (x fastest); u: the particle's grid
-/// coordinates (cells, (x - origin) / dx) and b the stencil's base node (from
-/// the same u); cScale = 4/dx (1/m). Sets vp (m/s) and C (1/s).
-/// The sums run in L lane by lane (component-wise the same arithmetic for any
-/// L, so the same bits).
-template <typename L = Vec3d>
-LODESTONE_HOSTDEV inline void gatherApicAt(const Vec3d* corner, std::size_t sj, std::size_t sk, const double u[3],
-                                           const int b3[3], double cScale, Vec3d& vp, Mat3d& C) {
+/// The node lines of a stencil in an array with strides sj and sk along j
+/// and k (x fastest): line (b, c) starts at corner + b sj + c sk.
+struct ApicStridedLines {
+  const Vec3d* corner;
+  std::size_t sj, sk;
+  LODESTONE_HOSTDEV const Vec3d* operator()(int b, int c) const {
+    return corner + std::size_t(b) * sj + std::size_t(c) * sk;
+  }
+};
+
+/// `lines(b, c)`: the nodal velocities (m/s) of the stencil's line of three
+/// nodes (b3[0] .. b3[0] + 2, b3[1] + b, b3[2] + c), consecutive in x; u: the
+/// particle's grid coordinates (cells, (x - origin) / dx) and b3 the
+/// stencil's base node (from the same u); cScale = 4/dx (1/m). Sets vp (m/s)
+/// and C (1/s). The sums run in L lane by lane (component-wise the same
+/// arithmetic for any L, so the same bits), in the same order whatever the
+/// lines' storage.
+template <typename L, typename Lines>
+LODESTONE_HOSTDEV inline void gatherApicLines(const Lines& lines, const double u[3], const int b3[3], double cScale,
+                                              Vec3d& vp, Mat3d& C) {
   const QuadraticWeights<double> wx = quadraticWeightsAt(u[0], b3[0]);
   const QuadraticWeights<double> wy = quadraticWeightsAt(u[1], b3[1]);
   const QuadraticWeights<double> wz = quadraticWeightsAt(u[2], b3[2]);
@@ -59,9 +70,8 @@ LODESTONE_HOSTDEV inline void gatherApicAt(const Vec3d* corner, std::size_t sj, 
   for (int c = 0; c < 3; ++c) {
     for (int b = 0; b < 3; ++b) {
       const double wbc = wy.w[b] * wz.w[c];
-      const Vec3d* line = corner + std::size_t(b) * sj + std::size_t(c) * sk;
       L n0, n1, n2;
-      apicLine<L>(line, n0, n1, n2);
+      apicLine<L>(lines(b, c), n0, n1, n2);
       const L l1 = wx.w[1] * n1, l2 = wx.w[2] * n2;
       const L s0 = wx.w[0] * n0 + l1 + l2;
       const L s1 = l1 + 2.0 * l2;
@@ -80,6 +90,14 @@ LODESTONE_HOSTDEV inline void gatherApicAt(const Vec3d* corner, std::size_t sj, 
     C(1, a) = col[a].y;
     C(2, a) = col[a].z;
   }
+}
+
+/// gatherApicLines with `corner`, the nodal velocity of the stencil's base
+/// node in an array with strides sj and sk along j and k (x fastest).
+template <typename L = Vec3d>
+LODESTONE_HOSTDEV inline void gatherApicAt(const Vec3d* corner, std::size_t sj, std::size_t sk, const double u[3],
+                                           const int b3[3], double cScale, Vec3d& vp, Mat3d& C) {
+  gatherApicLines<L>(ApicStridedLines{corner, sj, sk}, u, b3, cScale, vp, C);
 }
 
 /// gatherApicAt on `vel`, the nodal velocities (m/s) of a whole grid of

@@ -38,13 +38,20 @@
 // count or schedule: the grid is bitwise identical for any number of
 // threads. G2P writes only its own particle.
 //
-// Storage. The node arrays and the bins' sizes are laid out over the whole
-// grid or (setWholeLayout(false), as MpmSolver's grid) over a box that holds
-// the material's (MpmGridLayout, chosen by mpmGridLayout and kept while the
-// material stays inside it), x-rows as long as that box is wide, and take
-// memory page by page where the runs are written
-// (base/page_array.h). The layout changes where nodes lie in memory, never
-// what is added to them or in what order: any layout gives the same bits.
+// Storage. Each x-row of nodes the material reaches holds one run, from the
+// first to the last stencil that reaches it (activeRun). The node arrays
+// hold either the whole grid, node (i, j, k) at spec().index(i, j, k) and
+// every node outside the runs zero, or (setWholeLayout(false), as
+// MpmSolver's grid) only the runs, packed back to back in row order from the
+// arrays' start: the run of row (j, k) starts after the runs of the rows
+// before it. The packing is redone at every P2G (a prefix sum of the run
+// lengths), so memory follows any shape of material (a sheet slanted across
+// the grid, bodies apart) at the nodes its stencils reach, and pages are
+// taken only as far as the runs reach (base/page_array.h). The bins' sizes
+// are laid out over the whole grid or over a box that holds the material's
+// (MpmGridLayout, chosen by mpmGridLayout and kept while the material stays
+// inside it). Storage changes where nodes lie in memory, never what is added
+// to them or in what order: either gives the same bits.
 //
 // Particles must lie where their stencil fits the grid: grid coordinate
 // u = (x - origin)/dx in [1/2, dims - 3/2) per axis (transfer.h). The solver
@@ -90,12 +97,12 @@ struct GridToParticleReport {
   std::size_t nonFinite = 0;  ///< particles whose position, velocity or J became non-finite (left as they are)
 };
 
-/// Where an MpmGrid keeps its nodes: the box [lo, lo + dims) of the grid's
-/// nodes, x fastest, node (i, j, k) at index(i, j, k) of each node array.
-/// Its stencil bins (base nodes) are the box [lo, lo + dims - 2), binLayout.
-/// The whole grid, or a box that follows the material (mpmGridLayout), so
-/// that the arrays' rows are as long as the material's box is wide: material
-/// thin along x then packs its rows into shared pages.
+/// A box [lo, lo + dims) of the grid's nodes, x fastest, node (i, j, k) at
+/// index(i, j, k). Its stencil bins (base nodes) are the box
+/// [lo, lo + dims - 2), binLayout: where an MpmGrid counts the particles of
+/// each bin. The whole grid, or a box that follows the material
+/// (mpmGridLayout), so that the counts' rows are as long as the material's
+/// box is wide: material thin along x then packs them into shared pages.
 struct MpmGridLayout {
   Index3 lo{0, 0, 0}, dims{0, 0, 0};
   bool empty() const { return dims.i <= 0 || dims.j <= 0 || dims.k <= 0; }
@@ -156,20 +163,21 @@ constexpr std::uint64_t kMpmGridCountLimit = 0xFFFFFFFFu;  // 2^32 - 1
 void mpmNodeRuns(const std::uint32_t* rowFirst, const std::uint32_t* rowEnd, int nbj, int nbk, std::int32_t* runFirst,
                  std::int32_t* runEnd);
 
-/// The memory (bytes) the grid's arrays take for the runs of one P2G in
-/// `layout`: bins [rowFirst, rowEnd) of the nbj x nbk rows of bins from
-/// base node row (binLo.j, binLo.k) (bi in grid indices, as mpmNodeRuns
-/// takes them) and the node runs runFirst/runEnd mpmNodeRuns gives for them.
-/// Whole pages (PageMapping::pageSize) of the node data (32 B a node), the
-/// velocities (24 B), the colour field (8 B, when `colour`) and the bin
-/// sizes (4 B a bin), each page counted once however many rows share it,
-/// plus the bins' offsets (4 B a bin) and the rows' bookkeeping (32 B a
-/// row). Rows of the layout shorter than a page share pages; a run shorter
-/// than a page in a longer row still takes a page (a sheet slanted across a
-/// wide box).
+/// The memory (bytes) the grid's arrays take for the runs of one P2G with
+/// its bin sizes in `layout`: bins [rowFirst, rowEnd) of the nbj x nbk rows
+/// of bins from base node row (binLo.j, binLo.k) (bi in grid indices, as
+/// mpmNodeRuns takes them) and the node runs runFirst/runEnd mpmNodeRuns
+/// gives for them. Whole pages (PageMapping::pageSize) of the node data
+/// (32 B a node), the velocities (24 B), the colour field (8 B, when
+/// `colour`) and the bin sizes (4 B a bin), each page counted once however
+/// many rows share it, plus the bins' offsets (4 B a bin) and the rows'
+/// bookkeeping (40 B a row). packed = true (setWholeLayout(false)): the node
+/// runs back to back from the arrays' start; false: each run in its row of
+/// `layout`, where a run shorter than a page in a longer row still takes a
+/// page. Bin rows of the layout shorter than a page share pages.
 double mpmHeldBytes(const MpmGridLayout& layout, Index3 binLo, int nbj, int nbk, const std::uint32_t* rowFirst,
                     const std::uint32_t* rowEnd, const std::int32_t* runFirst, const std::int32_t* runEnd,
-                    bool colour);
+                    bool colour, bool packed);
 
 class MpmGrid {
  public:
@@ -198,11 +206,10 @@ class MpmGrid {
   GridToParticleReport gridToParticle(MpmParticles& particles, const std::vector<MpmMaterial>& materials, double dt,
                                       const ParticleBounds* bounds = nullptr) const;
 
-  /// Node data of the last P2G, node (i, j, k) at nodeIndex(i, j, k) (the
-  /// layout's box, x fastest; nodes outside it are zero and not stored).
-  /// Memory is taken only for the pages written (base/page_array.h): the
-  /// runs of nodes the particles reach on each x-row (activeRun), handed
-  /// back when the runs move off them.
+  /// Node data of the last P2G, node (i, j, k) of the runs (activeRun) at
+  /// nodeIndex(i, j, k); every other node is zero (and, packed, not
+  /// stored). Memory is taken only for the pages written
+  /// (base/page_array.h), handed back when the runs no longer reach them.
   PageArray<MpmNode>& nodes() { return nodes_; }
   const PageArray<MpmNode>& nodes() const { return nodes_; }
   /// Node velocities (m/s) used by G2P, at nodeIndex; written by the grid
@@ -210,28 +217,50 @@ class MpmGrid {
   PageArray<Vec3d>& velocity() { return velocity_; }
   const PageArray<Vec3d>& velocity() const { return velocity_; }
 
-  /// The box of nodes the arrays hold: the whole grid (the default), or,
-  /// after setWholeLayout(false), mpmGridLayout of the last P2G's particles,
-  /// kept while the material stays inside it. It holds the active box.
+  /// The box of nodes whose stencil bins (binLayout) hold the bins' sizes:
+  /// the whole grid (the default), or, after setWholeLayout(false),
+  /// mpmGridLayout of the last P2G's particles, kept while the material
+  /// stays inside it. It holds the active box.
   const MpmGridLayout& layout() const { return layout_; }
-  /// Index of node (i, j, k) in nodes(), velocity() and colour(); the
-  /// layout must hold it (every node of the active box).
-  std::size_t nodeIndex(int i, int j, int k) const { return layout_.index(i, j, k); }
-  /// Node (i, j, k) of the last P2G, zero outside the layout.
+  /// Whether the node arrays hold only the runs, back to back (after a P2G
+  /// with setWholeLayout(false)); false: the whole grid.
+  bool packed() const { return packed_; }
+  /// Index of node (i, j, k) in nodes(), velocity() and colour(); the node
+  /// must lie in a run (activeRun): packed, no other node is stored.
+  std::size_t nodeIndex(int i, int j, int k) const {
+    if (!packed_) return spec_.index(i, j, k);
+    return std::size_t(rowOrigin_[activeRow(j, k)] + i);
+  }
+  /// Whether node (i, j, k) lies in a run (activeRun).
+  bool inRun(int i, int j, int k) const {
+    int first = 0, end = 0;
+    activeRun(j, k, first, end);
+    return i >= first && i < end;
+  }
+  /// Node (i, j, k) of the last P2G, zero outside the runs.
   MpmNode nodeAt(int i, int j, int k) const {
-    return layout_.holds(i, j, k) ? nodes_[layout_.index(i, j, k)] : MpmNode{};
+    return inRun(i, j, k) ? nodes_[nodeIndex(i, j, k)] : MpmNode{};
   }
-  /// Velocity (m/s) of node (i, j, k), zero outside the layout.
+  /// Velocity (m/s) of node (i, j, k), zero outside the runs.
   Vec3d velocityAt(int i, int j, int k) const {
-    return layout_.holds(i, j, k) ? velocity_[layout_.index(i, j, k)] : Vec3d{};
+    return inRun(i, j, k) ? velocity_[nodeIndex(i, j, k)] : Vec3d{};
   }
-  /// whole = true (the default): the arrays are laid out over the whole
-  /// grid, node (i, j, k) at spec().index(i, j, k); data already written
-  /// moves with it. whole = false: over the material's box from the next
-  /// P2G on, so that memory follows the material's box rather than the
-  /// grid's rows (material thin along x packs its rows; MpmSolver's grid
-  /// does this unless MpmSettings::denseGrid). A partition's sums and
-  /// setColourSum, which add whole arrays, need the whole layout.
+  /// The colour field (colour()) at node (i, j, k), zero outside the runs
+  /// (with a sum over processes, setColourSum, whatever the sum left there).
+  double colourAt(int i, int j, int k) const {
+    if (colour_.empty() || i < 0 || j < 0 || k < 0 || i >= spec_.dims.i || j >= spec_.dims.j || k >= spec_.dims.k)
+      return 0.0;
+    if (!packed_) return colour_[spec_.index(i, j, k)];
+    return inRun(i, j, k) ? colour_[nodeIndex(i, j, k)] : 0.0;
+  }
+  /// whole = true (the default): the node arrays hold the whole grid, node
+  /// (i, j, k) at spec().index(i, j, k), and the bins' sizes are laid out
+  /// over it; data already written moves with it. whole = false: from the
+  /// next P2G on, the node arrays hold only the runs, packed, and the bins'
+  /// sizes the material's box (layout), so that memory follows the material
+  /// rather than the grid's rows (MpmSolver's grid does this unless
+  /// MpmSettings::denseGrid). A partition's sums and setColourSum, which add
+  /// whole arrays, need the whole layout.
   void setWholeLayout(bool whole);
 
   /// The box of nodes the last P2G could touch: [activeLo, activeHi) per
@@ -274,6 +303,7 @@ class MpmGrid {
     activeLo_ = {0, 0, 0};
     activeHi_ = spec_.dims;
     wholeGrid_ = true;
+    placeRuns();
   }
 
   /// The particle indices of the last P2G grouped by stencil bin (bins in
@@ -281,9 +311,9 @@ class MpmGrid {
   const std::vector<std::uint32_t>& binnedOrder() const { return sorted_; }
 
   /// The colour field c_i = sum_p w_ip V_p / dx^3 (dimensionless) of the
-  /// liquids with surface tension, node (i, j, k) at nodeIndex, valid on the
-  /// active box after a P2G of a scene that has one (empty when none ever
-  /// had).
+  /// liquids with surface tension, node (i, j, k) of the runs at nodeIndex
+  /// (colourAt for any node), after a P2G of a scene that has one (empty
+  /// when none ever had).
   const PageArray<double>& colour() const { return colour_; }
 
   /// The memory the grid's arrays hold for the runs of the last P2G, bytes
@@ -300,17 +330,27 @@ class MpmGrid {
   // Pass 1 of the binning in the current layout; false when some particle's
   // bin lies outside it (`box` then still spans every particle).
   bool binPass1(const MpmParticles& particles, std::size_t materialCount, Index3& boxLo, Index3& boxHi);
-  // Moves the node data of the runs from the layout to `to`, zeroing what
-  // they leave (the whole layout's indices are never below the box's).
-  void moveToLayout(const MpmGridLayout& to);
+  // Moves the node data of the runs from their packed places to the whole
+  // grid's, zeroing what they leave (a whole-grid index is never below the
+  // packed one).
+  void unpack();
+  // Row (j, k) of the active box, as runFirst_ and rowOrigin_ count them.
+  std::size_t activeRow(int j, int k) const {
+    return std::size_t(j - activeLo_.j) + std::size_t(activeHi_.j - activeLo_.j) * std::size_t(k - activeLo_.k);
+  }
+  // Sets rowOrigin_ (and, packed, packedCount_) for the runs of the active box.
+  void placeRuns();
   void zeroBox(Index3 lo, Index3 hi);
   // Zeroes the node data of the runs (activeRun) of the active box.
   void zeroRuns();
-  // Zeroes the node data of the previous runs (of box [lo, hi), in layout
-  // `was`) outside the current ones and hands back the pages that hold
-  // nothing of those.
-  void releaseOutsideRuns(const MpmGridLayout& was, Index3 lo, Index3 hi, const std::vector<std::int32_t>& first,
+  // Whole grid: zeroes the node data of the previous runs (of box [lo, hi))
+  // outside the current ones and hands back the pages that hold nothing of
+  // those.
+  void releaseOutsideRuns(Index3 lo, Index3 hi, const std::vector<std::int32_t>& first,
                           const std::vector<std::int32_t>& end);
+  // Packed: hands back the node data past the runs, up to `was` nodes (the
+  // previous runs').
+  void releasePackedTail(std::size_t was);
   // Hands back the bin sizes' pages of base box [lo, hi) (in layout `was`)
   // outside base box [keepLo, keepHi) (in the current layout).
   void releaseBinsOutside(const MpmGridLayout& was, Index3 lo, Index3 hi, Index3 keepLo, Index3 keepHi);
@@ -336,6 +376,11 @@ class MpmGrid {
   // The node runs of the active box's rows (activeRun), and those of the
   // previous P2G (handed back where the new ones do not reach).
   std::vector<std::int32_t> runFirst_, runEnd_, prevRunFirst_, prevRunEnd_;
+  // Per row of the active box: node (i, j, k) of its run lies at
+  // rowOrigin_[row] + i of the node arrays (packed or whole).
+  std::vector<std::ptrdiff_t> rowOrigin_;
+  bool packed_ = false;          // the node arrays hold the runs packed (setWholeLayout(false))
+  std::size_t packedCount_ = 0;  // packed: the nodes of the runs, from the arrays' start
   // Binning scratch. Bins are stencil base nodes; each row of bins of the
   // box in use, [binLo_, binLo_ + binDims_), gets offsets for its bins from
   // the first to the last holding particles: bins [rowFirst_, rowEnd_) of
