@@ -14,8 +14,8 @@ namespace lodestone::examples {
 
 namespace {
 
-// How the MPM grid holds its nodes: the runs the material reaches in a
-// layout over its box (mpm/grid.h), or whole (MpmSettings::denseGrid).
+// How the MPM grid holds its nodes: the runs the material reaches, packed
+// (mpm/grid.h), or whole (MpmSettings::denseGrid).
 StageDecision mpmGridDecision(const MpmSolver& solver) {
   const GridSpec& g = solver.settings().grid;
   const std::string domain = concat(g.dims.i, " x ", g.dims.j, " x ", g.dims.k);
@@ -26,24 +26,12 @@ StageDecision mpmGridDecision(const MpmSolver& solver) {
                    " nodes every substep, the same particles bit for bit as sparse and never measured faster (",
                    measured, ")"),
             0, 0};
-  const MpmParticles& p = solver.particles();
-  Index3 lo{g.dims.i, g.dims.j, g.dims.k}, hi{-1, -1, -1};
-  for (const Vec3d& x : p.x)
-    for (int a = 0; a < 3; ++a) {
-      const int b = mpmStencilBase(g, x[a], a);
-      (a == 0 ? lo.i : a == 1 ? lo.j : lo.k) = std::min(lo[a], b);
-      (a == 0 ? hi.i : a == 1 ? hi.j : hi.k) = std::max(hi[a], b);
-    }
-  const std::string layout =
-      p.empty() ? std::string("laid out when material arrives")
-                : [&] {
-                    const MpmGridLayout L = mpmGridLayout(g, lo, hi);
-                    return concat("laid out over the material's box, ", L.dims.i, " x ", L.dims.j, " x ", L.dims.k,
-                                  " nodes now");
-                  }();
   return {"MPM grid", true, "sparse",
-          concat("sparse: the runs of nodes the material's stencils reach on each x-row, ", layout, ", of the domain's ", domain,
-                 "; held whole (dense_grid) it would zero and visit every node each substep, never measured faster (",
+          concat("sparse: only the runs of nodes the material's stencils reach on each x-row, packed back to back, of "
+                 "the domain's ",
+                 domain,
+                 " nodes; held whole (dense_grid) it would zero and visit every node each substep, never measured "
+                 "faster (",
                  measured, ")"),
           0, 0};
 }
@@ -221,18 +209,21 @@ plugin::MemoryEstimate printMemoryEstimate(const plugin::Scene& scene, const Mpm
                e.describe().c_str(), c.mpmNodes, c.fieldNodes, c.fieldMaterialCells, c.particles,
                solver.emitterCount() > 0 ? " (at the end, with the emitted ones)" : "",
                plugin::memoryLimitText().c_str());
-  // Runs shorter than a page in longer rows take a page of each grid array
-  // per x-row: said where that makes the grid four times its nodes' 64 B or
-  // more, and a tenth of the estimate. (The layout's margins and the pages'
-  // ends alone stay within about twice.)
+  // Where the grid takes four times its nodes' 64 B or more, and a tenth of
+  // the estimate, the note says why: held whole, each x-row's run takes a
+  // page of each array; packed, the bookkeeping of the x-rows of the box
+  // around all the material (bodies far apart along y or z).
   const double packed = plugin::kMpmNodeBytes * c.mpmNodes;
   if (c.mpmGridBytes > 4 * packed && c.mpmGridBytes - packed > 0.1 * e.total())
     std::fprintf(out,
                  "  note: the MPM grid takes %.3g GiB for %.4g nodes (%.0f B a node, 64 B where the material fills "
-                 "its box): its x-rows are short against the material's box along x (a thin sheet slanted across x, "
-                 "or bodies apart along x and y or z), and each x-row's run takes a page of each grid array; the "
-                 "same material filling its box would take %.3g GiB\n",
+                 "its box): %s; the same nodes as runs filling their rows would take %.3g GiB\n",
                  c.mpmGridBytes / (1024.0 * 1024.0 * 1024.0), c.mpmNodes, c.mpmGridBytes / c.mpmNodes,
+                 scene.settings.denseGrid
+                     ? "held whole (dense_grid), each x-row's run takes a page of each grid array where the runs "
+                       "are short against the domain's rows (a thin sheet slanted across x)"
+                     : "the grid keeps 40 B for each x-row of the box around all the material, and the material "
+                       "reaches few of them (bodies far apart along y or z)",
                  packed / (1024.0 * 1024.0 * 1024.0));
   return e;
 }

@@ -382,9 +382,8 @@ namespace {
 // boxOf(b, lo, hi) gives box b, a point's box is the point): the stencil
 // bases of each box fill their rows of bins, whose node runs mpmNodeRuns
 // gives as the grid takes them. Their nodes, and the bytes the grid's pages
-// take for them, packed or (MpmSettings::denseGrid) in the whole grid, with
-// the bin sizes in the layout the grid takes for them (mpmHeldBytes; with
-// the colour field when `colour`).
+// take for them, packed or (MpmSettings::denseGrid) in the whole grid
+// (mpmHeldBytes; with the colour field when `colour`).
 struct RunMemory {
   double nodes = 0, bytes = 0;
 };
@@ -418,10 +417,7 @@ RunMemory mpmRunMemory(const GridSpec& g, std::size_t count, bool colour, bool p
   mpmNodeRuns(first.data(), end.data(), nbj, nbk, runFirst.data(), runEnd.data());
   RunMemory m;
   for (std::size_t q = 0; q < runFirst.size(); ++q) m.nodes += double(runEnd[q] - runFirst[q]);
-  // The layout the grid takes for this material (mpmGridLayout, or whole).
-  const MpmGridLayout layout = packed ? mpmGridLayout(g, {lo[0], lo[1], lo[2]}, {hi[0], hi[1], hi[2]})
-                                      : MpmGridLayout{{0, 0, 0}, g.dims};
-  m.bytes = mpmHeldBytes(layout, {lo[0], lo[1], lo[2]}, nbj, nbk, first.data(), end.data(), runFirst.data(),
+  m.bytes = mpmHeldBytes(g, {lo[0], lo[1], lo[2]}, nbj, nbk, first.data(), end.data(), runFirst.data(),
                          runEnd.data(), colour, packed);
   return m;
 }

@@ -83,8 +83,8 @@ void bindMpm(py::module_& m) {
       .def_readwrite("wall_nodes", &MpmSettings::wallNodes, "Wall layer thickness in nodes (0 = no walls).")
       .def_readwrite("reorder_interval", &MpmSettings::reorderInterval, "Substeps between particle sorts (0: never).")
       .def_readwrite("dense_grid", &MpmSettings::denseGrid,
-                     "Hold the MPM grid whole, laid out over the whole grid, instead of the runs of nodes the particles reach "
-                     "on each x-row in a layout over the material's box: the same "
+                     "Hold the MPM grid whole, every node of the grid, instead of only the runs of nodes the particles "
+                     "reach on each x-row, packed back to back: the same "
                      "particles bit for bit, more memory, never faster (the reference the sparse grid is checked against).")
       .def_readwrite("magnetic_solve_interval", &MpmSettings::magneticSolveInterval,
                      "Substeps between field solves; 0 = automatic.")

@@ -225,10 +225,13 @@ TEST(MpmTransfer, ParticleToGridIsTheScalarFormulaInTheDocumentedOrder) {
       expected[n].mass += c.mass;
     }
   }
-  for (int threads : {1, 2}) {
-    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, std::size_t(threads));
+  // With 1 and 2 threads, on the whole grid and (3 threads) on packed runs.
+  for (int threads : {1, 2, 3}) {
+    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, std::size_t(std::min(threads, 2)));
     MpmGrid grid(g);
+    grid.setWholeLayout(threads < 3);
     grid.particleToGrid(p, mats, dt);
+    EXPECT_EQ(grid.packed(), threads == 3);
     std::size_t differing = 0, first = 0;
     MpmNode firstGot;
     for (int k = 0; k < g.dims.k; ++k)
@@ -246,16 +249,25 @@ TEST(MpmTransfer, ParticleToGridIsTheScalarFormulaInTheDocumentedOrder) {
   }
 }
 
-// G2P against the scalar gather (gatherApicAt in Vec3d, as on the device) and
-// the scalar F, J and position updates of mpm/grid.h: bitwise.
+// G2P against the scalar gather (gatherApic in Vec3d, as on the device, on
+// the velocities copied into a whole grid) and the scalar F, J and position
+// updates of mpm/grid.h: bitwise, on the whole grid and on packed runs.
 TEST(MpmTransfer, GridToParticleIsTheScalarGather) {
+  for (const bool packed : {false, true}) {
+  SCOPED_TRACE(packed ? "packed" : "whole");
   const GridSpec g = testGrid(12, 0.05);
   MpmParticles p = randomParticles(g, 2000, 22);
   const std::vector<MpmMaterial> mats = twoMaterials();
   const double dt = 1e-3, invDx = 1.0 / g.dx;
   MpmGrid grid(g);
+  grid.setWholeLayout(!packed);
   grid.particleToGrid(p, mats, dt);
+  ASSERT_EQ(grid.packed(), packed);
   momentumToVelocity(grid);
+  std::vector<Vec3d> whole(g.nodeCount());
+  for (int k = 0; k < g.dims.k; ++k)
+    for (int j = 0; j < g.dims.j; ++j)
+      for (int i = 0; i < g.dims.i; ++i) whole[g.index(i, j, k)] = grid.velocityAt(i, j, k);
   MpmParticles expected = p;
   for (std::size_t q = 0; q < p.size(); ++q) {
     const Vec3d x = p.x[q];
@@ -263,9 +275,7 @@ TEST(MpmTransfer, GridToParticleIsTheScalarGather) {
     const int b[3] = {int(quadraticBaseFloor(u[0])), int(quadraticBaseFloor(u[1])), int(quadraticBaseFloor(u[2]))};
     Vec3d vp;
     Mat3d C;
-    const MpmGridLayout& L = grid.layout();
-    gatherApicAt<Vec3d>(grid.velocity().data() + grid.nodeIndex(b[0], b[1], b[2]), std::size_t(L.dims.i),
-                        std::size_t(L.dims.i) * std::size_t(L.dims.j), u, b, 4.0 * invDx, vp, C);
+    gatherApic<Vec3d>(whole.data(), std::size_t(g.dims.i), std::size_t(g.dims.j), u, b, 4.0 * invDx, vp, C);
     if (mats[p.material[q]].isFluid()) {
       expected.J[q] *= 1.0 + dt * trace(C);
     } else {
@@ -286,6 +296,7 @@ TEST(MpmTransfer, GridToParticleIsTheScalarGather) {
   EXPECT_EQ(0, std::memcmp(p.C.data(), expected.C.data(), n * sizeof(Mat3d)));
   EXPECT_EQ(0, std::memcmp(p.F.data(), expected.F.data(), n * sizeof(Mat3d)));
   EXPECT_EQ(0, std::memcmp(p.J.data(), expected.J.data(), n * sizeof(double)));
+  }
 }
 
 TEST(MpmTransfer, ParallelParticleToGridIsBitwiseDeterministic) {

@@ -318,9 +318,13 @@ FlatInterface flatInterface(int perAxis) {
       for (double y = kDx + h / 2; y < 15 * kDx; y += h)
         for (double x = kDx + h / 2; x < 15 * kDx; x += h) p.add({x, y, z}, {}, kRho * h * h * h, h * h * h, 0, 0);
     grid.particleToGrid(p, mats, 0.0);
-    const double* colour = grid.colour().data();
-    const MpmGridLayout& L = grid.layout();
-    const std::size_t sj = std::size_t(L.dims.i), sk = sj * std::size_t(L.dims.j);
+    // The colour field on the whole grid (colourAt: zero outside the runs).
+    const GridSpec& gs = grid.spec();
+    std::vector<double> colour(gs.nodeCount());
+    for (int k = 0; k < gs.dims.k; ++k)
+      for (int j = 0; j < gs.dims.j; ++j)
+        for (int i = 0; i < gs.dims.i; ++i) colour[gs.index(i, j, k)] = grid.colourAt(i, j, k);
+    const std::size_t sj = std::size_t(gs.dims.i), sk = sj * std::size_t(gs.dims.j);
     double sumG = 0, sumGd = 0, sumVG = 0;
     for (std::size_t q = 0; q < p.size(); ++q) {
       const Vec3d x = p.x[q] / kDx;  // grid coordinates
@@ -329,7 +333,7 @@ FlatInterface flatInterface(int perAxis) {
       const QuadraticWeights<double> wx = quadraticWeightsAt(x.x, int(quadraticBaseFloor(x.x)), 1 / kDx);
       const QuadraticWeights<double> wy = quadraticWeightsAt(x.y, int(quadraticBaseFloor(x.y)), 1 / kDx);
       const QuadraticWeights<double> wz = quadraticWeightsAt(x.z, int(quadraticBaseFloor(x.z)), 1 / kDx);
-      const double g = norm(colourGradient(colour + L.index(wx.base, wy.base, wz.base), sj, sk, wx, wy, wz));
+      const double g = norm(colourGradient(colour.data() + gs.index(wx.base, wy.base, wz.base), sj, sk, wx, wy, wz));
       sumG += g;
       sumGd += g * (surface - p.x[q].z) / kDx;
       sumVG += p.volume0[q] * g;

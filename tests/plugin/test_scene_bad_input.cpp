@@ -131,11 +131,11 @@ TEST(SceneBadInput, GridEstimateIsInGibibytesAndAcceptsTheLargestThatFits) {
   // 401^3: the run as a whole (the field solve's 409^3 nodes, 22.7 GiB, and
   // the sphere's 0.95M material cells, 1.2 GiB) is refused, by part; the MPM
   // grid counts the pages of the runs the sphere's stencils reach, packed
-  // (at most 124^3 nodes, 0.112 GiB with the bins' sizes over the sphere's
-  // box), not the domain's 401^3 (3.84 GiB).
+  // (at most 124^3 nodes, 0.104 GiB with the bins and the rows'
+  // bookkeeping), not the domain's 401^3 (3.84 GiB).
   const std::string err = errorOf(replaced(kScene, "\"dx\": 0.02", "\"dx\": 0.0005"));
   EXPECT_NE(err.find("bad.json needs about"), std::string::npos) << err;
-  EXPECT_NE(err.find("MPM grid 0.112, field solve 24,"), std::string::npos) << err;
+  EXPECT_NE(err.find("MPM grid 0.104, field solve 24,"), std::string::npos) << err;
   EXPECT_NE(err.find("more than LODESTONE_MEMORY_LIMIT_GIB = 25 GiB"), std::string::npos) << err;
   // Without magnetism the same grid needs no field solve: accepted.
   const std::string plain = replaced(kScene, ",\n                   \"magnetic\": { \"law\": \"paper\" }", "");

@@ -393,8 +393,6 @@ void MpmGrid::particleToGrid(const MpmParticles& particles, const std::vector<Mp
   particles.checkSizes();
   const auto t0 = Clock::now();
   const Index3 prevLo = activeLo_, prevHi = activeHi_;
-  const MpmGridLayout prevLayout = layout_;
-  const Index3 prevBinLo = binLo_, prevBinHi{binLo_.i + binDims_.i, binLo_.j + binDims_.j, binLo_.k + binDims_.k};
   const bool wasWhole = wholeGrid_, wasPacked = packed_;
   const std::size_t wasPackedCount = packedCount_;
   wholeGrid_ = false;
@@ -421,8 +419,6 @@ void MpmGrid::particleToGrid(const MpmParticles& particles, const std::vector<Mp
       releasePackedTail(wasPackedCount);
     else
       releaseOutsideRuns(prevLo, prevHi, prevRunFirst_, prevRunEnd_);
-    releaseBinsOutside(prevLayout, prevBinLo, prevBinHi, binLo_,
-                       {binLo_.i + binDims_.i, binLo_.j + binDims_.j, binLo_.k + binDims_.k});
   }
   if (particles.empty()) {
     // The colour sum is collective: a process without particles adds zeros.

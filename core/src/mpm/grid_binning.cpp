@@ -37,6 +37,22 @@ void atomicMax(std::atomic<std::uint32_t>& a, std::uint32_t v) {
   }
 }
 
+/// run(first, end) on each run [first, end) of consecutive particles with
+/// one key, in parallel chunks: once the particles are ordered by cell,
+/// most runs are a bin's particles, and each takes one atomic operation.
+template <typename Run>
+void forEachKeyRun(const std::uint64_t* key, std::size_t np, const Run& run) {
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, np, 4096), [&](const tbb::blocked_range<std::size_t>& r) {
+    std::size_t start = r.begin();
+    for (std::size_t p = r.begin() + 1; p < r.end(); ++p)
+      if (key[p] != key[start]) {
+        run(start, p);
+        start = p;
+      }
+    if (start < r.end()) run(start, r.end());
+  });
+}
+
 /// Box of base nodes touched: [lo, hi] inclusive, as a reduction value.
 struct BaseBox {
   int lo[3] = {std::numeric_limits<int>::max(), std::numeric_limits<int>::max(), std::numeric_limits<int>::max()};
@@ -65,20 +81,15 @@ struct BinKernel {
   Vec3d o;              // grid origin, m
   double invDx = 0;     // 1/m
   Index3 bd;            // stencil bases per axis
-  MpmGridLayout bins;   // the layout's bins (MpmGridLayout::binLayout)
   std::uint64_t* key = nullptr;
-  std::uint32_t* rank = nullptr;
-  std::atomic<std::uint32_t>* binSize = nullptr;
   std::atomic<std::uint32_t>*rowLow = nullptr, *rowHigh = nullptr;  // per row of bins: bd.i - first, end
   std::atomic<std::size_t>* firstBad = nullptr;
-  std::atomic<bool>* outside = nullptr;  // set when a bin lies outside the layout's
 
-  // Bases, bin slots, each row's extent of bins and the box of bases of
-  // particles [begin, end). Inlined into each instruction-set variant
-  // (runKernel).
+  // Bases, each row's extent of bins and the box of bases of particles
+  // [begin, end). Inlined into each instruction-set variant (runKernel).
   __attribute__((always_inline)) inline void operator()(std::size_t begin, std::size_t end, BaseBox& acc) const {
-    std::size_t runFlat = 0, runStart = 0, runLength = 0;
-    int runBase[3] = {0, 0, 0};
+    std::size_t runFlat = 0, runLength = 0;
+    int runBi = 0;
     std::size_t extentRow = kNone;
     std::uint32_t extentLo = 0, extentHi = 0;  // bins [extentLo, extentHi) of row extentRow
     auto endExtent = [&] {
@@ -89,20 +100,8 @@ struct BinKernel {
     };
     auto endRun = [&] {
       if (runLength == 0) return;
-      // A bin outside the layout's takes no slots: the binning lays the grid
-      // out anew and runs this pass again. The rows' extents are the
-      // particles' own, kept.
-      const int b0 = runBase[0], b1 = runBase[1], b2 = runBase[2];
-      if (b0 >= bins.lo.i && b1 >= bins.lo.j && b2 >= bins.lo.k && b0 < bins.lo.i + bins.dims.i &&
-          b1 < bins.lo.j + bins.dims.j && b2 < bins.lo.k + bins.dims.k) {
-        const std::uint32_t first =
-            binSize[bins.index(b0, b1, b2)].fetch_add(std::uint32_t(runLength), std::memory_order_relaxed);
-        for (std::size_t q = 0; q < runLength; ++q) rank[runStart + q] = first + std::uint32_t(q);
-      } else {
-        outside->store(true, std::memory_order_relaxed);
-      }
       const std::size_t row = runFlat / std::size_t(bd.i);
-      const std::uint32_t bi = std::uint32_t(b0);
+      const std::uint32_t bi = std::uint32_t(runBi);
       if (row != extentRow) {
         endExtent();
         extentRow = row;
@@ -132,10 +131,7 @@ struct BinKernel {
       if (runLength != 0 && flat != runFlat) endRun();
       if (runLength == 0) {
         runFlat = flat;
-        runStart = p;
-        runBase[0] = bi;
-        runBase[1] = bj;
-        runBase[2] = bk;
+        runBi = bi;
       }
       ++runLength;
       acc.add(bi, bj, bk);
@@ -170,39 +166,42 @@ void mpmNodeRuns(const std::uint32_t* rowFirst, const std::uint32_t* rowEnd, int
   });
 }
 
-bool MpmGrid::binPass1(const MpmParticles& particles, std::size_t materialCount, Index3& boxLo, Index3& boxHi) {
+void MpmGrid::bin(const MpmParticles& particles, std::size_t materialCount) {
   const std::size_t np = particles.size();
+  require(np < std::size_t(kBadKey), "MPM grid: at most 2^32 - 2 particles are supported, got ", np);
   const Vec3d* X = particles.x.data();
   const std::uint32_t* mat = particles.material.data();
-  std::atomic<std::size_t> firstBad{kNone};
-  std::atomic<bool> outside{false};
+  std::atomic<std::uint32_t>* rowLow = reinterpret_cast<std::atomic<std::uint32_t>*>(rowLow_.data());
+  std::atomic<std::uint32_t>* rowHigh = reinterpret_cast<std::atomic<std::uint32_t>*>(rowHigh_.data());
+  key_.resize(np);
+  // The runs of the previous P2G, which particleToGrid hands back where the new ones do not reach.
+  prevRunFirst_.swap(runFirst_);
+  prevRunEnd_.swap(runEnd_);
+  runFirst_.clear();
+  runEnd_.clear();
+  const Index3 bd = baseDims_;
 
-  // Pass 1: base node of every particle (packed 21 bits per axis), a
-  // scheduling-dependent slot in its bin, and the box of bases in use
-  // (min/max are exact, so the reduction is deterministic). A run of
-  // consecutive particles in one bin (the usual case once the particles are
-  // ordered by cell) takes its slots with one atomic addition.
+  // Pass 1: base node of every particle (packed 21 bits per axis), the
+  // extent of bins of each row of bins (in the whole grid's rows: atomic
+  // min and max, order-free) and the box of bases in use (min/max are
+  // exact, so the reduction is deterministic).
+  std::atomic<std::size_t> firstBad{kNone};
   BinKernel kernel;
   kernel.X = X;
   kernel.mat = mat;
   kernel.materialCount = materialCount;
   kernel.o = spec_.origin;
   kernel.invDx = 1.0 / spec_.dx;
-  kernel.bd = baseDims_;
-  kernel.bins = layout_.binLayout();
+  kernel.bd = bd;
   kernel.key = key_.data();
-  kernel.rank = rank_.data();
-  kernel.binSize = binSizes();
-  kernel.rowLow = reinterpret_cast<std::atomic<std::uint32_t>*>(rowLow_.data());
-  kernel.rowHigh = reinterpret_cast<std::atomic<std::uint32_t>*>(rowHigh_.data());
+  kernel.rowLow = rowLow;
+  kernel.rowHigh = rowHigh;
   kernel.firstBad = &firstBad;
-  kernel.outside = &outside;
   const BaseBox box = reduceKernel<BaseBox>(kernel, np, 2048);
 
   if (const std::size_t bad = firstBad.load(); bad != kNone) {
-    // Restore the invariants before throwing: bin sizes and row extents
-    // zero, and every node zero (no runs), in no layout.
-    binSize_.clear();
+    // Restore the invariants before throwing: row extents zero, and every
+    // node zero (no runs).
     rowLow_.clear();
     rowHigh_.clear();
     nodes_.clear();
@@ -216,7 +215,6 @@ bool MpmGrid::binPass1(const MpmParticles& particles, std::size_t materialCount,
     rowOrigin_.clear();
     packedCount_ = 0;
     activeLo_ = activeHi_ = binLo_ = binDims_ = {0, 0, 0};
-    if (!wholeLayout_) layout_ = MpmGridLayout{};
     const Vec3d x = X[bad];
     const Vec3d o = spec_.origin;
     if (mat[bad] >= materialCount)
@@ -232,61 +230,6 @@ bool MpmGrid::binPass1(const MpmParticles& particles, std::size_t materialCount,
                                  o.x, ", ", o.y, ", ", o.z, ") to (", hi.x, ", ", hi.y, ", ", hi.z,
                                  ") m with dx = ", spec_.dx, " m"));
   }
-  boxLo = {box.lo[0], box.lo[1], box.lo[2]};
-  boxHi = {box.hi[0], box.hi[1], box.hi[2]};
-  return !outside.load();
-}
-
-void MpmGrid::bin(const MpmParticles& particles, std::size_t materialCount) {
-  const std::size_t np = particles.size();
-  require(np < std::size_t(kBadKey), "MPM grid: at most 2^32 - 2 particles are supported, got ", np);
-  // Invariant: every bin size is zero between calls (pass 2 resets the
-  // ones it used), so only the bins of the active box are ever touched.
-  std::atomic<std::uint32_t>* binSize = binSizes();
-  std::atomic<std::uint32_t>* rowLow = reinterpret_cast<std::atomic<std::uint32_t>*>(rowLow_.data());
-  std::atomic<std::uint32_t>* rowHigh = reinterpret_cast<std::atomic<std::uint32_t>*>(rowHigh_.data());
-  key_.resize(np);
-  rank_.resize(np);
-  // The runs of the previous P2G, which particleToGrid hands back where the new ones do not reach.
-  prevRunFirst_.swap(runFirst_);
-  prevRunEnd_.swap(runEnd_);
-  runFirst_.clear();
-  runEnd_.clear();
-  const Index3 bd = baseDims_;
-
-  // Pass 1 in the current layout. Where some bin lies outside it, or the
-  // layout has grown eight times the one the material needs, the grid takes
-  // the material's layout (mpmGridLayout), the slots taken are given back
-  // and pass 1 runs again.
-  Index3 boxLo, boxHi;
-  const bool fits = binPass1(particles, materialCount, boxLo, boxHi);
-  if (np > 0 && !wholeLayout_) {
-    const MpmGridLayout wanted = mpmGridLayout(spec_, boxLo, boxHi);
-    const MpmGridLayout reach = mpmGridReach(spec_, boxLo, boxHi);
-    const Index3 reachHi{reach.lo.i + reach.dims.i, reach.lo.j + reach.dims.j, reach.lo.k + reach.dims.k};
-    if (!fits || !layout_.holds(reach.lo, reachHi) || layout_.count() > 8 * wanted.count()) {
-      if (!layout_.empty()) {
-        // Give back the slots pass 1 took (bins of the layout within the box).
-        const MpmGridLayout had = layout_.binLayout();
-        const Index3 lo{std::max(boxLo.i, had.lo.i), std::max(boxLo.j, had.lo.j), std::max(boxLo.k, had.lo.k)};
-        const Index3 hi{std::min(boxHi.i + 1, had.lo.i + had.dims.i), std::min(boxHi.j + 1, had.lo.j + had.dims.j),
-                        std::min(boxHi.k + 1, had.lo.k + had.dims.k)};
-        if (lo.i < hi.i && lo.j < hi.j && lo.k < hi.k) {
-          const int nj = hi.j - lo.j;
-          tbb::parallel_for(tbb::blocked_range<int>(0, nj * (hi.k - lo.k), 16), [&](const tbb::blocked_range<int>& r) {
-            for (int row = r.begin(); row != r.end(); ++row) {
-              std::atomic<std::uint32_t>* sizes = binSize + had.index(lo.i, lo.j + row % nj, lo.k + row / nj);
-              for (int i = 0; i < hi.i - lo.i; ++i)
-                if (sizes[i].load(std::memory_order_relaxed) != 0) sizes[i].store(0, std::memory_order_relaxed);
-            }
-          });
-        }
-      }
-      layout_ = wanted;
-      const bool again = binPass1(particles, materialCount, boxLo, boxHi);
-      require(again, "MPM grid: a particle's bin lies outside the layout taken for it");  // never: the same bases
-    }
-  }
 
   if (np == 0) {
     activeLo_ = activeHi_ = binLo_ = binDims_ = {0, 0, 0};
@@ -294,14 +237,14 @@ void MpmGrid::bin(const MpmParticles& particles, std::size_t materialCount) {
     sorted_.clear();
     return;
   }
-  binLo_ = boxLo;
-  binDims_ = {boxHi.i - boxLo.i + 1, boxHi.j - boxLo.j + 1, boxHi.k - boxLo.k + 1};
+  binLo_ = {box.lo[0], box.lo[1], box.lo[2]};
+  binDims_ = {box.hi[0] - box.lo[0] + 1, box.hi[1] - box.lo[1] + 1, box.hi[2] - box.lo[2] + 1};
   activeLo_ = binLo_;
-  activeHi_ = {boxHi.i + 3, boxHi.j + 3, boxHi.k + 3};
-  const MpmGridLayout bins = layout_.binLayout();
+  activeHi_ = {box.hi[0] + 3, box.hi[1] + 3, box.hi[2] + 3};
 
   // Each row's extent of bins (pass 1's atomics, reset here: zero between
-  // calls) and the first offset slot of its bins.
+  // calls) and the first slot of its bins: the rows' bins, from the first
+  // to the last holding particles, back to back.
   const std::size_t rows = std::size_t(binDims_.j) * std::size_t(binDims_.k);
   rowFirst_.resize(rows);
   rowEnd_.resize(rows);
@@ -327,26 +270,26 @@ void MpmGrid::bin(const MpmParticles& particles, std::size_t materialCount) {
   }
   rowStart_[rows] = slots;
 
-  // Pass 2: offsets of the rows' bins, x-rows in order (integer prefix
-  // sums: order-free); the final pass also resets the sizes it read.
-  offsets_.resize(slots + 1);
+  // Pass 2: the particles of each bin, counted in offsets_ (zeroed here).
+  static_assert(sizeof(std::atomic<std::uint32_t>) == sizeof(std::uint32_t) &&
+                    alignof(std::atomic<std::uint32_t>) == alignof(std::uint32_t) &&
+                    std::atomic<std::uint32_t>::is_always_lock_free,
+                "the bins' counts and cursors are uint32 storage used as lock-free atomics");
+  offsets_.assign(slots + 1, 0);
+  std::atomic<std::uint32_t>* count = reinterpret_cast<std::atomic<std::uint32_t>*>(offsets_.data());
+  forEachKeyRun(key_.data(), np, [&](std::size_t first, std::size_t end) {
+    count[binIndex(key_[first])].fetch_add(std::uint32_t(end - first), std::memory_order_relaxed);
+  });
+
+  // Pass 3: the counts become the bins' offsets, in place (integer prefix
+  // sums: order-free).
   tbb::parallel_scan(
-      tbb::blocked_range<std::size_t>(0, rows, 64), std::uint32_t(0),
+      tbb::blocked_range<std::size_t>(0, slots, 4096), std::uint32_t(0),
       [&](const tbb::blocked_range<std::size_t>& r, std::uint32_t sum, bool isFinal) {
-        for (std::size_t row = r.begin(); row != r.end(); ++row) {
-          if (rowEnd_[row] <= rowFirst_[row]) continue;  // an empty row: no bins (its first bin may lie before the layout)
-          const std::size_t bj = std::size_t(binLo_.j) + row % std::size_t(binDims_.j);
-          const std::size_t bk = std::size_t(binLo_.k) + row / std::size_t(binDims_.j);
-          std::atomic<std::uint32_t>* sizes = binSize + bins.index(int(rowFirst_[row]), int(bj), int(bk));
-          std::uint32_t* off = offsets_.data() + rowStart_[row];
-          for (std::size_t i = 0; i < rowEnd_[row] - rowFirst_[row]; ++i) {
-            const std::uint32_t n = sizes[i].load(std::memory_order_relaxed);
-            if (isFinal) {
-              off[i] = sum;
-              if (n != 0) sizes[i].store(0, std::memory_order_relaxed);  // empty bins' pages stay unwritten
-            }
-            sum += n;
-          }
+        for (std::size_t b = r.begin(); b != r.end(); ++b) {
+          const std::uint32_t n = offsets_[b];
+          if (isFinal) offsets_[b] = sum;
+          sum += n;
         }
         return sum;
       },
@@ -358,13 +301,19 @@ void MpmGrid::bin(const MpmParticles& particles, std::size_t materialCount) {
   runEnd_.assign(runFirst_.size(), 0);
   mpmNodeRuns(rowFirst_.data(), rowEnd_.data(), binDims_.j, binDims_.k, runFirst_.data(), runEnd_.data());
 
-  // Pass 3: scatter indices into their bins.
+  // Pass 4: scatter indices into their bins, each run of particles taking
+  // its places from its bin's cursor (the order within a bin depends on the
+  // schedule; pass 5 sorts it).
   sorted_.resize(np);
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, np, 8192), [&](const tbb::blocked_range<std::size_t>& r) {
-    for (std::size_t p = r.begin(); p != r.end(); ++p) sorted_[offsets_[binIndex(key_[p])] + rank_[p]] = std::uint32_t(p);
+  cursor_.assign(offsets_.begin(), offsets_.end() - 1);
+  std::atomic<std::uint32_t>* cursor = reinterpret_cast<std::atomic<std::uint32_t>*>(cursor_.data());
+  forEachKeyRun(key_.data(), np, [&](std::size_t first, std::size_t end) {
+    const std::uint32_t at =
+        cursor[binIndex(key_[first])].fetch_add(std::uint32_t(end - first), std::memory_order_relaxed);
+    for (std::size_t q = first; q < end; ++q) sorted_[at + (q - first)] = std::uint32_t(q);
   });
 
-  // Pass 4: ascending particle index within each bin (bins are small:
+  // Pass 5: ascending particle index within each bin (bins are small:
   // insertion sort; std::sort for crowded ones).
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, slots, 4096), [&](const tbb::blocked_range<std::size_t>& r) {
     for (std::size_t b = r.begin(); b != r.end(); ++b) {

@@ -34,16 +34,9 @@ MpmGrid::MpmGrid(const GridSpec& spec) : spec_(spec) {
   // Reserved, not yet backed by memory: pages are taken as P2G first writes them.
   nodes_ = PageArray<MpmNode>(spec_.nodeCount());
   velocity_ = PageArray<Vec3d>(spec_.nodeCount());
-  binSize_ = PageArray<std::uint32_t>(nb);
   rowLow_ = PageArray<std::uint32_t>(std::size_t(baseDims_.j) * std::size_t(baseDims_.k));
   rowHigh_ = PageArray<std::uint32_t>(std::size_t(baseDims_.j) * std::size_t(baseDims_.k));
-  layout_ = {{0, 0, 0}, spec_.dims};
 }
-
-static_assert(sizeof(std::atomic<std::uint32_t>) == sizeof(std::uint32_t) &&
-                  alignof(std::atomic<std::uint32_t>) == alignof(std::uint32_t) &&
-                  std::atomic<std::uint32_t>::is_always_lock_free,
-              "the bin sizes are zero-initialised uint32 storage used as lock-free atomics");
 
 MpmGrid::MpmGrid(MpmGrid&&) noexcept = default;
 MpmGrid& MpmGrid::operator=(MpmGrid&&) noexcept = default;
@@ -70,26 +63,6 @@ void MpmGrid::zeroBox(Index3 lo, Index3 hi) {
   });
 }
 
-MpmGridLayout mpmGridReach(const GridSpec& spec, Index3 baseLo, Index3 baseHi) {
-  const Index3 lo{std::max(0, baseLo.i - 1), std::max(0, baseLo.j - 1), std::max(0, baseLo.k - 1)};
-  const Index3 hi{std::min(spec.dims.i, baseHi.i + 4), std::min(spec.dims.j, baseHi.j + 4),
-                  std::min(spec.dims.k, baseHi.k + 4)};
-  return {lo, {hi.i - lo.i, hi.j - lo.j, hi.k - lo.k}};
-}
-
-MpmGridLayout mpmGridLayout(const GridSpec& spec, Index3 baseLo, Index3 baseHi) {
-  const MpmGridLayout reach = mpmGridReach(spec, baseLo, baseHi);
-  // Along x the margin shares the rows' pages with the material; along y
-  // and z it takes no memory until material reaches it.
-  int lo[3], extent[3];
-  for (int a = 0; a < 3; ++a) {
-    const int margin = a == 0 ? 1 + reach.dims[a] / 16 : 2 + reach.dims[a] / 8;
-    lo[a] = std::max(0, reach.lo[a] - margin);
-    extent[a] = std::min(spec.dims[a], reach.lo[a] + reach.dims[a] + margin) - lo[a];
-  }
-  return {{lo[0], lo[1], lo[2]}, {extent[0], extent[1], extent[2]}};
-}
-
 int mpmStencilBase(const GridSpec& spec, double x, int axis) {
   const double u = (x - spec.origin[axis]) / spec.dx;
   return int(std::clamp(quadraticBaseFloor(u), 0.0, double(spec.dims[axis] - 3)));
@@ -100,26 +73,26 @@ namespace {
 bool emptyBox(Index3 lo, Index3 hi) { return lo.i >= hi.i || lo.j >= hi.j || lo.k >= hi.k; }
 
 // Zeroes the pieces [i0, i1) of each row (j, k) of box [lo, hi) that
-// `zeroRow(j, k, zero)` passes to zero(i0, i1), in an array laid out as
-// `at` (x fastest); `keep(j, k, f, e)` gives the run [f, e) of row (j, k)
-// whose pages must stay, in layout `kept`. Contiguous runs are merged, and
-// since every element outside what is kept is zero or about to be, a page
-// holding nothing kept goes back to the system whole.
+// `zeroRow(j, k, zero)` passes to zero(i0, i1), in an array over the whole
+// grid `spec` (x fastest); `keep(j, k, f, e)` gives the run [f, e) of row
+// (j, k) whose pages must stay. Contiguous runs are merged, and since every
+// element outside what is kept is zero or about to be, a page holding
+// nothing kept goes back to the system whole.
 template <typename T, typename ZeroRow, typename Keep>
-void zeroRowPieces(PageArray<T>& a, const MpmGridLayout& at, Index3 lo, Index3 hi, const ZeroRow& zeroRow,
-                   const MpmGridLayout& kept, const Keep& keep) {
-  if (a.empty() || emptyBox(lo, hi) || at.empty()) return;
-  const std::size_t rowLength = std::size_t(kept.dims.i), plane = rowLength * std::size_t(kept.dims.j);
-  const std::size_t keptCount = kept.count();
+void zeroRowPieces(PageArray<T>& a, const GridSpec& spec, Index3 lo, Index3 hi, const ZeroRow& zeroRow,
+                   const Keep& keep) {
+  if (a.empty() || emptyBox(lo, hi)) return;
+  const std::size_t rowLength = std::size_t(spec.dims.i), plane = rowLength * std::size_t(spec.dims.j);
+  const std::size_t keptCount = spec.nodeCount();
   // Whether elements [e0, e1) all lie outside what is kept.
   const auto outsideKeep = [&](std::size_t e0, std::size_t e1) {
     e1 = std::min(e1, keptCount);
     for (std::size_t e = e0; e < e1;) {
-      const std::size_t i = e % rowLength, j = (e / rowLength) % std::size_t(kept.dims.j), k = e / plane;
+      const std::size_t i = e % rowLength, j = (e / rowLength) % std::size_t(spec.dims.j), k = e / plane;
       const std::size_t rowEnd = std::min(e1, e - i + rowLength);
-      const int iLo = kept.lo.i + int(i), iHi = iLo + int(rowEnd - e);
+      const int iLo = int(i), iHi = iLo + int(rowEnd - e);
       int f = 0, l = 0;
-      keep(kept.lo.j + int(j), kept.lo.k + int(k), f, l);
+      keep(int(j), int(k), f, l);
       if (f < l && iLo < l && iHi > f) return false;
       e = rowEnd;
     }
@@ -139,9 +112,9 @@ void zeroRowPieces(PageArray<T>& a, const MpmGridLayout& at, Index3 lo, Index3 h
   };
   for (int k = lo.k; k < hi.k; ++k)
     for (int j = lo.j; j < hi.j; ++j) {
-      const std::size_t row = at.index(at.lo.i, j, k);
+      const std::size_t row = spec.index(0, j, k);
       zeroRow(j, k, [&](int i0, int i1) {
-        if (i1 > i0) zero(row + std::size_t(i0 - at.lo.i), std::size_t(i1 - i0));
+        if (i1 > i0) zero(row + std::size_t(i0), std::size_t(i1 - i0));
       });
     }
   flush();
@@ -172,42 +145,33 @@ class PageCount {
 
 }  // namespace
 
-double mpmHeldBytes(const MpmGridLayout& layout, Index3 binLo, int nbj, int nbk, const std::uint32_t* rowFirst,
+double mpmHeldBytes(const GridSpec& spec, Index3 binLo, int nbj, int nbk, const std::uint32_t* rowFirst,
                     const std::uint32_t* rowEnd, const std::int32_t* runFirst, const std::int32_t* runEnd,
                     bool colour, bool packed) {
   const std::size_t page = PageMapping::pageSize();
-  PageCount nodes(sizeof(MpmNode), page), velocity(sizeof(Vec3d), page), colourField(sizeof(double), page),
-      bins(sizeof(std::uint32_t), page);
+  PageCount nodes(sizeof(MpmNode), page), velocity(sizeof(Vec3d), page), colourField(sizeof(double), page);
   double binCount = 0;
-  const MpmGridLayout binLayout = layout.binLayout();
-  for (int bk = 0; bk < nbk; ++bk)
-    for (int bj = 0; bj < nbj; ++bj) {
-      const std::size_t row = std::size_t(bj) + std::size_t(nbj) * std::size_t(bk);
-      if (rowEnd[row] <= rowFirst[row]) continue;
-      const std::size_t at = binLayout.index(int(rowFirst[row]), binLo.j + bj, binLo.k + bk);
-      bins.add(at, at + (rowEnd[row] - rowFirst[row]));
-      binCount += double(rowEnd[row] - rowFirst[row]);
-    }
+  for (std::size_t row = 0; row < std::size_t(nbj) * std::size_t(nbk); ++row)
+    if (rowEnd[row] > rowFirst[row]) binCount += double(rowEnd[row] - rowFirst[row]);
   const int nj = nbj + 2, nk = nbk + 2;
   std::size_t packedAt = 0;  // packed: where the next run starts
   for (int kk = 0; kk < nk; ++kk)
     for (int jj = 0; jj < nj; ++jj) {
       const std::size_t q = std::size_t(jj) + std::size_t(nj) * std::size_t(kk);
       if (runEnd[q] <= runFirst[q]) continue;
-      const std::size_t first = packed ? packedAt : layout.index(runFirst[q], binLo.j + jj, binLo.k + kk);
+      const std::size_t first = packed ? packedAt : spec.index(runFirst[q], binLo.j + jj, binLo.k + kk);
       const std::size_t end = first + std::size_t(runEnd[q] - runFirst[q]);
       packedAt = end;
       nodes.add(first, end);
       velocity.add(first, end);
       if (colour) colourField.add(first, end);
     }
-  return nodes.bytes() + velocity.bytes() + colourField.bytes() + bins.bytes() + 4 * binCount +
-         40.0 * double(nj) * double(nk);
+  return nodes.bytes() + velocity.bytes() + colourField.bytes() + 4 * binCount + 40.0 * double(nj) * double(nk);
 }
 
 double MpmGrid::heldBytes() const {
   if (binDims_.j <= 0 || binDims_.k <= 0 || runFirst_.empty()) return 0;
-  return mpmHeldBytes(layout_, binLo_, binDims_.j, binDims_.k, rowFirst_.data(), rowEnd_.data(), runFirst_.data(),
+  return mpmHeldBytes(spec_, binLo_, binDims_.j, binDims_.k, rowFirst_.data(), rowEnd_.data(), runFirst_.data(),
                       runEnd_.data(), !colour_.empty(), packed_);
 }
 
@@ -265,7 +229,6 @@ void MpmGrid::releasePackedTail(std::size_t was) {
 void MpmGrid::releaseOutsideRuns(Index3 lo, Index3 hi, const std::vector<std::int32_t>& first,
                                  const std::vector<std::int32_t>& end) {
   if (emptyBox(lo, hi)) return;
-  const MpmGridLayout all{{0, 0, 0}, spec_.dims};
   const int nj = hi.j - lo.j;
   const auto keep = [&](int j, int k, int& f, int& e) { activeRun(j, k, f, e); };
   // The previous run of each row less the current one (up to two pieces).
@@ -282,45 +245,14 @@ void MpmGrid::releaseOutsideRuns(Index3 lo, Index3 hi, const std::vector<std::in
     zero(a, std::min(b, c));
     zero(std::max(a, d), b);
   };
-  zeroRowPieces(nodes_, all, lo, hi, zeroRow, all, keep);
-  zeroRowPieces(velocity_, all, lo, hi, zeroRow, all, keep);
-  zeroRowPieces(colour_, all, lo, hi, zeroRow, all, keep);
-}
-
-void MpmGrid::releaseBinsOutside(const MpmGridLayout& was, Index3 lo, Index3 hi, Index3 keepLo, Index3 keepHi) {
-  // Every bin size is zero between calls: only pages go back.
-  const bool kept = !emptyBox(keepLo, keepHi);
-  const bool sameLayout = was == layout_;
-  const auto keep = [&](int j, int k, int& f, int& e) {
-    f = e = 0;
-    if (kept && j >= keepLo.j && j < keepHi.j && k >= keepLo.k && k < keepHi.k) {
-      f = keepLo.i;
-      e = keepHi.i;
-    }
-  };
-  const auto zeroRow = [&](int j, int k, const auto& zero) {
-    int c = 0, d = 0;
-    if (sameLayout) keep(j, k, c, d);
-    if (c >= d) {
-      zero(lo.i, hi.i);
-      return;
-    }
-    zero(lo.i, std::min(hi.i, c));
-    zero(std::max(lo.i, d), hi.i);
-  };
-  zeroRowPieces(binSize_, was.binLayout(), lo, hi, zeroRow, layout_.binLayout(), keep);
+  zeroRowPieces(nodes_, spec_, lo, hi, zeroRow, keep);
+  zeroRowPieces(velocity_, spec_, lo, hi, zeroRow, keep);
+  zeroRowPieces(colour_, spec_, lo, hi, zeroRow, keep);
 }
 
 void MpmGrid::setWholeLayout(bool whole) {
   wholeLayout_ = whole;
-  const MpmGridLayout all{{0, 0, 0}, spec_.dims};
-  const bool written = !emptyBox(activeLo_, activeHi_) || wholeGrid_;
-  if (!whole) {
-    if (!written) layout_ = MpmGridLayout{};  // the first P2G lays it out
-    return;
-  }
-  if (packed_) unpack();
-  layout_ = all;  // the bin sizes are zero between calls: nothing moves
+  if (whole && packed_) unpack();
 }
 
 void MpmGrid::unpack() {

@@ -47,11 +47,11 @@
 // before it. The packing is redone at every P2G (a prefix sum of the run
 // lengths), so memory follows any shape of material (a sheet slanted across
 // the grid, bodies apart) at the nodes its stencils reach, and pages are
-// taken only as far as the runs reach (base/page_array.h). The bins' sizes
-// are laid out over the whole grid or over a box that holds the material's
-// (MpmGridLayout, chosen by mpmGridLayout and kept while the material stays
-// inside it). Storage changes where nodes lie in memory, never what is added
-// to them or in what order: either gives the same bits.
+// taken only as far as the runs reach (base/page_array.h). The bins are
+// packed the same way: each row of bins holds its bins from the first to
+// the last holding particles, back to back. Storage changes where nodes lie
+// in memory, never what is added to them or in what order: either gives
+// the same bits.
 //
 // Particles must lie where their stencil fits the grid: grid coordinate
 // u = (x - origin)/dx in [1/2, dims - 3/2) per axis (transfer.h). The solver
@@ -97,57 +97,9 @@ struct GridToParticleReport {
   std::size_t nonFinite = 0;  ///< particles whose position, velocity or J became non-finite (left as they are)
 };
 
-/// A box [lo, lo + dims) of the grid's nodes, x fastest, node (i, j, k) at
-/// index(i, j, k). Its stencil bins (base nodes) are the box
-/// [lo, lo + dims - 2), binLayout: where an MpmGrid counts the particles of
-/// each bin. The whole grid, or a box that follows the material
-/// (mpmGridLayout), so that the counts' rows are as long as the material's
-/// box is wide: material thin along x then packs them into shared pages.
-struct MpmGridLayout {
-  Index3 lo{0, 0, 0}, dims{0, 0, 0};
-  bool empty() const { return dims.i <= 0 || dims.j <= 0 || dims.k <= 0; }
-  /// Nodes in the box.
-  std::size_t count() const { return empty() ? 0 : std::size_t(dims.i) * std::size_t(dims.j) * std::size_t(dims.k); }
-  /// Whether node (i, j, k) lies in the box.
-  bool holds(int i, int j, int k) const {
-    return i >= lo.i && j >= lo.j && k >= lo.k && i < lo.i + dims.i && j < lo.j + dims.j && k < lo.k + dims.k;
-  }
-  /// Whether the box of nodes [a, b) lies in the box.
-  bool holds(Index3 a, Index3 b) const {
-    return a.i >= lo.i && a.j >= lo.j && a.k >= lo.k && b.i <= lo.i + dims.i && b.j <= lo.j + dims.j &&
-           b.k <= lo.k + dims.k;
-  }
-  /// Index of node (i, j, k), which the box must hold.
-  std::size_t index(int i, int j, int k) const {
-    return std::size_t(i - lo.i) + std::size_t(dims.i) * (std::size_t(j - lo.j) + std::size_t(dims.j) * std::size_t(k - lo.k));
-  }
-  /// The layout of its stencil bins (base nodes): [lo, lo + dims - 2), none
-  /// for an empty one. binLayout().index(bi, bj, bk) is bin (bi, bj, bk)'s.
-  MpmGridLayout binLayout() const {
-    if (empty()) return {};
-    return {lo, {dims.i - 2, dims.j - 2, dims.k - 2}};
-  }
-  friend bool operator==(const MpmGridLayout& a, const MpmGridLayout& b) { return a.lo == b.lo && a.dims == b.dims; }
-};
-
-/// The nodes a P2G of particles whose stencil bases span [baseLo, baseHi]
-/// (inclusive, grid indices) reads or writes: those the stencils reach,
-/// [baseLo, baseHi + 3), and one more each side (the colour field's Hessian
-/// reads them), within the grid. A layout must hold them.
-MpmGridLayout mpmGridReach(const GridSpec& spec, Index3 baseLo, Index3 baseHi);
-
-/// The layout an MpmGrid on `spec` takes for particles whose stencil bases
-/// span [baseLo, baseHi] (inclusive, grid indices): their mpmGridReach and
-/// a margin each side, so that moving material keeps its
-/// layout for a while, all within the grid: along x 1 + a sixteenth of that
-/// extent (it shares the rows' pages), along y and z 2 + an eighth (it takes
-/// no memory until material reaches it).
-MpmGridLayout mpmGridLayout(const GridSpec& spec, Index3 baseLo, Index3 baseHi);
-
 /// The stencil base node (quadraticBaseFloor) along `axis` (0, 1, 2 for x,
 /// y, z) of a point whose coordinate on that axis is x (m), clamped to the
-/// grid's bins [0, dims - 3]: the bin a particle there lands in, and the
-/// bounds of a box's bins for mpmGridLayout.
+/// grid's bins [0, dims - 3]: the bin a particle there lands in.
 int mpmStencilBase(const GridSpec& spec, double x, int axis);
 
 /// An MpmGrid holds fewer stencil bins (base nodes: dims - 2 per axis) than
@@ -163,19 +115,18 @@ constexpr std::uint64_t kMpmGridCountLimit = 0xFFFFFFFFu;  // 2^32 - 1
 void mpmNodeRuns(const std::uint32_t* rowFirst, const std::uint32_t* rowEnd, int nbj, int nbk, std::int32_t* runFirst,
                  std::int32_t* runEnd);
 
-/// The memory (bytes) the grid's arrays take for the runs of one P2G with
-/// its bin sizes in `layout`: bins [rowFirst, rowEnd) of the nbj x nbk rows
-/// of bins from base node row (binLo.j, binLo.k) (bi in grid indices, as
-/// mpmNodeRuns takes them) and the node runs runFirst/runEnd mpmNodeRuns
-/// gives for them. Whole pages (PageMapping::pageSize) of the node data
-/// (32 B a node), the velocities (24 B), the colour field (8 B, when
-/// `colour`) and the bin sizes (4 B a bin), each page counted once however
-/// many rows share it, plus the bins' offsets (4 B a bin) and the rows'
-/// bookkeeping (40 B a row). packed = true (setWholeLayout(false)): the node
-/// runs back to back from the arrays' start; false: each run in its row of
-/// `layout`, where a run shorter than a page in a longer row still takes a
-/// page. Bin rows of the layout shorter than a page share pages.
-double mpmHeldBytes(const MpmGridLayout& layout, Index3 binLo, int nbj, int nbk, const std::uint32_t* rowFirst,
+/// The memory (bytes) an MpmGrid on `spec` takes for the runs of one P2G:
+/// bins [rowFirst, rowEnd) of the nbj x nbk rows of bins from base node row
+/// (binLo.j, binLo.k) (bi in grid indices, as mpmNodeRuns takes them) and
+/// the node runs runFirst/runEnd mpmNodeRuns gives for them. Whole pages
+/// (PageMapping::pageSize) of the node data (32 B a node), the velocities
+/// (24 B) and the colour field (8 B, when `colour`), each page counted once
+/// however many runs share it: packed = true (setWholeLayout(false)), the
+/// runs back to back from the arrays' start; false, each run in its row of
+/// the whole grid, where a run shorter than a page in a longer row still
+/// takes a page. Plus the bins' offsets (4 B a bin) and the rows'
+/// bookkeeping (40 B a row).
+double mpmHeldBytes(const GridSpec& spec, Index3 binLo, int nbj, int nbk, const std::uint32_t* rowFirst,
                     const std::uint32_t* rowEnd, const std::int32_t* runFirst, const std::int32_t* runEnd,
                     bool colour, bool packed);
 
@@ -217,11 +168,6 @@ class MpmGrid {
   PageArray<Vec3d>& velocity() { return velocity_; }
   const PageArray<Vec3d>& velocity() const { return velocity_; }
 
-  /// The box of nodes whose stencil bins (binLayout) hold the bins' sizes:
-  /// the whole grid (the default), or, after setWholeLayout(false),
-  /// mpmGridLayout of the last P2G's particles, kept while the material
-  /// stays inside it. It holds the active box.
-  const MpmGridLayout& layout() const { return layout_; }
   /// Whether the node arrays hold only the runs, back to back (after a P2G
   /// with setWholeLayout(false)); false: the whole grid.
   bool packed() const { return packed_; }
@@ -254,13 +200,12 @@ class MpmGrid {
     return inRun(i, j, k) ? colour_[nodeIndex(i, j, k)] : 0.0;
   }
   /// whole = true (the default): the node arrays hold the whole grid, node
-  /// (i, j, k) at spec().index(i, j, k), and the bins' sizes are laid out
-  /// over it; data already written moves with it. whole = false: from the
-  /// next P2G on, the node arrays hold only the runs, packed, and the bins'
-  /// sizes the material's box (layout), so that memory follows the material
-  /// rather than the grid's rows (MpmSolver's grid does this unless
-  /// MpmSettings::denseGrid). A partition's sums and setColourSum, which add
-  /// whole arrays, need the whole layout.
+  /// (i, j, k) at spec().index(i, j, k); data already written moves with
+  /// it. whole = false: from the next P2G on, the node arrays hold only the
+  /// runs, packed, so that memory follows the material rather than the
+  /// grid's rows (MpmSolver's grid does this unless MpmSettings::denseGrid).
+  /// A partition's sums and setColourSum, which add whole arrays, need the
+  /// whole layout.
   void setWholeLayout(bool whole);
 
   /// The box of nodes the last P2G could touch: [activeLo, activeHi) per
@@ -327,9 +272,6 @@ class MpmGrid {
 
  private:
   void bin(const MpmParticles& particles, std::size_t materialCount);
-  // Pass 1 of the binning in the current layout; false when some particle's
-  // bin lies outside it (`box` then still spans every particle).
-  bool binPass1(const MpmParticles& particles, std::size_t materialCount, Index3& boxLo, Index3& boxHi);
   // Moves the node data of the runs from their packed places to the whole
   // grid's, zeroing what they leave (a whole-grid index is never below the
   // packed one).
@@ -351,9 +293,6 @@ class MpmGrid {
   // Packed: hands back the node data past the runs, up to `was` nodes (the
   // previous runs').
   void releasePackedTail(std::size_t was);
-  // Hands back the bin sizes' pages of base box [lo, hi) (in layout `was`)
-  // outside base box [keepLo, keepHi) (in the current layout).
-  void releaseBinsOutside(const MpmGridLayout& was, Index3 lo, Index3 hi, Index3 keepLo, Index3 keepHi);
   // Runs rowFn(bj, bk) on every row of bins of the active box, in the nine
   // colours of disjoint nodes (grid.cpp).
   template <typename RowFn>
@@ -370,7 +309,6 @@ class MpmGrid {
   std::vector<Mat3d> capillary_;  // surface tension: capillary Cauchy stress per particle, Pa
   std::function<void(double*, std::size_t)> colourSum_;  // setColourSum
   Index3 activeLo_{0, 0, 0}, activeHi_{0, 0, 0};
-  MpmGridLayout layout_;     // where the node arrays and bin sizes keep their entries
   bool wholeLayout_ = true;  // setWholeLayout
   bool wholeGrid_ = false;  // activateWholeGrid since the last P2G: the caller writes the whole grid
   // The node runs of the active box's rows (activeRun), and those of the
@@ -382,7 +320,7 @@ class MpmGrid {
   bool packed_ = false;          // the node arrays hold the runs packed (setWholeLayout(false))
   std::size_t packedCount_ = 0;  // packed: the nodes of the runs, from the arrays' start
   // Binning scratch. Bins are stencil base nodes; each row of bins of the
-  // box in use, [binLo_, binLo_ + binDims_), gets offsets for its bins from
+  // box in use, [binLo_, binLo_ + binDims_), gets slots for its bins from
   // the first to the last holding particles: bins [rowFirst_, rowEnd_) of
   // row r (bi, grid indices) are offsets_[rowStart_[r] ...].
   std::size_t binIndex(std::uint64_t packed) const {
@@ -400,12 +338,8 @@ class MpmGrid {
   // zero between calls (read back and reset within the box), used as atomics.
   PageArray<std::uint32_t> rowLow_, rowHigh_;
   std::vector<std::uint64_t> key_;   // per particle: base node, 21 bits per axis
-  std::vector<std::uint32_t> rank_;  // per particle: slot in its bin (scheduling-dependent, re-sorted)
-  // Per base node of the layout (MpmGridLayout::binLayout): the particles in
-  // each bin, zero between calls; used as std::atomic<std::uint32_t> (binSizes()).
-  PageArray<std::uint32_t> binSize_;
-  std::atomic<std::uint32_t>* binSizes() { return reinterpret_cast<std::atomic<std::uint32_t>*>(binSize_.data()); }
-  std::vector<std::uint32_t> offsets_;  // the rows' bins + 1 prefix sums
+  std::vector<std::uint32_t> offsets_;  // per slot + 1: the bins' first places in sorted_
+  std::vector<std::uint32_t> cursor_;   // per slot: the next free place while scattering
   std::vector<std::uint32_t> sorted_;   // particle indices grouped by bin, ascending within a bin
   double binningSeconds_ = 0;
 };
