@@ -210,20 +210,16 @@ plugin::MemoryEstimate printMemoryEstimate(const plugin::Scene& scene, const Mpm
                solver.emitterCount() > 0 ? " (at the end, with the emitted ones)" : "",
                plugin::memoryLimitText().c_str());
   // Where the grid takes four times its nodes' 64 B or more, and a tenth of
-  // the estimate, the note says why: held whole, each x-row's run takes a
-  // page of each array; packed, the bookkeeping of the x-rows of the box
-  // around all the material (bodies far apart along y or z).
+  // the estimate, the note says why: the bookkeeping of the x-rows of the
+  // box around all the material, of which the material reaches few.
   const double packed = plugin::kMpmNodeBytes * c.mpmNodes;
   if (c.mpmGridBytes > 4 * packed && c.mpmGridBytes - packed > 0.1 * e.total())
     std::fprintf(out,
-                 "  note: the MPM grid takes %.3g GiB for %.4g nodes (%.0f B a node, 64 B where the material fills "
-                 "its box): %s; the same nodes as runs filling their rows would take %.3g GiB\n",
+                 "  note: the MPM grid takes %.3g GiB for %.4g nodes (%.0f B a node, 64 B where the material's "
+                 "runs fill the rows of its box): it keeps 40 B for each x-row of the box around all the material, "
+                 "and the material reaches few of them (bodies far apart along y or z); its nodes alone take "
+                 "%.3g GiB\n",
                  c.mpmGridBytes / (1024.0 * 1024.0 * 1024.0), c.mpmNodes, c.mpmGridBytes / c.mpmNodes,
-                 scene.settings.denseGrid
-                     ? "held whole (dense_grid), each x-row's run takes a page of each grid array where the runs "
-                       "are short against the domain's rows (a thin sheet slanted across x)"
-                     : "the grid keeps 40 B for each x-row of the box around all the material, and the material "
-                       "reaches few of them (bodies far apart along y or z)",
                  packed / (1024.0 * 1024.0 * 1024.0));
   return e;
 }
