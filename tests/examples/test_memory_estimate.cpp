@@ -51,6 +51,12 @@ struct Memory {
   double estimated = 0, peak = 0, mpmGrid = 0, fieldSolve = 0, particles = 0;
 };
 
+/// What the run in `dir` printed.
+std::string logOf(const fs::path& dir) {
+  std::ifstream in(dir / "log.txt");
+  return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+}
+
 /// Runs frame 1 of `scene` with `args` into `dir`; the memory of its stats.json.
 Memory run(const fs::path& scene, const fs::path& dir, const std::string& args) {
   const std::string command = std::string(LODESTONE_CLI) + " run '" + scene.string() + "' --out '" +
@@ -58,9 +64,7 @@ Memory run(const fs::path& scene, const fs::path& dir, const std::string& args) 
                               (dir / "log.txt").string() + "' 2>&1";
   const int status = std::system(command.c_str());
   if (status != 0) {
-    std::ifstream log(dir / "log.txt");
-    const std::string text((std::istreambuf_iterator<char>(log)), std::istreambuf_iterator<char>());
-    ADD_FAILURE() << command << " exited with status " << status << ":\n" << text;
+    ADD_FAILURE() << command << " exited with status " << status << ":\n" << logOf(dir);
   }
   const nlohmann::json m = readJson(dir / "out" / "stats.json").at("memory");
   Memory r;
@@ -74,6 +78,20 @@ Memory run(const fs::path& scene, const fs::path& dir, const std::string& args) 
                        m.at("process_before_bytes").get<double>(),
                    r.estimated);
   return r;
+}
+
+/// `scene` (its first body) with a copy of that body named "far": the
+/// first centred at `a`, the copy at `b` (m), written to dir/scene.json and
+/// run with `args`.
+Memory runApart(const fs::path& dir, nlohmann::json scene, const std::array<double, 3>& a,
+                const std::array<double, 3>& b, const std::string& args) {
+  scene["bodies"][0]["center"] = a;
+  nlohmann::json far = scene["bodies"][0];
+  far["name"] = "far";
+  far["center"] = b;
+  scene["bodies"].push_back(far);
+  std::ofstream(dir / "scene.json") << scene.dump(1);
+  return run(dir / "scene.json", dir, args);
 }
 
 /// The estimate within 20% of the peak, and `part` (bytes) at least
@@ -105,14 +123,8 @@ TEST(MemoryEstimate, TwoSmallBodiesFarApartCostTheirOwnRowsNotTheBoxBetween) {
   // run of nodes that stencils reach (mpm/grid.h): the cubes' own rows.
   const fs::path dir = scratch("mpm_grid");
   cubeScene(dir, 0.0078, 0.03, false);
-  nlohmann::json s = readJson(dir / "scene.json");
-  s["bodies"][0]["center"] = {-0.42, -0.42, 0.06};
-  nlohmann::json second = s["bodies"][0];
-  second["name"] = "far";
-  second["center"] = {0.42, 0.42, 0.92};
-  s["bodies"].push_back(second);
-  std::ofstream(dir / "scene.json") << s.dump(1);
-  const Memory m = run(dir / "scene.json", dir, "--no-png --no-ply");
+  const Memory m =
+      runApart(dir, readJson(dir / "scene.json"), {-0.42, -0.42, 0.06}, {0.42, 0.42, 0.92}, "--no-png --no-ply");
   expectClose(m, m.mpmGrid, 0.0);
   EXPECT_GT(m.mpmGrid, 0);
   EXPECT_LT(m.mpmGrid, 0.02 * 129.0 * 129.0 * 129.0 * 64) << "the estimate counts the box between the bodies";
@@ -178,8 +190,7 @@ TEST(MemoryEstimate, TwoMagneticBodiesFarApartCostTheirPatches) {
   s["magnets"].push_back(magnet);
   std::ofstream(dir / "scene.json") << s.dump(1);
   const Memory m = run(dir / "scene.json", dir, "--no-png --no-ply");
-  std::ifstream logFile(dir / "log.txt");
-  const std::string log((std::istreambuf_iterator<char>(logFile)), std::istreambuf_iterator<char>());
+  const std::string log = logOf(dir);
   EXPECT_NE(log.find("patches: on (2 patches)"), std::string::npos) << log;
   EXPECT_GT(m.fieldSolve, 0);
   EXPECT_LT(m.fieldSolve, 0.1 * 129.0 * 129.0 * 129.0 * 356) << "the estimate counts the box between the bodies";
@@ -220,8 +231,7 @@ TEST(MemoryEstimate, ASheetSlantedAcrossXCostsItsRuns) {
   const Memory m = run(slabScene(dir, {90, 125, 1}, {1, 0, 1}), dir, "--no-png --no-ply");
   expectClose(m, m.mpmGrid, 0.1);
   EXPECT_LT(m.mpmGrid, 60e6) << "the sheet's runs took a page each";
-  std::ifstream logFile(dir / "log.txt");
-  const std::string log((std::istreambuf_iterator<char>(logFile)), std::istreambuf_iterator<char>());
+  const std::string log = logOf(dir);
   EXPECT_EQ(log.find("note: the MPM grid"), std::string::npos) << log;
 }
 
@@ -232,18 +242,10 @@ TEST(MemoryEstimate, TwoSmallBodiesFarApartSayWhatTheirRowsCost) {
   // Estimated within 20%, and the CLI says why the grid costs that.
   const fs::path dir = scratch("apart");
   nlohmann::json s = readJson(slabScene(dir, {6, 6, 6}, {0, 0, 1}));
-  const double dx = 8.0 / 1024;
-  s["domain"] = {{"min", {0, 0, 0}}, {"max", {8, 8, 8}}, {"dx", dx}};
-  nlohmann::json other = s["bodies"][0];
-  s["bodies"][0]["center"] = {0.2, 0.2, 0.2};
-  other["name"] = "far";
-  other["center"] = {7.8, 7.8, 7.8};
-  s["bodies"].push_back(other);
-  std::ofstream(dir / "scene.json") << s.dump(1);
-  const Memory m = run(dir / "scene.json", dir, "--no-png --no-ply");
+  s["domain"] = {{"min", {0, 0, 0}}, {"max", {8, 8, 8}}, {"dx", 8.0 / 1024}};
+  const Memory m = runApart(dir, s, {0.2, 0.2, 0.2}, {7.8, 7.8, 7.8}, "--no-png --no-ply");
   expectClose(m, m.mpmGrid, 0.2);
-  std::ifstream logFile(dir / "log.txt");
-  const std::string log((std::istreambuf_iterator<char>(logFile)), std::istreambuf_iterator<char>());
+  const std::string log = logOf(dir);
   EXPECT_NE(log.find("note: the MPM grid takes"), std::string::npos) << log;
   EXPECT_NE(log.find("bodies far apart along y or z"), std::string::npos) << log;
 }
@@ -257,7 +259,6 @@ TEST(MemoryEstimate, APlateThinAlongXCostsItsBox) {
   const Memory m = run(slabScene(dir, {1, 125, 125}, {0, 0, 1}), dir, "--no-png --no-ply");
   expectClose(m, m.mpmGrid, 0.1);
   EXPECT_LT(m.mpmGrid, 60e6) << "the plate's rows took a page each";
-  std::ifstream logFile(dir / "log.txt");
-  const std::string log((std::istreambuf_iterator<char>(logFile)), std::istreambuf_iterator<char>());
+  const std::string log = logOf(dir);
   EXPECT_EQ(log.find("note: the MPM grid"), std::string::npos) << log;
 }
