@@ -174,6 +174,7 @@ void MpmGrid::bin(const MpmParticles& particles, std::size_t materialCount) {
   std::atomic<std::uint32_t>* rowLow = reinterpret_cast<std::atomic<std::uint32_t>*>(rowLow_.data());
   std::atomic<std::uint32_t>* rowHigh = reinterpret_cast<std::atomic<std::uint32_t>*>(rowHigh_.data());
   key_.resize(np);
+  rank_.resize(np);
   // The runs of the previous P2G, which particleToGrid hands back where the new ones do not reach.
   prevRunFirst_.swap(runFirst_);
   prevRunEnd_.swap(runEnd_);
@@ -270,15 +271,19 @@ void MpmGrid::bin(const MpmParticles& particles, std::size_t materialCount) {
   }
   rowStart_[rows] = slots;
 
-  // Pass 2: the particles of each bin, counted in offsets_ (zeroed here).
+  // Pass 2: the particles of each bin, counted in offsets_ (zeroed here),
+  // each particle given its place among its bin's (scheduling-dependent;
+  // pass 5 sorts each bin).
   static_assert(sizeof(std::atomic<std::uint32_t>) == sizeof(std::uint32_t) &&
                     alignof(std::atomic<std::uint32_t>) == alignof(std::uint32_t) &&
                     std::atomic<std::uint32_t>::is_always_lock_free,
-                "the bins' counts and cursors are uint32 storage used as lock-free atomics");
+                "the bins' counts are uint32 storage used as lock-free atomics");
   offsets_.assign(slots + 1, 0);
   std::atomic<std::uint32_t>* count = reinterpret_cast<std::atomic<std::uint32_t>*>(offsets_.data());
   forEachKeyRun(key_.data(), np, [&](std::size_t first, std::size_t end) {
-    count[binIndex(key_[first])].fetch_add(std::uint32_t(end - first), std::memory_order_relaxed);
+    const std::uint32_t at =
+        count[binIndex(key_[first])].fetch_add(std::uint32_t(end - first), std::memory_order_relaxed);
+    for (std::size_t q = first; q < end; ++q) rank_[q] = at + std::uint32_t(q - first);
   });
 
   // Pass 3: the counts become the bins' offsets, in place (integer prefix
@@ -301,16 +306,10 @@ void MpmGrid::bin(const MpmParticles& particles, std::size_t materialCount) {
   runEnd_.assign(runFirst_.size(), 0);
   mpmNodeRuns(rowFirst_.data(), rowEnd_.data(), binDims_.j, binDims_.k, runFirst_.data(), runEnd_.data());
 
-  // Pass 4: scatter indices into their bins, each run of particles taking
-  // its places from its bin's cursor (the order within a bin depends on the
-  // schedule; pass 5 sorts it).
+  // Pass 4: scatter indices into their bins.
   sorted_.resize(np);
-  cursor_.assign(offsets_.begin(), offsets_.end() - 1);
-  std::atomic<std::uint32_t>* cursor = reinterpret_cast<std::atomic<std::uint32_t>*>(cursor_.data());
-  forEachKeyRun(key_.data(), np, [&](std::size_t first, std::size_t end) {
-    const std::uint32_t at =
-        cursor[binIndex(key_[first])].fetch_add(std::uint32_t(end - first), std::memory_order_relaxed);
-    for (std::size_t q = first; q < end; ++q) sorted_[at + (q - first)] = std::uint32_t(q);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, np, 8192), [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t p = r.begin(); p != r.end(); ++p) sorted_[offsets_[binIndex(key_[p])] + rank_[p]] = std::uint32_t(p);
   });
 
   // Pass 5: ascending particle index within each bin (bins are small:
