@@ -49,6 +49,7 @@ nlohmann::json frameJson(int frame, const MpmFrameReport& r, std::size_t particl
   putQuantity(f, "dt_max", r.maxDt, "s");
   nlohmann::json stages;
   putQuantity(stages, "p2g", r.secondsP2G, "s");
+  putQuantity(stages, "p2g_binning", r.secondsBinning, "s");  // part of p2g
   putQuantity(stages, "magnetic", r.secondsMagnetic, "s");
   putQuantity(stages, "grid_update", r.secondsGridUpdate, "s");
   putQuantity(stages, "g2p", r.secondsG2P, "s");

@@ -66,7 +66,12 @@ Memory run(const fs::path& scene, const fs::path& dir, const std::string& args) 
   if (status != 0) {
     ADD_FAILURE() << command << " exited with status " << status << ":\n" << logOf(dir);
   }
-  const nlohmann::json m = readJson(dir / "out" / "stats.json").at("memory");
+  const nlohmann::json stats = readJson(dir / "out" / "stats.json");
+  // The binning is a part of P2G, reported on its own.
+  const nlohmann::json& stages = stats.at("frames").back().at("stages");
+  EXPECT_GT(stages.at("p2g_binning_s").get<double>(), 0.0);
+  EXPECT_LT(stages.at("p2g_binning_s").get<double>(), stages.at("p2g_s").get<double>());
+  const nlohmann::json& m = stats.at("memory");
   Memory r;
   r.estimated = m.at("estimated_peak_bytes").get<double>();
   r.peak = m.at("peak_resident_bytes").get<double>();

@@ -156,6 +156,7 @@ MpmFrameReport MpmSolver::advanceFrame(double frameDuration, const MpmProgressCa
     fr.maxDt = first ? dt : std::max(fr.maxDt, dt);
     first = false;
     fr.secondsP2G += r.secondsP2G;
+    fr.secondsBinning += r.secondsBinning;
     fr.secondsMagnetic += r.secondsMagnetic;
     fr.secondsGridUpdate += r.secondsGridUpdate;
     fr.secondsG2P += r.secondsG2P;

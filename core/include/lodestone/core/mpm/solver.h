@@ -224,6 +224,7 @@ struct MpmFrameReport {
   int dtAtMinimum = 0;          ///< substeps whose CFL step was raised to dtMin
   int dtLimitedByCfl = 0;       ///< substeps whose fixed dt exceeded stabilityLimitDt() and was shortened
   double secondsP2G = 0, secondsMagnetic = 0, secondsGridUpdate = 0, secondsG2P = 0, secondsTotal = 0;
+  double secondsBinning = 0;  ///< part of secondsP2G: the particle sort by stencil bin
   std::vector<MagneticStageReport> magneticReports;  ///< one per field solve
   int magneticReused = 0;                            ///< due solves the planner skipped (field reused)
   Vec3d magneticImpulse;                             ///< sum over substeps of dt * applied magnetic force, N*s
