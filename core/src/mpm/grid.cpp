@@ -408,17 +408,17 @@ void MpmGrid::particleToGrid(const MpmParticles& particles, const std::vector<Mp
   // keeps its pages.
   if (wasWhole && !packed_) {
     zeroBox({0, 0, 0}, spec_.dims);
-  } else if (wasWhole || (packed_ && !wasPacked)) {  // the whole grid given up since (setWholeLayout(false))
-    nodes_.clear();
-    velocity_.clear();
-    colour_.clear();
-    zeroRuns();
   } else {
-    zeroRuns();
-    if (packed_)
+    if (wasWhole || (packed_ && !wasPacked)) {  // the whole grid given up since (setWholeLayout(false))
+      nodes_.clear();
+      velocity_.clear();
+      colour_.clear();
+    } else if (packed_) {
       releasePackedTail(wasPackedCount);
-    else
+    } else {
       releaseOutsideRuns(prevLo, prevHi, prevRunFirst_, prevRunEnd_);
+    }
+    zeroRuns();
   }
   if (particles.empty()) {
     // The colour sum is collective: a process without particles adds zeros.
