@@ -4,6 +4,9 @@
 #include <tbb/parallel_for.h>
 
 #include <cmath>
+#include <cstring>
+#include <memory>
+#include <type_traits>
 
 #include "lodestone/core/base/error.h"
 #include "lodestone/core/base/parallel.h"
@@ -12,14 +15,24 @@ namespace lodestone {
 inline namespace mpm {
 
 namespace {
+constexpr std::size_t kPermuteGrain = 8192;
+
+/// a[p] <- a[order[p]] through `scratch` (room for a.size() elements of the
+/// widest attribute): gathered into it, then copied back, so that `a` keeps
+/// its storage. A new array per attribute would cost a zeroing pass and the
+/// first touch of its pages each time, three times the gather's own time.
 template <typename V>
-void permuteArray(std::vector<V>& a, const std::vector<std::uint32_t>& order) {
-  std::vector<V> b(a.size());
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, order.size(), 8192),
+void permuteArray(std::vector<V>& a, const std::vector<std::uint32_t>& order, unsigned char* scratch) {
+  static_assert(std::is_trivially_copyable<V>::value, "particle attributes are copied as bytes");
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, order.size(), kPermuteGrain),
                     [&](const tbb::blocked_range<std::size_t>& r) {
-                      for (std::size_t p = r.begin(); p != r.end(); ++p) b[p] = a[order[p]];
+                      for (std::size_t p = r.begin(); p != r.end(); ++p)
+                        std::memcpy(scratch + p * sizeof(V), &a[order[p]], sizeof(V));
                     });
-  a.swap(b);
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, order.size(), kPermuteGrain),
+                    [&](const tbb::blocked_range<std::size_t>& r) {
+                      std::memcpy(a.data() + r.begin(), scratch + r.begin() * sizeof(V), r.size() * sizeof(V));
+                    });
 }
 
 template <typename V>
@@ -137,17 +150,21 @@ void MpmParticles::permute(const std::vector<std::uint32_t>& order) {
     require(o < order.size() && !seen[o], "MPM particles: the order is not a permutation (entry ", o, ")");
     seen[o] = 1;
   }
-  permuteArray(x, order);
-  permuteArray(v, order);
-  permuteArray(C, order);
-  permuteArray(F, order);
-  permuteArray(J, order);
-  permuteArray(mass, order);
-  permuteArray(volume0, order);
-  permuteArray(count, order);
-  permuteArray(material, order);
-  permuteArray(id, order);
-  permuteArray(magneticForce, order);
+  // Not zeroed: the gather writes every byte it later reads.
+  const std::unique_ptr<unsigned char[]> scratch(new unsigned char[order.size() * sizeof(Mat3d)]);
+  static_assert(sizeof(Mat3d) >= sizeof(Vec3d) && sizeof(Mat3d) >= sizeof(std::uint64_t),
+                "the scratch holds the widest attribute");
+  permuteArray(x, order, scratch.get());
+  permuteArray(v, order, scratch.get());
+  permuteArray(C, order, scratch.get());
+  permuteArray(F, order, scratch.get());
+  permuteArray(J, order, scratch.get());
+  permuteArray(mass, order, scratch.get());
+  permuteArray(volume0, order, scratch.get());
+  permuteArray(count, order, scratch.get());
+  permuteArray(material, order, scratch.get());
+  permuteArray(id, order, scratch.get());
+  permuteArray(magneticForce, order, scratch.get());
 }
 
 double MpmParticles::totalMass() const {
