@@ -81,7 +81,8 @@ void bindMpm(py::module_& m) {
       .def_readwrite("dt_max", &MpmSettings::dtMax, "s")
       .def_readwrite("dt_min", &MpmSettings::dtMin, "s")
       .def_readwrite("wall_nodes", &MpmSettings::wallNodes, "Wall layer thickness in nodes (0 = no walls).")
-      .def_readwrite("reorder_interval", &MpmSettings::reorderInterval, "Substeps between particle sorts (0: never).")
+      .def_readwrite("reorder_interval", &MpmSettings::reorderInterval,
+                     "Substeps between particle sorts by cell, and the first substep after an emit sorts (0: never).")
       .def_readwrite("dense_grid", &MpmSettings::denseGrid,
                      "Hold the MPM grid whole, every node of the grid, instead of only the runs of nodes the particles "
                      "reach on each x-row, packed back to back: the same "

@@ -18,7 +18,10 @@
 #include "lodestone/core/base/bspline.h"
 #include "lodestone/core/base/error.h"
 #include "lodestone/core/mpm/grid.h"
+#include "lodestone/core/mpm/emitter.h"
+#include "lodestone/core/mpm/material.h"
 #include "lodestone/core/mpm/particle_order.h"
+#include "lodestone/core/mpm/solver.h"
 #include "lodestone/core/sources/uniform_field.h"
 #include "lodestone_test/mpm_samples.h"
 
@@ -172,4 +175,86 @@ TEST(MpmParticleOrder, AStaleOrderChangesNothingAndABadOneIsRefused) {
   EXPECT_EQ(p.id, before.id);
   EXPECT_EQ(p.x, before.x);
   EXPECT_EQ(reuse.positions(), before.x);
+}
+
+TEST(MpmParticleOrder, DueAfterAnEmissionUnlessNever) {
+  EXPECT_TRUE(particleReorderDue(20, 1, true));
+  EXPECT_TRUE(particleReorderDue(20, 7, true));
+  EXPECT_FALSE(particleReorderDue(20, 7, false));
+  for (long long s : {1LL, 20LL}) EXPECT_FALSE(particleReorderDue(0, s, true)) << s;
+}
+
+namespace {
+
+// A moving, spinning solid block emitted into a small grid, its particles in
+// the emitter's lattice order.
+MpmSolver& emitBlock(MpmSolver& solver) {
+  const std::uint32_t m = solver.addMaterial(neoHookeanSolid(1e5, 0.3, 1000));
+  EmitterSettings e;
+  e.velocity = {0.3, 0, -0.2};  // m/s
+  e.angularVelocity = {0, 2, 1};  // rad/s
+  solver.emit(EmitterShape::box(Pose::at({0.5, 0.45, 0.55}), {0.12, 0.1, 0.08}), m, e);
+  return solver;
+}
+
+MpmSettings blockSettings(int reorderInterval) {
+  MpmSettings s;
+  s.grid.dx = 1.0 / 32;
+  s.grid.dims = {33, 33, 33};
+  s.fixedDt = 2e-4;  // s
+  s.reorderInterval = reorderInterval;
+  return s;
+}
+
+bool sortedByCell(const MpmSolver& solver, const std::vector<Vec3d>& x) {
+  const GridSpec g = solver.settings().grid;
+  for (std::size_t q = 1; q < x.size(); ++q)
+    if (baseNode(g, x[q]) < baseNode(g, x[q - 1])) return false;
+  return true;
+}
+
+}  // namespace
+
+TEST(MpmParticleOrder, TheFirstSubstepAfterAnEmissionSortsAndTheParticlesAreThoseOfNoSort) {
+  MpmSolver sorted(blockSettings(20)), never(blockSettings(0));
+  emitBlock(sorted);
+  emitBlock(never);
+  const std::vector<Vec3d> emitted = sorted.particles().x;
+  ASSERT_GT(emitted.size(), 1000u);
+  ASSERT_FALSE(sortedByCell(sorted, emitted)) << "the lattice order is the cell order: the test would be vacuous";
+
+  // Substep 1 sorts by the cells P2G binned the particles in (their positions
+  // before it advected them); substep 2 keeps that order.
+  std::vector<Vec3d> before = sorted.particles().x;
+  sorted.step(2e-4);
+  never.step(2e-4);
+  std::vector<std::uint64_t> ids = sorted.particles().id;
+  std::vector<Vec3d> x0(ids.size());
+  for (std::size_t q = 0; q < ids.size(); ++q) x0[q] = before[ids[q]];  // ids are emission indices
+  EXPECT_TRUE(sortedByCell(sorted, x0));
+  for (std::size_t q = 0; q < ids.size(); ++q) ASSERT_EQ(never.particles().id[q], q) << q;
+  sorted.step(2e-4);
+  never.step(2e-4);
+  EXPECT_EQ(sorted.particles().id, ids) << "no emission since the sort, and substep 2 is not on the interval";
+
+  // A second emission: the next substep sorts again.
+  emitBlock(sorted);
+  emitBlock(never);
+  sorted.step(2e-4);
+  never.step(2e-4);
+  EXPECT_NE(std::vector<std::uint64_t>(sorted.particles().id.begin(), sorted.particles().id.begin() + ids.size()), ids);
+
+  // P2G sums each node's particles in index order, which the sort keeps
+  // within a node: every particle ends where it does unsorted, bit for bit.
+  const MpmParticles& a = sorted.particles();
+  const MpmParticles& b = never.particles();
+  ASSERT_EQ(a.size(), b.size());
+  for (std::size_t q = 0; q < a.size(); ++q) {
+    const std::size_t o = a.id[q];  // b holds particle id o at index o
+    ASSERT_EQ(b.id[o], o);
+    ASSERT_EQ(a.x[q], b.x[o]) << q;
+    ASSERT_EQ(a.v[q], b.v[o]) << q;
+    ASSERT_TRUE(sameMat(a.F[q], b.F[o])) << q;
+    ASSERT_TRUE(sameMat(a.C[q], b.C[o])) << q;
+  }
 }

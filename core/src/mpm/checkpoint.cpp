@@ -171,7 +171,7 @@ struct MpmCheckpointAccess {
     w.put(std::int32_t(s.stepsSinceSolve_));
     w.put(std::uint8_t(s.haveMagneticForce_));
     w.put(std::uint8_t(s.frameStart_));
-    w.put(std::uint8_t(s.particlesDirty_));
+    w.put(std::uint8_t(s.emittedSinceSort_));  // (version 2 wrote particlesDirty_ here, which restore never read)
     w.put(std::uint8_t(s.sameGrid_));
     w.putGrid(s.settings_.grid);
     w.putGrid(s.magneticGrid_);
@@ -257,7 +257,7 @@ struct MpmCheckpointAccess {
     const std::int32_t stepsSinceSolve = r.get<std::int32_t>("solve counter");
     const bool haveForce = r.get<std::uint8_t>("flags") != 0;
     const bool frameStart = r.get<std::uint8_t>("flags") != 0;
-    const bool dirty = r.get<std::uint8_t>("flags") != 0;
+    const bool emittedSinceSort = r.get<std::uint8_t>("flags") != 0;
     const bool sameGrid = r.get<std::uint8_t>("flags") != 0;
     const GridSpec grid = r.getGrid("MPM grid"), mgrid = r.getGrid("magnetic grid");
     const auto equalGrids = [](const GridSpec& a, const GridSpec& b) {
@@ -400,8 +400,11 @@ struct MpmCheckpointAccess {
     s.frameStart_ = frameStart;
     // A domain check at the next substep: a no-op for particles the solver
     // wrote (they are inside), a clamp or removal for any that are not.
-    (void)dirty;
     s.particlesDirty_ = true;
+    // Points emitted since the last sort: the next substep sorts them (in an
+    // older file this byte was the dirty mark: at worst one more sort of the
+    // particles by cell).
+    s.emittedSinceSort_ = emittedSinceSort;
     s.magneticDropped_ = dropped;
     for (std::size_t m = 0; m < poses.size(); ++m) s.magnets_[m]->setPose(poses[m]);
     for (std::size_t c = 0; c < bodies.size(); ++c)

@@ -4,7 +4,9 @@
 namespace lodestone {
 inline namespace mpm {
 
-bool particleReorderDue(int interval, long long substeps) { return interval > 0 && substeps % interval == 0; }
+bool particleReorderDue(int interval, long long substeps, bool emittedSinceSort) {
+  return interval > 0 && (emittedSinceSort || substeps % interval == 0);
+}
 
 bool reorderParticles(const std::vector<std::uint32_t>& order, MpmParticles& particles, FieldReuse& reuse) {
   if (order.size() != particles.size()) return false;

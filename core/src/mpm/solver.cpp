@@ -138,6 +138,7 @@ std::uint32_t MpmSolver::addMaterial(const MpmMaterial& material) {
 
 EmitReport MpmSolver::emit(const EmitterShape& shape, std::uint32_t material, EmitterSettings settings) {
   particlesDirty_ = true;
+  emittedSinceSort_ = true;
   require(material < materials_.size(), "MPM solver: material index ", material, " out of range (", materials_.size(),
           " materials)");
   if (settings.cellSize == 0) settings.cellSize = settings_.grid.dx;
@@ -516,9 +517,10 @@ MpmStepReport MpmSolver::step(double dt) {
   const bool removedAfterP2G = gridToParticle(dt, rep);
   ++substeps_;
   ++stepsSinceSolve_;
-  if (!removedAfterP2G && particleReorderDue(settings_.reorderInterval, substeps_)) {
+  if (!removedAfterP2G && particleReorderDue(settings_.reorderInterval, substeps_, emittedSinceSort_)) {
     FieldReuse byId;  // with a partition the record is in id order, not the particles'
     reorderParticles(grid_.binnedOrder(), particles_, partition_ ? byId : reuse_);
+    emittedSinceSort_ = false;
   }
   // 8. The rate emitters: the chunks born in (t, t + dt], at their place at t + dt.
   emitFromEmitters(dt, rep);

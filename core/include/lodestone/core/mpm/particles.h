@@ -6,7 +6,8 @@
 // Magnetic points carry n_p micro-particles (dimensionless), zero otherwise.
 //
 // The solver reorders points by grid cell every MpmSettings::reorderInterval
-// substeps (default 20; 0 keeps the order) and removes
+// substeps (default 20; 0 keeps the order) and after the first substep that
+// follows an emission, and removes
 // points that leave the domain under OutOfDomainPolicy::Remove or become
 // non-finite; `id` is a persistent identity that survives both.
 #include <cstddef>

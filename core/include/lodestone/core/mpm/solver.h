@@ -19,8 +19,9 @@
 //      particles leaving the domain are clamped or removed, non-finite ones
 //      removed, and counted in the report; particles that ended deeper
 //      inside a collider than its allowance are pushed back (colliderProjection).
-//      Every `reorderInterval` substeps
-//      the particles are then sorted by cell (mpm/particle_order.h).
+//      Every `reorderInterval` substeps, and after the first substep that
+//      follows an emit(), the particles are then sorted by cell
+//      (mpm/particle_order.h).
 //
 // Coupling to the magnetic stage. When the stage grid equals the MPM grid
 // (the default), the stage's nodal force f_i (N) is first moved onto the
@@ -117,13 +118,14 @@ struct MpmSettings {
   int minSubsteps = 1;
   int maxSubsteps = 0;
 
-  int reorderInterval = 20;  ///< substeps between sorts of the particles by grid cell, for memory locality in P2G
+  int reorderInterval = 20;  ///< substeps between sorts of the particles by grid cell, for memory locality in P2G;
+                             ///< the first substep after an emit() also sorts
                              ///< (0 = never: indices stay stable; MpmParticles::id survives either way)
   /// Hold the MPM grid whole: laid out over the whole grid, the grid update
   /// visits every node and P2G zeroes them all, as a process of a partition
-  /// does with its window. Off (the default), the grid is laid out over the
-  /// material's box (MpmGridLayout) and holds and visits only the runs of
-  /// nodes the particles' stencils reach on each x-row (mpm/grid.h). The particles
+  /// does with its window. Off (the default), the grid holds and visits only
+  /// the runs of nodes the particles' stencils reach on each x-row, packed
+  /// back to back (mpm/grid.h). The particles
   /// are the same bit for bit either way; dense takes the whole grid's
   /// memory and is never faster (docs/benchmarks.md, "The MPM grid against
   /// particle count and domain size"): the reference the sparse grid is
@@ -543,6 +545,7 @@ class MpmSolver {
   bool haveMagneticForce_ = false;
   bool frameStart_ = false;
   bool particlesDirty_ = true;
+  bool emittedSinceSort_ = false;  // emit() since the last sort: the next substep sorts (particle_order.h)
   int stepsSinceSolve_ = 0;
   MagneticPlan lastPlan_;
   std::vector<RigidBodyState> rigid_;                 // the substep's body states: one per collider, then the walls
