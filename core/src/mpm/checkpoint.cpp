@@ -227,13 +227,19 @@ struct MpmCheckpointAccess {
       for (std::size_t i = 0; i < nphi; ++i) w.put(phi.data[i]);
     }
     // The planner's reuse test (positions and sampled applied field at the last solve).
+    // A record of other particles than these (points emitted since the
+    // solve) fails the reuse test as an empty one does, and is written empty:
+    // restore accepts only a record of the particles it restores.
     const FieldReuse& reuse = s.reuse_;
-    w.put(std::uint64_t(reuse.positions().size()));
-    for (const Vec3d& x : reuse.positions()) w.putVec(x);
-    w.put(std::uint64_t(reuse.fields().size()));
-    for (const Vec3d& H : reuse.fields()) w.putVec(H);
-    w.put(std::uint64_t(reuse.samples().size()));
-    for (const std::uint32_t q : reuse.samples()) w.put(q);
+    const bool current = reuse.positions().empty() || reuse.positions().size() == P.size();
+    const auto putAll = [&](const auto& values, const auto& put) {
+      w.put(std::uint64_t(current ? values.size() : 0));
+      if (current)
+        for (const auto& value : values) put(value);
+    };
+    putAll(reuse.positions(), [&](const Vec3d& x) { w.putVec(x); });
+    putAll(reuse.fields(), [&](const Vec3d& H) { w.putVec(H); });
+    putAll(reuse.samples(), [&](std::uint32_t q) { w.put(q); });
 
     std::vector<std::uint8_t> out(kHeaderSize + w.bytes.size());
     std::memcpy(out.data(), kMagic, 8);
