@@ -133,9 +133,15 @@ TEST(MpmParticleOrder, ReorderingKeepsEveryParticlesAttributesAndItsReuseRecordT
   const auto isMagnetic = [&](std::size_t q) { return p.count[q] > 0; };
   EXPECT_TRUE(reuse.pointsWithin(p.x, isMagnetic, 0.0));
 
-  // Sorted particles bin in their own order.
+  // Sorted particles bin in their own order, and sorting them again moves nothing.
   const std::vector<std::uint32_t> again = binnedOrder(p, g);
   for (std::size_t q = 0; q < again.size(); ++q) ASSERT_EQ(again[q], q) << q;
+  const MpmParticles sorted = p;
+  const std::vector<Vec3d> recorded = reuse.positions();
+  ASSERT_TRUE(reorderParticles(again, p, reuse));
+  EXPECT_EQ(p.id, sorted.id);
+  EXPECT_EQ(p.x, sorted.x);
+  EXPECT_EQ(reuse.positions(), recorded);
 }
 
 TEST(MpmParticleOrder, P2GFillsTheGridBitwiseAsBeforeTheSort) {

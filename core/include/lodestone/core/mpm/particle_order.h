@@ -29,7 +29,8 @@ bool particleReorderDue(int interval, long long substeps, bool emittedSinceSort 
 
 /// Sorts the particles into `order` (new particle p is old particle
 /// order[p]; the binned order of the last P2G) and permutes `reuse`'s record
-/// with them. When `order` no longer describes the particles (its size
+/// with them; an identity `order` (particles already in cell order) moves
+/// nothing. When `order` no longer describes the particles (its size
 /// differs: particles were removed after the P2G that made it) nothing
 /// changes and false is returned. Throws InvalidArgument when `order` is not
 /// a permutation.
