@@ -474,6 +474,7 @@ MpmStepReport MpmSolver::step(double dt) {
   // 0. Particles handed out (particles(), emit()) since the last substep are
   // put back where their stencil fits; G2P keeps the others there.
   auto t = Clock::now();
+  knownMaxSpeed_ = -1.0;  // the substep moves the particles; G2P knows their speed again
   enforceDomainOfHandedOut(rep);
   // With a partition: particles whose stencil base left this process's box
   // go to their owner (mpm/partition.h).
@@ -524,6 +525,7 @@ MpmStepReport MpmSolver::step(double dt) {
   }
   // 8. The rate emitters: the chunks born in (t, t + dt], at their place at t + dt.
   emitFromEmitters(dt, rep);
+  if (rep.emitted.particles > 0) knownMaxSpeed_ = -1.0;
   rep.secondsG2P = secondsSince(t);
 
   time_ += dt;
@@ -583,7 +585,11 @@ bool MpmSolver::gridToParticle(double dt, MpmStepReport& rep) {
   rep.maxSpeed = g2p.maxSpeed;
   rep.clamped += g2p.clamped;
   const std::size_t removedBefore = rep.removed;
-  if (g2p.outside + g2p.nonFinite + pushedOutside > 0) rep.clamped += enforceDomain(rep.removed, rep.nonFinite);
+  const bool enforced = g2p.outside + g2p.nonFinite + pushedOutside > 0;
+  if (enforced) rep.clamped += enforceDomain(rep.removed, rep.nonFinite);
+  // G2P's maximum is every particle's speed unless a projection or the
+  // domain's enforcement changed a velocity or removed a particle since.
+  knownMaxSpeed_ = rep.projected == 0 && !enforced ? g2p.maxSpeed : -1.0;
   return rep.removed != removedBefore;
 }
 

@@ -27,6 +27,10 @@ double MpmSolver::suggestedDt() const {
 double MpmSolver::stabilityLimitDt() const { return cflDt(1.0, true); }
 
 double MpmSolver::maxParticleSpeed() const {
+  // The last substep's G2P found it, unless the particles were handed out
+  // (particles(), emit(), a restore) or changed after it.
+  if (knownMaxSpeed_ >= 0 && !particlesDirty_)
+    return partition_ ? partition_->maxOverRanks(knownMaxSpeed_) : knownMaxSpeed_;
   const std::size_t np = particles_.size();
   const Vec3d* v = particles_.v.data();
   const double vmax2 = tbb::parallel_reduce(

@@ -545,6 +545,7 @@ class MpmSolver {
   bool haveMagneticForce_ = false;
   bool frameStart_ = false;
   bool particlesDirty_ = true;
+  double knownMaxSpeed_ = -1;  // m/s: max |v_p| from the last substep's G2P, when still exact (else < 0)
   bool emittedSinceSort_ = false;  // emit() since the last sort: the next substep sorts (particle_order.h)
   int stepsSinceSolve_ = 0;
   MagneticPlan lastPlan_;
