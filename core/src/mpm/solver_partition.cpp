@@ -33,6 +33,7 @@ void MpmSolver::setPartition(std::shared_ptr<MpmPartition> partition) {
   keepOwnedParticles(0);
   particles_.shrinkToFit();  // particles emitted before the split were made on every process
   particlesDirty_ = false;
+  knownMaxSpeed_ = -1.0;  // of the particles before the split
 }
 
 void MpmSolver::keepOwnedParticles(std::size_t from) {
