@@ -346,6 +346,70 @@ TEST(MpmTransfer, SolverStepsAreBitwiseDeterministicAcrossThreadCounts) {
   }
 }
 
+// The binning computes stencil bases four particles at a time where the CPU
+// has AVX2: on positions at half-cell edges (where the base steps), one ulp
+// either side of them and at the first and last base of the grid, every
+// particle's mass lands on the nodes of its scalar base
+// (quadraticBaseFloor), and one ulp past the grid's range is refused naming
+// the particle. dx is a power of two and the origin 0, so x / dx is exact,
+// one ulp included.
+TEST(MpmTransfer, BasesAtHalfCellEdgesAreTheScalarBases) {
+  GridSpec g;
+  g.dx = 0.0625;  // m
+  g.origin = {0, 0, 0};
+  g.dims = {9, 10, 11};
+  const std::vector<double> edges = {0.5, 1.5, 2.5, 3.5, 4.0, 5.5, double(g.dims.i) - 1.5};
+  std::vector<double> us;
+  for (double u : edges)
+    for (double d : {-1.0, 0.0, 1.0}) {
+      const double v = d == 0 ? u : std::nextafter(u, d * HUGE_VAL);
+      if (v >= 0.5 && v < double(g.dims.i) - 1.5) us.push_back(v);
+    }
+  MpmParticles p;
+  for (std::size_t a = 0; a < us.size(); ++a)
+    for (std::size_t b = 0; b < us.size(); b += 2)  // 2 * 3 axes' worth of combinations, a count not a multiple of 4
+      p.add(g.origin + g.dx * Vec3d{us[a], us[b], us[(a + b) % us.size()]}, {}, 1.0 + double(p.size()), 1e-6, 0, 0);
+  ASSERT_NE(p.size() % 4, 0u) << "the last particles would not take the scalar tail";
+  std::vector<double> expected(g.nodeCount(), 0.0);
+  for (std::size_t q = 0; q < p.size(); ++q) {
+    const Vec3d u = (p.x[q] - g.origin) * (1.0 / g.dx);
+    const int b[3] = {int(quadraticBaseFloor(u.x)), int(quadraticBaseFloor(u.y)), int(quadraticBaseFloor(u.z))};
+    const QuadraticWeights<double> w[3] = {quadraticWeightsAt(u.x, b[0]), quadraticWeightsAt(u.y, b[1]),
+                                           quadraticWeightsAt(u.z, b[2])};
+    for (int c = 0; c < 3; ++c)
+      for (int bb = 0; bb < 3; ++bb)
+        for (int a = 0; a < 3; ++a)
+          expected[g.index(b[0] + a, b[1] + bb, b[2] + c)] += p.mass[q] * w[0].w[a] * w[1].w[bb] * w[2].w[c];
+  }
+  const std::vector<MpmMaterial> mats{neoHookeanSolid(1e5, 0.3, 1000)};
+  MpmGrid grid(g);
+  grid.particleToGrid(p, mats, 0.0);
+  double worst = 0, total = 0;
+  for (int k = 0; k < g.dims.k; ++k)
+    for (int j = 0; j < g.dims.j; ++j)
+      for (int i = 0; i < g.dims.i; ++i) {
+        worst = std::max(worst, std::fabs(grid.nodeAt(i, j, k).mass - expected[g.index(i, j, k)]));
+        total += expected[g.index(i, j, k)];
+      }
+  // A base one node off would move a whole particle's mass (at least 1 kg)
+  // by a node; summation order alone differs by rounding.
+  EXPECT_LT(worst, 1e-12 * total) << p.size() << " particles";
+
+  // One ulp below the first base's range along each axis in turn.
+  for (int axis = 0; axis < 3; ++axis) {
+    MpmParticles bad = p;
+    Vec3d u = (bad.x[5] - g.origin) * (1.0 / g.dx);
+    u[axis] = std::nextafter(0.5, 0.0);
+    bad.x[5] = g.origin + g.dx * u;
+    try {
+      grid.particleToGrid(bad, mats, 0.0);
+      ADD_FAILURE() << "axis " << axis << ": accepted";
+    } catch (const InvalidArgument& e) {
+      EXPECT_NE(std::string(e.what()).find("particle 5 "), std::string::npos) << e.what();
+    }
+  }
+}
+
 TEST(MpmTransfer, RejectsParticlesOutsideTheGridNamingThem) {
   const GridSpec g = testGrid(8, 0.1);
   MpmParticles p;

@@ -13,9 +13,14 @@
 #include <limits>
 
 #include "lodestone/core/base/bspline.h"
+#include "lodestone/core/base/cpu_features.h"
 #include "lodestone/core/base/error.h"
 #include "lodestone/core/mpm/grid.h"
 #include "grid_kernels.h"
+
+#if defined(LODESTONE_MPM_AVX2)
+#include <immintrin.h>
+#endif
 
 namespace lodestone {
 inline namespace mpm {
@@ -53,6 +58,69 @@ void forEachKeyRun(const std::uint64_t* key, std::size_t np, const Run& run) {
   });
 }
 
+/// The stencil bases of a block of particles (BinKernel): base[a][q] along
+/// axis a of particle q, and ok[q] whether all three lie in [0, dims - 1]
+/// (false for a non-finite position).
+constexpr std::size_t kBaseBlock = 64;
+struct BaseBlock {
+  std::int32_t base[3][kBaseBlock];
+  std::uint8_t ok[kBaseBlock];
+};
+
+/// BaseBlock of X[0, n) (n <= kBaseBlock): quadraticBaseFloor of
+/// (x - o) invDx per axis.
+void basesScalar(const Vec3d* X, std::size_t n, const Vec3d& o, double invDx, const Index3& bd, BaseBlock& out) {
+  for (std::size_t q = 0; q < n; ++q) {
+    const double f[3] = {quadraticBaseFloor((X[q].x - o.x) * invDx), quadraticBaseFloor((X[q].y - o.y) * invDx),
+                         quadraticBaseFloor((X[q].z - o.z) * invDx)};
+    // The comparisons are false for NaN, so non-finite positions are not ok.
+    bool ok = true;
+    for (int a = 0; a < 3; ++a) {
+      ok = ok && f[a] >= 0 && f[a] <= bd[a] - 1;
+      out.base[a][q] = ok ? std::int32_t(f[a]) : 0;
+    }
+    out.ok[q] = ok;
+  }
+}
+
+#if defined(LODESTONE_MPM_AVX2)
+/// basesScalar four particles at a time: the same operations (subtract,
+/// multiply, floor, the half-cell test), so the same bases.
+__attribute__((target("avx2"))) void basesAvx2(const Vec3d* X, std::size_t n, const Vec3d& o, double invDx,
+                                                const Index3& bd, BaseBlock& out) {
+  const std::size_t n4 = n / 4 * 4;
+  const __m256d inv = _mm256_set1_pd(invDx), half = _mm256_set1_pd(0.5), one = _mm256_set1_pd(1.0);
+  const __m256d zero = _mm256_setzero_pd();
+  const double origin[3] = {o.x, o.y, o.z};
+  const double* x = &X[0].x;
+  for (std::size_t q = 0; q < n4; q += 4) {
+    const double* p = x + 3 * q;
+    int okMask = 0xf;
+    for (int a = 0; a < 3; ++a) {
+      const __m256d u =
+          _mm256_mul_pd(_mm256_sub_pd(_mm256_setr_pd(p[a], p[a + 3], p[a + 6], p[a + 9]), _mm256_set1_pd(origin[a])), inv);
+      const __m256d b = _mm256_round_pd(u, _MM_FROUND_TO_NEG_INF | _MM_FROUND_NO_EXC);
+      // quadraticBaseFloor: b - 1 where u - b < 1/2 (b - 0 is b, bit for bit).
+      const __m256d f = _mm256_sub_pd(b, _mm256_and_pd(_mm256_cmp_pd(_mm256_sub_pd(u, b), half, _CMP_LT_OQ), one));
+      const __m256d in = _mm256_and_pd(_mm256_cmp_pd(f, zero, _CMP_GE_OQ),
+                                       _mm256_cmp_pd(f, _mm256_set1_pd(double(bd[a] - 1)), _CMP_LE_OQ));
+      okMask &= _mm256_movemask_pd(in);
+      // Lanes out of range become 0 before the conversion.
+      _mm_storeu_si128(reinterpret_cast<__m128i*>(&out.base[a][q]), _mm256_cvttpd_epi32(_mm256_and_pd(in, f)));
+    }
+    for (int l = 0; l < 4; ++l) out.ok[q + std::size_t(l)] = (okMask >> l) & 1;
+  }
+  if (n4 < n) {
+    BaseBlock tail;
+    basesScalar(X + n4, n - n4, o, invDx, bd, tail);
+    for (std::size_t q = n4; q < n; ++q) {
+      for (int a = 0; a < 3; ++a) out.base[a][q] = tail.base[a][q - n4];
+      out.ok[q] = tail.ok[q - n4];
+    }
+  }
+}
+#endif
+
 /// Box of base nodes touched: [lo, hi] inclusive, as a reduction value.
 struct BaseBox {
   int lo[3] = {std::numeric_limits<int>::max(), std::numeric_limits<int>::max(), std::numeric_limits<int>::max()};
@@ -84,6 +152,7 @@ struct BinKernel {
   std::uint64_t* key = nullptr;
   std::atomic<std::uint32_t>*rowLow = nullptr, *rowHigh = nullptr;  // per row of bins: bd.i - first, end
   std::atomic<std::size_t>* firstBad = nullptr;
+  bool avx2 = false;  // the bases four at a time (basesAvx2)
 
   // Bases, each row's extent of bins and the box of bases of particles
   // [begin, end). Inlined into each instruction-set variant (runKernel).
@@ -113,28 +182,35 @@ struct BinKernel {
       }
       runLength = 0;
     };
-    for (std::size_t p = begin; p != end; ++p) {
-      const Vec3d u{(X[p].x - o.x) * invDx, (X[p].y - o.y) * invDx, (X[p].z - o.z) * invDx};
-      const double fx = quadraticBaseFloor(u.x), fy = quadraticBaseFloor(u.y), fz = quadraticBaseFloor(u.z);
-      // The comparisons are false for NaN, so non-finite positions land here too.
-      if (!(fx >= 0 && fx <= bd.i - 1 && fy >= 0 && fy <= bd.j - 1 && fz >= 0 && fz <= bd.k - 1) ||
-          mat[p] >= materialCount) {
-        endRun();
-        key[p] = kBadBase;
-        atomicMin(*firstBad, p);
-        continue;
+    BaseBlock block;
+    for (std::size_t first = begin; first < end; first += kBaseBlock) {
+      const std::size_t n = std::min(kBaseBlock, end - first);
+#if defined(LODESTONE_MPM_AVX2)
+      if (avx2)
+        basesAvx2(X + first, n, o, invDx, bd, block);
+      else
+#endif
+        basesScalar(X + first, n, o, invDx, bd, block);
+      for (std::size_t q = 0; q < n; ++q) {
+        const std::size_t p = first + q;
+        if (!block.ok[q] || mat[p] >= materialCount) {
+          endRun();
+          key[p] = kBadBase;
+          atomicMin(*firstBad, p);
+          continue;
+        }
+        const int bi = block.base[0][q], bj = block.base[1][q], bk = block.base[2][q];
+        key[p] = std::uint64_t(bi) | (std::uint64_t(bj) << 21) | (std::uint64_t(bk) << 42);
+        const std::size_t flat =
+            std::size_t(bi) + std::size_t(bd.i) * (std::size_t(bj) + std::size_t(bd.j) * std::size_t(bk));
+        if (runLength != 0 && flat != runFlat) endRun();
+        if (runLength == 0) {  // a run's particles share one base: the box grows once a run
+          runFlat = flat;
+          runBi = bi;
+          acc.add(bi, bj, bk);
+        }
+        ++runLength;
       }
-      const int bi = int(fx), bj = int(fy), bk = int(fz);
-      key[p] = std::uint64_t(bi) | (std::uint64_t(bj) << 21) | (std::uint64_t(bk) << 42);
-      const std::size_t flat =
-          std::size_t(bi) + std::size_t(bd.i) * (std::size_t(bj) + std::size_t(bd.j) * std::size_t(bk));
-      if (runLength != 0 && flat != runFlat) endRun();
-      if (runLength == 0) {
-        runFlat = flat;
-        runBi = bi;
-      }
-      ++runLength;
-      acc.add(bi, bj, bk);
     }
     endRun();
     endExtent();
@@ -198,6 +274,7 @@ void MpmGrid::bin(const MpmParticles& particles, std::size_t materialCount) {
   kernel.rowLow = rowLow;
   kernel.rowHigh = rowHigh;
   kernel.firstBad = &firstBad;
+  kernel.avx2 = cpuHasAvx2Fma();
   const BaseBox box = reduceKernel<BaseBox>(kernel, np, 2048);
 
   if (const std::size_t bad = firstBad.load(); bad != kNone) {
