@@ -67,10 +67,11 @@ struct BaseBlock {
   std::uint8_t ok[kBaseBlock];
 };
 
-/// BaseBlock of X[0, n) (n <= kBaseBlock): quadraticBaseFloor of
-/// (x - o) invDx per axis.
-void basesScalar(const Vec3d* X, std::size_t n, const Vec3d& o, double invDx, const Index3& bd, BaseBlock& out) {
-  for (std::size_t q = 0; q < n; ++q) {
+/// Entries [from, n) of the BaseBlock of X[0, n) (n <= kBaseBlock):
+/// quadraticBaseFloor of (x - o) invDx per axis.
+void basesScalar(const Vec3d* X, std::size_t from, std::size_t n, const Vec3d& o, double invDx, const Index3& bd,
+                 BaseBlock& out) {
+  for (std::size_t q = from; q < n; ++q) {
     const double f[3] = {quadraticBaseFloor((X[q].x - o.x) * invDx), quadraticBaseFloor((X[q].y - o.y) * invDx),
                          quadraticBaseFloor((X[q].z - o.z) * invDx)};
     // The comparisons are false for NaN, so non-finite positions are not ok.
@@ -110,14 +111,7 @@ __attribute__((target("avx2"))) void basesAvx2(const Vec3d* X, std::size_t n, co
     }
     for (int l = 0; l < 4; ++l) out.ok[q + std::size_t(l)] = (okMask >> l) & 1;
   }
-  if (n4 < n) {
-    BaseBlock tail;
-    basesScalar(X + n4, n - n4, o, invDx, bd, tail);
-    for (std::size_t q = n4; q < n; ++q) {
-      for (int a = 0; a < 3; ++a) out.base[a][q] = tail.base[a][q - n4];
-      out.ok[q] = tail.ok[q - n4];
-    }
-  }
+  basesScalar(X, n4, n, o, invDx, bd, out);
 }
 #endif
 
@@ -190,7 +184,7 @@ struct BinKernel {
         basesAvx2(X + first, n, o, invDx, bd, block);
       else
 #endif
-        basesScalar(X + first, n, o, invDx, bd, block);
+        basesScalar(X + first, 0, n, o, invDx, bd, block);
       for (std::size_t q = 0; q < n; ++q) {
         const std::size_t p = first + q;
         if (!block.ok[q] || mat[p] >= materialCount) {

@@ -29,18 +29,19 @@ double MpmSolver::stabilityLimitDt() const { return cflDt(1.0, true); }
 double MpmSolver::maxParticleSpeed() const {
   // The last substep's G2P found it, unless the particles were handed out
   // (particles(), emit(), a restore) or changed after it.
-  if (knownMaxSpeed_ >= 0 && !particlesDirty_)
-    return partition_ ? partition_->maxOverRanks(knownMaxSpeed_) : knownMaxSpeed_;
-  const std::size_t np = particles_.size();
-  const Vec3d* v = particles_.v.data();
-  const double vmax2 = tbb::parallel_reduce(
-      tbb::blocked_range<std::size_t>(0, np, 8192), 0.0,
-      [&](const tbb::blocked_range<std::size_t>& r, double m) {
-        for (std::size_t p = r.begin(); p != r.end(); ++p) m = std::max(m, norm2(v[p]));
-        return m;
-      },
-      [](double a, double b) { return std::max(a, b); });
-  return partition_ ? partition_->maxOverRanks(std::sqrt(vmax2)) : std::sqrt(vmax2);
+  double vmax = knownMaxSpeed_;
+  if (vmax < 0 || particlesDirty_) {
+    const std::size_t np = particles_.size();
+    const Vec3d* v = particles_.v.data();
+    vmax = std::sqrt(tbb::parallel_reduce(
+        tbb::blocked_range<std::size_t>(0, np, 8192), 0.0,
+        [&](const tbb::blocked_range<std::size_t>& r, double m) {
+          for (std::size_t p = r.begin(); p != r.end(); ++p) m = std::max(m, norm2(v[p]));
+          return m;
+        },
+        [](double a, double b) { return std::max(a, b); }));
+  }
+  return partition_ ? partition_->maxOverRanks(vmax) : vmax;
 }
 
 double MpmSolver::colliderCrossingDt() const { return colliderCrossingDt(maxParticleSpeed()); }
