@@ -42,10 +42,10 @@ inline namespace mpm {
 namespace {
 
 // Four doubles processed lane-wise (GCC/Clang vector extension): a node's
-// momentum and mass, or a velocity and a zero lane. Each lane does exactly the
-// scalar arithmetic, in the same order, so the results are bitwise those of the
-// scalar formulas; the compiler uses the widest vector registers the target
-// has.
+// momentum and mass, or a velocity and a zero lane. Each lane does the scalar
+// formula's operations in the same order; the compiler uses the widest vector
+// registers the target has, and in the AVX2 variant fuses multiplies and adds
+// (grid_kernels.h).
 typedef double Lanes4 __attribute__((vector_size(32)));
 
 inline Lanes4 load4(const double* p) {
@@ -275,6 +275,10 @@ struct DepositKernel {
   }
 };
 
+/// A velocity's |v|^2 (m^2/s^2) in G2P and in MpmGrid::maxSpeed: one
+/// expression, so the AVX2 variant contracts it into the same FMAs in both.
+__attribute__((always_inline)) inline double speed2(const Vec3d& v) { return norm2(v); }
+
 struct G2PSums {
   double maxSpeed2 = 0;
   std::size_t clamped = 0, outside = 0, nonFinite = 0;
@@ -353,9 +357,17 @@ struct G2PKernel {
       }
       streamDoubles<3>(&V[p].x, &vp.x);
       X[p] = xn;
-      acc.maxSpeed2 = std::max(acc.maxSpeed2, norm2(vp));
+      acc.maxSpeed2 = std::max(acc.maxSpeed2, speed2(vp));
     }
     fenceStreamed();
+  }
+};
+
+/// The largest |v|^2 of velocities [begin, end) (MpmGrid::maxSpeed).
+struct SpeedKernel {
+  const Vec3d* v = nullptr;
+  __attribute__((always_inline)) inline void operator()(std::size_t begin, std::size_t end, G2PSums& acc) const {
+    for (std::size_t p = begin; p != end; ++p) acc.maxSpeed2 = std::max(acc.maxSpeed2, speed2(v[p]));
   }
 };
 
@@ -635,6 +647,12 @@ GridToParticleReport MpmGrid::gridToParticle(MpmParticles& particles, const std:
   rep.outside = sums.outside;
   rep.nonFinite = sums.nonFinite;
   return rep;
+}
+
+double MpmGrid::maxSpeed(const Vec3d* v, std::size_t count) {
+  SpeedKernel kernel;
+  kernel.v = v;
+  return std::sqrt(reduceKernel<G2PSums>(kernel, count, 8192).maxSpeed2);
 }
 
 }  // namespace mpm

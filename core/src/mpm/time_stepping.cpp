@@ -1,8 +1,6 @@
 // Time stepping of the reference MLS-MPM: the substep's size (the CFL step,
 // the stability bound, the collider crossing limit) and frames of substeps
 // (advanceFrame, with the substep limits per frame); see mpm/solver.h.
-#include <tbb/blocked_range.h>
-#include <tbb/parallel_reduce.h>
 
 #include <algorithm>
 #include <cmath>
@@ -30,17 +28,7 @@ double MpmSolver::maxParticleSpeed() const {
   // The last substep's G2P found it, unless the particles were handed out
   // (particles(), emit(), a restore) or changed after it.
   double vmax = knownMaxSpeed_;
-  if (vmax < 0 || particlesDirty_) {
-    const std::size_t np = particles_.size();
-    const Vec3d* v = particles_.v.data();
-    vmax = std::sqrt(tbb::parallel_reduce(
-        tbb::blocked_range<std::size_t>(0, np, 8192), 0.0,
-        [&](const tbb::blocked_range<std::size_t>& r, double m) {
-          for (std::size_t p = r.begin(); p != r.end(); ++p) m = std::max(m, norm2(v[p]));
-          return m;
-        },
-        [](double a, double b) { return std::max(a, b); }));
-  }
+  if (vmax < 0 || particlesDirty_) vmax = MpmGrid::maxSpeed(particles_.v.data(), particles_.size());
   return partition_ ? partition_->maxOverRanks(vmax) : vmax;
 }
 

@@ -36,7 +36,10 @@
 // particle index. A node receives contributions from 9 rows of 9 distinct
 // colours, so it accumulates them in one fixed order whatever the thread
 // count or schedule: the grid is bitwise identical for any number of
-// threads. G2P writes only its own particle.
+// threads. G2P writes only its own particle. On CPUs with AVX2 and FMA the
+// transfers fuse multiplies and adds (one rounding where the portable code
+// rounds twice), so such a machine and one without AVX2 agree to the last
+// few digits, not bit for bit.
 //
 // Storage. Each x-row of nodes the material reaches holds one run, from the
 // first to the last stencil that reaches it (activeRun). The node arrays
@@ -156,6 +159,11 @@ class MpmGrid {
   /// the last particleToGrid, unmoved.
   GridToParticleReport gridToParticle(MpmParticles& particles, const std::vector<MpmMaterial>& materials, double dt,
                                       const ParticleBounds* bounds = nullptr) const;
+
+  /// The largest |v| of velocities v[0 .. count) (m/s), computed with the
+  /// arithmetic of gridToParticle's maxSpeed: the same bits for the
+  /// velocities G2P wrote.
+  static double maxSpeed(const Vec3d* v, std::size_t count);
 
   /// Node data of the last P2G, node (i, j, k) of the runs (activeRun) at
   /// nodeIndex(i, j, k); every other node is zero (and, packed, not
