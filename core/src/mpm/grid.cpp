@@ -304,60 +304,82 @@ struct G2PKernel {
   bool bounded = false, clamp = false;
   Vec3d lo, hi;  // ParticleBounds, m
 
+  // The gather of particle p: its velocity vp (m/s) and C (1/s).
+  __attribute__((always_inline)) inline void gather(std::size_t p, Vec3d& vp, Mat3d& C) const {
+    const Vec3d x = X[p];
+    const double ux = (x.x - o.x) * invDx, uy = (x.y - o.y) * invDx, uz = (x.z - o.z) * invDx;
+    // The same base as the binning: the same arithmetic on the same,
+    // unmoved position (range-checked there).
+    const int bi = int(quadraticBaseFloor(ux));
+    const int bj = int(quadraticBaseFloor(uy));
+    const int bk = int(quadraticBaseFloor(uz));
+    const double u[3] = {ux, uy, uz};
+    const int b3[3] = {bi, bj, bk};
+    gatherApicLines<Lanes4>(NodeRowLines<Vec3d>{vel, rows.origin + rows.row(bj, bk), rows.nj, bi}, u, b3, cScale, vp,
+                            C);
+  }
+
+  // Steps 6-7 of particle p from its gathered vp and C.
+  __attribute__((always_inline)) inline void update(std::size_t p, Vec3d vp, const Mat3d& C, G2PSums& acc) const {
+    const Vec3d x = X[p];
+    // Step 6: MLS update of the deformation (F <- (I + dt C) F, or J alone for fluids);
+    // the elastoplastic solid's trial F_E is returned to the yield surface.
+    const MaterialParams& mp = params[mat[p]];
+    if (mp.fluid) {
+      Jp[p] *= 1.0 + dt * trace(C);
+    } else {
+      Mat3d G = Mat3d::identity();
+      for (int a = 0; a < 3; ++a)
+        for (int b = 0; b < 3; ++b) G(a, b) += dt * C(a, b);
+      Fp[p] = G * Fp[p];
+      if (mp.elastoplastic) Fp[p] = vonMisesReturn(Fp[p], mp.mu, mp.yieldStress);
+      Jp[p] = determinant(Fp[p]);
+    }
+    streamDoubles<9>(&Cp[p](0, 0), &C(0, 0));
+    // Step 7: advection.
+    Vec3d xn = x + dt * vp;
+    if (!(isFinite(xn) && isFinite(vp) && std::isfinite(Jp[p]))) {
+      ++acc.nonFinite;
+    } else if (bounded && (xn.x < lo.x || xn.x > hi.x || xn.y < lo.y || xn.y > hi.y || xn.z < lo.z || xn.z > hi.z)) {
+      if (clamp) {
+        for (int a = 0; a < 3; ++a) {
+          if (xn[a] < lo[a]) {
+            xn[a] = lo[a];
+            vp[a] = std::max(vp[a], 0.0);
+          } else if (xn[a] > hi[a]) {
+            xn[a] = hi[a];
+            vp[a] = std::min(vp[a], 0.0);
+          }
+        }
+        ++acc.clamped;
+      } else {
+        ++acc.outside;
+      }
+    }
+    streamDoubles<3>(&V[p].x, &vp.x);
+    X[p] = xn;
+    acc.maxSpeed2 = std::max(acc.maxSpeed2, speed2(vp));
+  }
+
   // G2P of particles [begin, end), their counts added to acc. Inlined into
-  // each instruction-set variant (runKernel).
+  // each instruction-set variant (runKernel). Two particles' gathers go
+  // first, then their updates: the second gather's loads and sums overlap
+  // the first's chains of additions.
   __attribute__((always_inline)) inline void operator()(std::size_t begin, std::size_t end, G2PSums& acc) const {
-    for (std::size_t p = begin; p != end; ++p) {
-      const Vec3d x = X[p];
-      const double ux = (x.x - o.x) * invDx, uy = (x.y - o.y) * invDx, uz = (x.z - o.z) * invDx;
-      // The same base as the binning: the same arithmetic on the same,
-      // unmoved position (range-checked there).
-      const int bi = int(quadraticBaseFloor(ux));
-      const int bj = int(quadraticBaseFloor(uy));
-      const int bk = int(quadraticBaseFloor(uz));
-      const double u[3] = {ux, uy, uz};
-      const int b3[3] = {bi, bj, bk};
+    std::size_t p = begin;
+    for (; p + 1 < end; p += 2) {
+      Vec3d v0, v1;
+      Mat3d C0, C1;
+      gather(p, v0, C0);
+      gather(p + 1, v1, C1);
+      update(p, v0, C0, acc);
+      update(p + 1, v1, C1, acc);
+    }
+    if (p < end) {
       Vec3d vp;
       Mat3d C;
-      gatherApicLines<Lanes4>(NodeRowLines<Vec3d>{vel, rows.origin + rows.row(bj, bk), rows.nj, bi}, u, b3, cScale,
-                              vp, C);
-      // Step 6: MLS update of the deformation (F <- (I + dt C) F, or J alone for fluids);
-      // the elastoplastic solid's trial F_E is returned to the yield surface.
-      const MaterialParams& mp = params[mat[p]];
-      if (mp.fluid) {
-        Jp[p] *= 1.0 + dt * trace(C);
-      } else {
-        Mat3d G = Mat3d::identity();
-        for (int a = 0; a < 3; ++a)
-          for (int b = 0; b < 3; ++b) G(a, b) += dt * C(a, b);
-        Fp[p] = G * Fp[p];
-        if (mp.elastoplastic) Fp[p] = vonMisesReturn(Fp[p], mp.mu, mp.yieldStress);
-        Jp[p] = determinant(Fp[p]);
-      }
-      streamDoubles<9>(&Cp[p](0, 0), &C(0, 0));
-      // Step 7: advection.
-      Vec3d xn = x + dt * vp;
-      if (!(isFinite(xn) && isFinite(vp) && std::isfinite(Jp[p]))) {
-        ++acc.nonFinite;
-      } else if (bounded && (xn.x < lo.x || xn.x > hi.x || xn.y < lo.y || xn.y > hi.y || xn.z < lo.z || xn.z > hi.z)) {
-        if (clamp) {
-          for (int a = 0; a < 3; ++a) {
-            if (xn[a] < lo[a]) {
-              xn[a] = lo[a];
-              vp[a] = std::max(vp[a], 0.0);
-            } else if (xn[a] > hi[a]) {
-              xn[a] = hi[a];
-              vp[a] = std::min(vp[a], 0.0);
-            }
-          }
-          ++acc.clamped;
-        } else {
-          ++acc.outside;
-        }
-      }
-      streamDoubles<3>(&V[p].x, &vp.x);
-      X[p] = xn;
-      acc.maxSpeed2 = std::max(acc.maxSpeed2, speed2(vp));
+      gather(p, vp, C);
+      update(p, vp, C, acc);
     }
     fenceStreamed();
   }
