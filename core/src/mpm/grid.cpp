@@ -207,6 +207,9 @@ struct DepositKernel {
       __builtin_prefetch(reinterpret_cast<const char*>(&Fp[q]) + 64);
       __builtin_prefetch(&X[q]);
       __builtin_prefetch(&V[q]);
+      __builtin_prefetch(&Jp[q]);
+      __builtin_prefetch(&M[q]);
+      __builtin_prefetch(&V0[q]);
     };
     // The row's first kAhead particles, asked for together: a short row
     // (material thin along x) would otherwise wait on each in turn.
