@@ -11,6 +11,7 @@
 #include <cstddef>
 #include <functional>
 #include <limits>
+#include <stdexcept>
 
 #include "lodestone/core/base/bspline.h"
 #include "lodestone/core/base/cpu_features.h"
@@ -45,17 +46,23 @@ void atomicMax(std::atomic<std::uint32_t>& a, std::uint32_t v) {
 /// run(first, end) on each run [first, end) of consecutive particles with
 /// one key, in parallel chunks: once the particles are ordered by cell,
 /// most runs are a bin's particles, and each takes one atomic operation.
+/// The chunks (hence the runs) depend only on np, not on the threads or the
+/// schedule (simple_partitioner: halved down to the grain), so two calls
+/// over the same keys see the same runs.
 template <typename Run>
 void forEachKeyRun(const std::uint64_t* key, std::size_t np, const Run& run) {
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, np, 4096), [&](const tbb::blocked_range<std::size_t>& r) {
-    std::size_t start = r.begin();
-    for (std::size_t p = r.begin() + 1; p < r.end(); ++p)
-      if (key[p] != key[start]) {
-        run(start, p);
-        start = p;
-      }
-    if (start < r.end()) run(start, r.end());
-  });
+  tbb::parallel_for(
+      tbb::blocked_range<std::size_t>(0, np, 4096),
+      [&](const tbb::blocked_range<std::size_t>& r) {
+        std::size_t start = r.begin();
+        for (std::size_t p = r.begin() + 1; p < r.end(); ++p)
+          if (key[p] != key[start]) {
+            run(start, p);
+            start = p;
+          }
+        if (start < r.end()) run(start, r.end());
+      },
+      tbb::simple_partitioner());
 }
 
 /// The stencil bases of a block of particles (BinKernel): base[a][q] along
@@ -343,8 +350,8 @@ void MpmGrid::bin(const MpmParticles& particles, std::size_t materialCount) {
   rowStart_[rows] = slots;
 
   // Pass 2: the particles of each bin, counted in offsets_ (zeroed here),
-  // each particle given its place among its bin's (scheduling-dependent;
-  // pass 5 sorts each bin).
+  // each run of particles given its place among its bin's (at its first
+  // particle; scheduling-dependent, pass 5 sorts each bin).
   static_assert(sizeof(std::atomic<std::uint32_t>) == sizeof(std::uint32_t) &&
                     alignof(std::atomic<std::uint32_t>) == alignof(std::uint32_t) &&
                     std::atomic<std::uint32_t>::is_always_lock_free,
@@ -352,9 +359,7 @@ void MpmGrid::bin(const MpmParticles& particles, std::size_t materialCount) {
   offsets_.assign(slots + 1, 0);
   std::atomic<std::uint32_t>* count = reinterpret_cast<std::atomic<std::uint32_t>*>(offsets_.data());
   forEachKeyRun(key_.data(), np, [&](std::size_t first, std::size_t end) {
-    const std::uint32_t at =
-        count[binIndex(key_[first])].fetch_add(std::uint32_t(end - first), std::memory_order_relaxed);
-    for (std::size_t q = first; q < end; ++q) rank_[q] = at + std::uint32_t(q - first);
+    rank_[first] = count[binIndex(key_[first])].fetch_add(std::uint32_t(end - first), std::memory_order_relaxed);
   });
 
   // Pass 3: the counts become the bins' offsets, in place (integer prefix
@@ -377,10 +382,15 @@ void MpmGrid::bin(const MpmParticles& particles, std::size_t materialCount) {
   runEnd_.assign(runFirst_.size(), 0);
   mpmNodeRuns(rowFirst_.data(), rowEnd_.data(), binDims_.j, binDims_.k, runFirst_.data(), runEnd_.data());
 
-  // Pass 4: scatter indices into their bins.
+  // Pass 4: scatter indices into their bins, a run at a time (pass 2's runs).
   sorted_.resize(np);
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, np, 8192), [&](const tbb::blocked_range<std::size_t>& r) {
-    for (std::size_t p = r.begin(); p != r.end(); ++p) sorted_[offsets_[binIndex(key_[p])] + rank_[p]] = std::uint32_t(p);
+  forEachKeyRun(key_.data(), np, [&](std::size_t first, std::size_t end) {
+    const std::size_t b = binIndex(key_[first]);
+    const std::size_t at = std::size_t(offsets_[b]) + rank_[first];
+    // Pass 2 saw the same runs; a run reaching past its bin would mean it did not.
+    if (at + (end - first) > offsets_[b + 1]) throw std::logic_error("MPM binning: the scatter's runs are not the count's");
+    std::uint32_t* out = sorted_.data() + at;
+    for (std::size_t q = first; q < end; ++q) *out++ = std::uint32_t(q);
   });
 
   // Pass 5: ascending particle index within each bin (bins are small:
