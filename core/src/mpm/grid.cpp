@@ -260,17 +260,23 @@ struct DepositKernel {
         const Lanes4 A0{A(0, 0) * dx, A(1, 0) * dx, A(2, 0) * dx, 0.0};
         const Lanes4 A1{A(0, 1) * dx, A(1, 1) * dx, A(2, 1) * dx, 0.0};
         const Lanes4 A2{A(0, 2) * dx, A(1, 2) * dx, A(2, 2) * dx, 0.0};
-        const Lanes4 twoA0 = 2.0 * A0;
         const Lanes4 q0m{q0.x, q0.y, q0.z, m};
+        // Node (a, b, c) receives w_a w_b w_c (q0m + a A0 + b A1 + c A2)
+        // = w_b w_c (P_a + b U_a + c W_a), with P_a = w_a (q0m + a A0),
+        // U_a = w_a A1 and W_a = w_a A2: the terms with b or c zero vanish.
+        const Lanes4 P[3] = {wx.w[0] * q0m, wx.w[1] * (q0m + A0), wx.w[2] * (q0m + 2.0 * A0)};
+        const Lanes4 U[3] = {wx.w[0] * A1, wx.w[1] * A1, wx.w[2] * A1};
+        const Lanes4 W[3] = {wx.w[0] * A2, wx.w[1] * A2, wx.w[2] * A2};
         for (int c = 0; c < 3; ++c) {
+          Lanes4 Pc[3];
+          for (int a = 0; a < 3; ++a) Pc[a] = c == 0 ? P[a] : P[a] + double(c) * W[a];
           for (int b = 0; b < 3; ++b) {
             const double wbc = wy.w[b] * wz.w[c];
-            const Lanes4 q = q0m + double(b) * A1 + double(c) * A2;
             double* line = reinterpret_cast<double*>(nodes + (origin[b + 3 * c] + bi));
-            const double w0 = wx.w[0] * wbc, w1 = wx.w[1] * wbc, w2 = wx.w[2] * wbc;
-            store4(line, load4(line) + w0 * q);
-            store4(line + 4, load4(line + 4) + w1 * (q + A0));
-            store4(line + 8, load4(line + 8) + w2 * (q + twoA0));
+            for (int a = 0; a < 3; ++a) {
+              const Lanes4 r = b == 0 ? Pc[a] : Pc[a] + double(b) * U[a];
+              store4(line + 4 * a, load4(line + 4 * a) + wbc * r);
+            }
           }
         }
       }
