@@ -79,12 +79,12 @@ LODESTONE_HOSTDEV inline void gatherApicLines(const Lines& lines, const double u
       const L s1 = l1 + 2.0 * l2;
       P += wy.w[b] * s0;
       P0 += wy.w[b] * s1;
-      P1 += (double(b) * wy.w[b]) * s0;
+      if (b != 0) P1 += (double(b) * wy.w[b]) * s0;  // the line of offset 0 adds nothing to S1
     }
     v += wz.w[c] * P;
     S0 += wz.w[c] * P0;
     S1 += wz.w[c] * P1;
-    S2 += (double(c) * wz.w[c]) * P;
+    if (c != 0) S2 += (double(c) * wz.w[c]) * P;
   }
   vp = apicVec3(v);
   // d_i = (index - f) dx: column a of C is (4/dx)(S_a - v_p f_a).
