@@ -173,7 +173,7 @@ std::vector<MaterialParams> paramsOf(const std::vector<MpmMaterial>& materials) 
 /// What a P2G deposit reads and writes (MpmGrid::particleToGrid sets it up).
 struct DepositKernel {
   const MaterialParams* params = nullptr;
-  double dx = 0, invDx = 0, stressScale = 0, dt = 0;  // m, 1/m, s/m^2, s
+  double dx = 0, invDx = 0, stressScaleDx = 0, dt = 0;  // m, 1/m, dt D^-1 dx (s/m), s
   Vec3d o;                                            // grid origin, m
   NodeRows rows;                                      // where the nodes are
   const Vec3d *X = nullptr, *V = nullptr;
@@ -247,19 +247,20 @@ struct DepositKernel {
           for (int a = 0; a < 3; ++a)
             for (int b = 0; b < 3; ++b) tau(a, b) += Jp[p] * Tc(a, b);
         }
-        // A = m C - dt D^-1 V0 tau (kg/s): the MLS-MPM affine momentum with the stress impulse.
-        Mat3d A;
-        const double s = stressScale * V0[p];
+        // A dx = m dx C - dt D^-1 dx V0 tau (kg m/s): the MLS-MPM affine momentum with the stress
+        // impulse, A, times dx.
+        Mat3d Adx;
+        const double mdx = m * dx, s = stressScaleDx * V0[p];
         for (int a = 0; a < 3; ++a)
-          for (int b = 0; b < 3; ++b) A(a, b) = m * Cp[p](a, b) - s * tau(a, b);
+          for (int b = 0; b < 3; ++b) Adx(a, b) = mdx * Cp[p](a, b) - s * tau(a, b);
         // Contribution at node offset (a, b, c): m v + dt f + A d with
-        // d = ((a - fx) dx, (b - fy) dx, (c - fz) dx) = q0 + a A0 + b A1 + c A2.
-        Vec3d q0 = m * V[p] - A * Vec3d{fx * dx, fy * dx, fz * dx};
+        // d = ((a - fx) dx, (b - fy) dx, (c - fz) dx) = q0 + a A0 + b A1 + c A2 (A_j: column j of A dx).
+        Vec3d q0 = m * V[p] - Adx * Vec3d{fx, fy, fz};
         if (particleForces) q0 += dt * particleForces[p];
         // Node lanes: momentum x, y, z and mass; the mass lane of q is m (A's lane is 0).
-        const Lanes4 A0{A(0, 0) * dx, A(1, 0) * dx, A(2, 0) * dx, 0.0};
-        const Lanes4 A1{A(0, 1) * dx, A(1, 1) * dx, A(2, 1) * dx, 0.0};
-        const Lanes4 A2{A(0, 2) * dx, A(1, 2) * dx, A(2, 2) * dx, 0.0};
+        const Lanes4 A0{Adx(0, 0), Adx(1, 0), Adx(2, 0), 0.0};
+        const Lanes4 A1{Adx(0, 1), Adx(1, 1), Adx(2, 1), 0.0};
+        const Lanes4 A2{Adx(0, 2), Adx(1, 2), Adx(2, 2), 0.0};
         const Lanes4 q0m{q0.x, q0.y, q0.z, m};
         // Node (a, b, c) receives w_a w_b w_c (q0m + a A0 + b A1 + c A2)
         // = w_b w_c (P_a + b U_a + c W_a), with P_a = w_a (q0m + a A0),
@@ -486,7 +487,7 @@ void MpmGrid::particleToGrid(const MpmParticles& particles, const std::vector<Mp
   const std::vector<MaterialParams> params = paramsOf(materials);
   const double dx = spec_.dx;
   const double invDx = 1.0 / dx;
-  const double stressScale = dt * 4.0 * invDx * invDx;  // dt D^-1, s/m^2
+  const double stressScaleDx = dt * 4.0 * invDx;  // dt D^-1 dx, s/m
   const Vec3d o = spec_.origin;
 
   const Vec3d* X = particles.x.data();
@@ -520,7 +521,7 @@ void MpmGrid::particleToGrid(const MpmParticles& particles, const std::vector<Mp
   kernel.params = params.data();
   kernel.dx = dx;
   kernel.invDx = invDx;
-  kernel.stressScale = stressScale;
+  kernel.stressScaleDx = stressScaleDx;
   kernel.dt = dt;
   kernel.o = o;
   kernel.rows = NodeRows{rowOrigin_.data(), activeLo_, std::size_t(activeHi_.j - activeLo_.j)};
