@@ -56,8 +56,9 @@ struct ApicStridedLines {
 /// particle's grid coordinates (cells, (x - origin) / dx) and b3 the
 /// stencil's base node (from the same u); cScale = 4/dx (1/m). Sets vp (m/s)
 /// and C (1/s). The sums run in L lane by lane (component-wise the same
-/// arithmetic for any L, so the same bits), in the same order whatever the
-/// lines' storage.
+/// operations for any L, so the same bits where the compiler fuses the
+/// same multiplies and adds), in the same order whatever the lines'
+/// storage.
 template <typename L, typename Lines>
 LODESTONE_HOSTDEV inline void gatherApicLines(const Lines& lines, const double u[3], const int b3[3], double cScale,
                                               Vec3d& vp, Mat3d& C) {
