@@ -99,9 +99,8 @@ fig.savefig(os.path.join(here, "images", "dist_mpm_scaling.png"))
 
 # The MPM grid's memory and time (docs/benchmarks.md, docs/data/scaling.csv):
 # peak resident memory and ms per substep against the domain's nodes at 1e6
-# particles, the current binary (the runs of nodes packed) beside the
-# previous one (the runs in the rows of a box around the material),
-# measured in one run.
+# particles, the current binary beside the previous one that
+# docs/benchmarks.md names, measured in one run.
 sc = rows("scaling.csv")
 fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(9, 3.8), dpi=110)
 for binary, style in (("current", "o-"), ("previous", "s--")):
@@ -109,7 +108,7 @@ for binary, style in (("current", "o-"), ("previous", "s--")):
     if not rs:
         continue
     nodes = [float(r["grid_nodes"]) for r in rs]
-    label = {"current": "runs packed (this binary)", "previous": "runs in a box's rows (previous binary)"}[binary]
+    label = {"current": "this binary", "previous": "the previous binary"}[binary]
     ax1.loglog(nodes, [float(r["peak_bytes"]) / 1e9 for r in rs], style, label=label)
     ax2.semilogx(nodes, [float(r["ms_per_substep"]) for r in rs], style, label=label)
 ax1.axhline(23.5 * 1.0737, color="r", lw=0.8, ls=":")
