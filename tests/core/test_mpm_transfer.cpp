@@ -216,8 +216,7 @@ TEST(MpmTransfer, ParticleToGridIsTheScalarFormulaInTheDocumentedOrder) {
     for (int r = 0; r < 3; ++r)
       for (int c = 0; c < 3; ++c) maxA = std::max(maxA, std::abs(A(r, c)));
     const Vec3d mv = m * p.v[q];
-    const double magnitude =
-        std::max({std::abs(mv.x), std::abs(mv.y), std::abs(mv.z)}) + 10.0 * maxA * dx;
+    const double magnitude = std::max({std::abs(mv.x), std::abs(mv.y), std::abs(mv.z)}) + 10.0 * maxA * dx;
     for (int c = 0; c < 3; ++c)
       for (int bb = 0; bb < 3; ++bb) {
         const Vec3d line = q0 + double(bb) * col[1] + double(c) * col[2];
@@ -260,10 +259,9 @@ TEST(MpmTransfer, ParticleToGridIsTheScalarFormulaInTheDocumentedOrder) {
     double worst = 0;  // largest difference over the node's scale, in roundings
     for (std::size_t n = 0; n < got.size(); ++n) {
       if (std::memcmp(&expected[n], &got[n], sizeof(MpmNode)) != 0) ++differing;
-      const double diff = std::max({std::abs(got[n].momentum.x - expected[n].momentum.x),
-                                    std::abs(got[n].momentum.y - expected[n].momentum.y),
-                                    std::abs(got[n].momentum.z - expected[n].momentum.z),
-                                    std::abs(got[n].mass - expected[n].mass)});
+      const double diff = std::max(
+          {std::abs(got[n].momentum.x - expected[n].momentum.x), std::abs(got[n].momentum.y - expected[n].momentum.y),
+           std::abs(got[n].momentum.z - expected[n].momentum.z), std::abs(got[n].mass - expected[n].mass)});
       const double r = diff == 0 ? 0 : diff / (eps * scale[n]);
       if (r > worst) {
         worst = r;
@@ -274,10 +272,11 @@ TEST(MpmTransfer, ParticleToGridIsTheScalarFormulaInTheDocumentedOrder) {
       EXPECT_EQ(differing, 0u) << threads << " threads";
     }
     EXPECT_LT(worst, 16.0) << threads << " threads; node " << worstNode << ": mass " << got[worstNode].mass
-                           << " kg, expected " << expected[worstNode].mass << "; momentum x " << got[worstNode].momentum.x
-                           << ", expected " << expected[worstNode].momentum.x;
-    std::printf("%d threads: %zu of %zu nodes differ from the formula's bits, by at most %.2f roundings of their terms\n",
-                threads, differing, got.size(), worst);
+                           << " kg, expected " << expected[worstNode].mass << "; momentum x "
+                           << got[worstNode].momentum.x << ", expected " << expected[worstNode].momentum.x;
+    std::printf(
+        "%d threads: %zu of %zu nodes differ from the formula's bits, by at most %.2f roundings of their terms\n",
+        threads, differing, got.size(), worst);
     if (first.empty()) {
       first = got;
     } else {
@@ -372,17 +371,15 @@ TEST(MpmTransfer, GridToParticlesFastestSpeedIsMaxSpeedOfItsVelocities) {
   const GridSpec g = testGrid(8, 0.05);
   const std::vector<MpmMaterial> mats = twoMaterials();
   MpmGrid grid(g);
-  std::size_t compared = 0;
   for (unsigned seed = 0; seed < 300; ++seed) {
     MpmParticles p = randomParticles(g, 1, 1000 + seed);
     grid.particleToGrid(p, mats, 1e-3);
     momentumToVelocity(grid);
     const GridToParticleReport rep = grid.gridToParticle(p, mats, 1e-3);
     ASSERT_GT(rep.maxSpeed, 0.0) << "seed " << seed;
-    EXPECT_EQ(rep.maxSpeed, MpmGrid::maxSpeed(p.v.data(), 1)) << "seed " << seed << ": v = (" << p.v[0].x << ", " << p.v[0].y << ", " << p.v[0].z << ") m/s";
-    ++compared;
+    EXPECT_EQ(rep.maxSpeed, MpmGrid::maxSpeed(p.v.data(), 1))
+        << "seed " << seed << ": v = (" << p.v[0].x << ", " << p.v[0].y << ", " << p.v[0].z << ") m/s";
   }
-  EXPECT_EQ(compared, 300u);
 }
 
 TEST(MpmTransfer, ParallelParticleToGridIsBitwiseDeterministic) {

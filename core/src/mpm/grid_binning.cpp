@@ -95,7 +95,7 @@ void basesScalar(const Vec3d* X, std::size_t from, std::size_t n, const Vec3d& o
 /// basesScalar four particles at a time: the same operations (subtract,
 /// multiply, floor, the half-cell test), so the same bases.
 __attribute__((target("avx2"))) void basesAvx2(const Vec3d* X, std::size_t n, const Vec3d& o, double invDx,
-                                                const Index3& bd, BaseBlock& out) {
+                                               const Index3& bd, BaseBlock& out) {
   const std::size_t n4 = n / 4 * 4;
   const __m256d inv = _mm256_set1_pd(invDx), half = _mm256_set1_pd(0.5), one = _mm256_set1_pd(1.0);
   const __m256d zero = _mm256_setzero_pd();
@@ -105,8 +105,8 @@ __attribute__((target("avx2"))) void basesAvx2(const Vec3d* X, std::size_t n, co
     const double* p = x + 3 * q;
     int okMask = 0xf;
     for (int a = 0; a < 3; ++a) {
-      const __m256d u =
-          _mm256_mul_pd(_mm256_sub_pd(_mm256_setr_pd(p[a], p[a + 3], p[a + 6], p[a + 9]), _mm256_set1_pd(origin[a])), inv);
+      const __m256d u = _mm256_mul_pd(
+          _mm256_sub_pd(_mm256_setr_pd(p[a], p[a + 3], p[a + 6], p[a + 9]), _mm256_set1_pd(origin[a])), inv);
       const __m256d b = _mm256_round_pd(u, _MM_FROUND_TO_NEG_INF | _MM_FROUND_NO_EXC);
       // quadraticBaseFloor: b - 1 where u - b < 1/2 (b - 0 is b, bit for bit).
       const __m256d f = _mm256_sub_pd(b, _mm256_and_pd(_mm256_cmp_pd(_mm256_sub_pd(u, b), half, _CMP_LT_OQ), one));
@@ -388,7 +388,8 @@ void MpmGrid::bin(const MpmParticles& particles, std::size_t materialCount) {
     const std::size_t b = binIndex(key_[first]);
     const std::size_t at = std::size_t(offsets_[b]) + rank_[first];
     // Pass 2 saw the same runs; a run reaching past its bin would mean it did not.
-    if (at + (end - first) > offsets_[b + 1]) throw std::logic_error("MPM binning: the scatter's runs are not the count's");
+    if (at + (end - first) > offsets_[b + 1])
+      throw std::logic_error("MPM binning: the scatter's runs are not the count's");
     std::uint32_t* out = sorted_.data() + at;
     for (std::size_t q = first; q < end; ++q) *out++ = std::uint32_t(q);
   });

@@ -346,7 +346,7 @@ class MpmGrid {
   // zero between calls (read back and reset within the box), used as atomics.
   PageArray<std::uint32_t> rowLow_, rowHigh_;
   std::vector<std::uint64_t> key_;   // per particle: base node, 21 bits per axis
-  std::vector<std::uint32_t> rank_;     // at each run's first particle: its place in its bin (scheduling-dependent)
+  std::vector<std::uint32_t> rank_;  // at each run's first particle: its place in its bin (scheduling-dependent)
   std::vector<std::uint32_t> offsets_;  // per slot + 1: the bins' first places in sorted_
   std::vector<std::uint32_t> sorted_;   // particle indices grouped by bin, ascending within a bin
   double binningSeconds_ = 0;
