@@ -6,6 +6,7 @@
 // as before.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -142,6 +143,53 @@ TEST(MpmParticleOrder, ReorderingKeepsEveryParticlesAttributesAndItsReuseRecordT
   EXPECT_EQ(p.id, sorted.id);
   EXPECT_EQ(p.x, sorted.x);
   EXPECT_EQ(reuse.positions(), recorded);
+}
+
+TEST(MpmParticleOrder, AttributesEqualButForOneParticleFollowThatParticle) {
+  // Arrays whose elements are all equal are left in place; one differing
+  // element anywhere (here deep inside each array, past the first chunk of
+  // a parallel check) makes the array move with its particles.
+  const GridSpec g = testGrid();
+  MpmParticles before = randomParticles(g, 20000, 11);
+  const std::size_t odd = 17000;
+  for (std::size_t q = 0; q < before.size(); ++q) {
+    before.mass[q] = 1e-3;
+    before.volume0[q] = 1e-6;
+    before.count[q] = 0.0;
+    before.material[q] = 0;
+    before.magneticForce[q] = Vec3d{};
+  }
+  before.mass[odd] = 2e-3;
+  before.volume0[odd] = 3e-6;
+  before.count[odd] = 5.0;
+  before.material[odd] = 1;
+  before.magneticForce[odd] = Vec3d{0, 0, 1e-9};
+  MpmParticles p = before;
+  const std::vector<std::uint32_t> order = binnedOrder(p, g);
+  const std::size_t to = std::size_t(std::find(order.begin(), order.end(), std::uint32_t(odd)) - order.begin());
+  ASSERT_NE(to, odd) << "the odd particle must move for the test to mean anything";
+  FieldReuse reuse;
+  ASSERT_TRUE(reorderParticles(order, p, reuse));
+  for (std::size_t q = 0; q < p.size(); ++q) {
+    const std::size_t o = order[q];
+    ASSERT_EQ(p.mass[q], before.mass[o]) << q;
+    ASSERT_EQ(p.volume0[q], before.volume0[o]) << q;
+    ASSERT_EQ(p.count[q], before.count[o]) << q;
+    ASSERT_EQ(p.material[q], before.material[o]) << q;
+    ASSERT_EQ(p.magneticForce[q], before.magneticForce[o]) << q;
+  }
+  EXPECT_EQ(p.mass[to], 2e-3);
+  EXPECT_EQ(p.material[to], 1u);
+
+  // All equal: the arrays come out as they went in.
+  MpmParticles uniform = before;
+  uniform.mass[odd] = 1e-3;
+  uniform.material[odd] = 0;
+  const MpmParticles sortedUniform = uniform;
+  ASSERT_TRUE(reorderParticles(order, uniform, reuse));
+  EXPECT_EQ(uniform.mass, sortedUniform.mass);
+  EXPECT_EQ(uniform.material, sortedUniform.material);
+  for (std::size_t q = 0; q < uniform.size(); ++q) ASSERT_EQ(uniform.id[q], sortedUniform.id[order[q]]) << q;
 }
 
 TEST(MpmParticleOrder, P2GFillsTheGridBitwiseAsBeforeTheSort) {
