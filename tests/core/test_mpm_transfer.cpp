@@ -510,3 +510,36 @@ TEST(MpmTransfer, RejectsParticlesOutsideTheGridNamingThem) {
   p.material[0] = 3;
   EXPECT_THROW(grid.particleToGrid(p, mats, 1e-3), InvalidArgument);
 }
+
+TEST(MpmTransfer, NamesTheFirstBadParticleWhereverItLiesInABlockOfFour) {
+  // The binning computes four particles' bases at a time: a bad material,
+  // a position outside and a NaN in each lane of a block, and one left to
+  // the scalar remainder, are each found and the lowest index named.
+  const GridSpec g = testGrid(8, 0.1);
+  const std::vector<MpmMaterial> mats{neoHookeanSolid(1e5, 0.3, 1000), neoHookeanSolid(2e5, 0.3, 1000)};
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  for (std::size_t bad = 0; bad < 11; ++bad)
+    for (int kind = 0; kind < 3; ++kind) {
+      MpmParticles p;
+      for (std::size_t q = 0; q < 11; ++q)
+        p.add(g.origin + Vec3d{0.3 + 0.01 * double(q), 0.35, 0.35}, {}, 1, 1e-3, std::uint32_t(q % 2), 0);
+      if (kind == 0) p.material[bad] = 2;  // one past the last material
+      if (kind == 1) p.x[bad].y = g.origin.y + 0.02;
+      if (kind == 2) p.x[bad].z = nan;
+      if (bad + 3 < 11) p.material[bad + 3] = 7;  // a later bad particle is not the one named
+      MpmGrid grid(g);
+      try {
+        grid.particleToGrid(p, mats, 1e-3);
+        ADD_FAILURE() << "particle " << bad << " (kind " << kind << ") was not refused";
+      } catch (const InvalidArgument& e) {
+        const char* what[] = {": material index 2 ", " at (", ": position must be finite"};
+        const std::string want = "MPM particle " + std::to_string(bad) + what[kind];
+        EXPECT_NE(std::string(e.what()).find(want), std::string::npos) << e.what();
+      }
+    }
+  // The largest valid index passes.
+  MpmParticles p;
+  for (std::size_t q = 0; q < 8; ++q) p.add(g.origin + Vec3d{0.35, 0.35, 0.35}, {}, 1, 1e-3, 1, 0);
+  MpmGrid grid(g);
+  EXPECT_NO_THROW(grid.particleToGrid(p, mats, 1e-3));
+}

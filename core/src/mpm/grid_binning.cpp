@@ -65,45 +65,46 @@ void forEachKeyRun(const std::uint64_t* key, std::size_t np, const Run& run) {
       tbb::simple_partitioner());
 }
 
-/// The stencil bases of a block of particles (BinKernel): base[a][q] along
-/// axis a of particle q, and ok[q] whether all three lie in [0, dims - 1]
-/// (false for a non-finite position).
-constexpr std::size_t kBaseBlock = 64;
-struct BaseBlock {
-  std::int32_t base[3][kBaseBlock];
-  std::uint8_t ok[kBaseBlock];
-};
+/// The packed stencil base of particle (x, mat): bi | bj << 21 | bk << 42
+/// with each base quadraticBaseFloor((x - o) invDx) in [0, bd - 1], or
+/// kBadBase for a base out of range, a non-finite position or a material
+/// index >= materialCount. BinKernel computes them kKeyBlock particles at a
+/// time, then finds their runs.
+constexpr std::size_t kKeyBlock = 64;
 
-/// Entries [from, n) of the BaseBlock of X[0, n) (n <= kBaseBlock):
-/// quadraticBaseFloor of (x - o) invDx per axis.
-void basesScalar(const Vec3d* X, std::size_t from, std::size_t n, const Vec3d& o, double invDx, const Index3& bd,
-                 BaseBlock& out) {
+/// key[q] for q in [from, n) of particles X, mat.
+void keysScalar(const Vec3d* X, const std::uint32_t* mat, std::size_t from, std::size_t n, const Vec3d& o, double invDx,
+                const Index3& bd, std::size_t materialCount, std::uint64_t* key) {
   for (std::size_t q = from; q < n; ++q) {
     const double f[3] = {quadraticBaseFloor((X[q].x - o.x) * invDx), quadraticBaseFloor((X[q].y - o.y) * invDx),
                          quadraticBaseFloor((X[q].z - o.z) * invDx)};
     // The comparisons are false for NaN, so non-finite positions are not ok.
-    bool ok = true;
-    for (int a = 0; a < 3; ++a) {
-      ok = ok && f[a] >= 0 && f[a] <= bd[a] - 1;
-      out.base[a][q] = ok ? std::int32_t(f[a]) : 0;
-    }
-    out.ok[q] = ok;
+    bool ok = mat[q] < materialCount;
+    for (int a = 0; a < 3; ++a) ok = ok && f[a] >= 0 && f[a] <= bd[a] - 1;
+    key[q] = ok ? std::uint64_t(f[0]) | (std::uint64_t(f[1]) << 21) | (std::uint64_t(f[2]) << 42) : kBadBase;
   }
 }
 
 #if defined(LODESTONE_MPM_AVX2)
-/// basesScalar four particles at a time: the same operations (subtract,
-/// multiply, floor, the half-cell test), so the same bases.
-__attribute__((target("avx2"))) void basesAvx2(const Vec3d* X, std::size_t n, const Vec3d& o, double invDx,
-                                               const Index3& bd, BaseBlock& out) {
+/// keysScalar four particles at a time: the same operations (subtract,
+/// multiply, floor, the half-cell test), so the same keys. Needs
+/// materialCount <= 2^32 - 1.
+__attribute__((target("avx2"))) void keysAvx2(const Vec3d* X, const std::uint32_t* mat, std::size_t n, const Vec3d& o,
+                                              double invDx, const Index3& bd, std::size_t materialCount,
+                                              std::uint64_t* key) {
   const std::size_t n4 = n / 4 * 4;
   const __m256d inv = _mm256_set1_pd(invDx), half = _mm256_set1_pd(0.5), one = _mm256_set1_pd(1.0);
   const __m256d zero = _mm256_setzero_pd();
+  // mat < materialCount as a signed comparison of both offset by 2^31.
+  const __m128i bias = _mm_set1_epi32(std::int32_t(0x80000000u));
+  const __m128i limit = _mm_xor_si128(_mm_set1_epi32(std::int32_t(std::uint32_t(materialCount))), bias);
   const double origin[3] = {o.x, o.y, o.z};
   const double* x = &X[0].x;
   for (std::size_t q = 0; q < n4; q += 4) {
     const double* p = x + 3 * q;
-    int okMask = 0xf;
+    const __m128i m = _mm_loadu_si128(reinterpret_cast<const __m128i*>(mat + q));
+    __m256i ok = _mm256_cvtepi32_epi64(_mm_cmplt_epi32(_mm_xor_si128(m, bias), limit));
+    __m256i packed = _mm256_setzero_si256();
     for (int a = 0; a < 3; ++a) {
       const __m256d u = _mm256_mul_pd(
           _mm256_sub_pd(_mm256_setr_pd(p[a], p[a + 3], p[a + 6], p[a + 9]), _mm256_set1_pd(origin[a])), inv);
@@ -112,13 +113,16 @@ __attribute__((target("avx2"))) void basesAvx2(const Vec3d* X, std::size_t n, co
       const __m256d f = _mm256_sub_pd(b, _mm256_and_pd(_mm256_cmp_pd(_mm256_sub_pd(u, b), half, _CMP_LT_OQ), one));
       const __m256d in = _mm256_and_pd(_mm256_cmp_pd(f, zero, _CMP_GE_OQ),
                                        _mm256_cmp_pd(f, _mm256_set1_pd(double(bd[a] - 1)), _CMP_LE_OQ));
-      okMask &= _mm256_movemask_pd(in);
+      ok = _mm256_and_si256(ok, _mm256_castpd_si256(in));
       // Lanes out of range become 0 before the conversion.
-      _mm_storeu_si128(reinterpret_cast<__m128i*>(&out.base[a][q]), _mm256_cvttpd_epi32(_mm256_and_pd(in, f)));
+      const __m256i base = _mm256_cvtepi32_epi64(_mm256_cvttpd_epi32(_mm256_and_pd(in, f)));
+      packed = _mm256_or_si256(packed, _mm256_sll_epi64(base, _mm_cvtsi32_si128(21 * a)));
     }
-    for (int l = 0; l < 4; ++l) out.ok[q + std::size_t(l)] = (okMask >> l) & 1;
+    // Lanes not ok become kBadBase (all bits set).
+    packed = _mm256_or_si256(packed, _mm256_andnot_si256(ok, _mm256_set1_epi64x(-1)));
+    _mm256_storeu_si256(reinterpret_cast<__m256i*>(key + q), packed);
   }
-  basesScalar(X, n4, n, o, invDx, bd, out);
+  keysScalar(X, mat, n4, n, o, invDx, bd, materialCount, key);
 }
 #endif
 
@@ -153,13 +157,14 @@ struct BinKernel {
   std::uint64_t* key = nullptr;
   std::atomic<std::uint32_t>*rowLow = nullptr, *rowHigh = nullptr;  // per row of bins: bd.i - first, end
   std::atomic<std::size_t>* firstBad = nullptr;
-  bool avx2 = false;  // the bases four at a time (basesAvx2)
+  bool avx2 = false;  // the keys four at a time (keysAvx2)
 
-  // Bases, each row's extent of bins and the box of bases of particles
+  // Keys, each row's extent of bins and the box of bases of particles
   // [begin, end). Inlined into each instruction-set variant (runKernel).
   __attribute__((always_inline)) inline void operator()(std::size_t begin, std::size_t end, BaseBox& acc) const {
-    std::size_t runFlat = 0, runLength = 0;
-    int runBi = 0;
+    // The run of equal keys in progress (kBadBase: none) and its base.
+    std::uint64_t runKey = kBadBase;
+    int runBi = 0, runBj = 0, runBk = 0;
     std::size_t extentRow = kNone;
     std::uint32_t extentLo = 0, extentHi = 0;  // bins [extentLo, extentHi) of row extentRow
     auto endExtent = [&] {
@@ -169,8 +174,8 @@ struct BinKernel {
       extentRow = kNone;
     };
     auto endRun = [&] {
-      if (runLength == 0) return;
-      const std::size_t row = runFlat / std::size_t(bd.i);
+      if (runKey == kBadBase) return;
+      const std::size_t row = std::size_t(runBj) + std::size_t(bd.j) * std::size_t(runBk);
       const std::uint32_t bi = std::uint32_t(runBi);
       if (row != extentRow) {
         endExtent();
@@ -181,36 +186,30 @@ struct BinKernel {
         extentLo = std::min(extentLo, bi);
         extentHi = std::max(extentHi, bi + 1);
       }
-      runLength = 0;
+      runKey = kBadBase;
     };
-    BaseBlock block;
-    for (std::size_t first = begin; first < end; first += kBaseBlock) {
-      const std::size_t n = std::min(kBaseBlock, end - first);
+    for (std::size_t first = begin; first < end; first += kKeyBlock) {
+      const std::size_t n = std::min(kKeyBlock, end - first);
 #if defined(LODESTONE_MPM_AVX2)
       if (avx2)
-        basesAvx2(X + first, n, o, invDx, bd, block);
+        keysAvx2(X + first, mat + first, n, o, invDx, bd, materialCount, key + first);
       else
 #endif
-        basesScalar(X + first, 0, n, o, invDx, bd, block);
-      for (std::size_t q = 0; q < n; ++q) {
-        const std::size_t p = first + q;
-        if (!block.ok[q] || mat[p] >= materialCount) {
+        keysScalar(X + first, mat + first, 0, n, o, invDx, bd, materialCount, key + first);
+      for (std::size_t p = first; p < first + n; ++p) {
+        const std::uint64_t k = key[p];
+        if (k == kBadBase) {
           endRun();
-          key[p] = kBadBase;
           atomicMin(*firstBad, p);
           continue;
         }
-        const int bi = block.base[0][q], bj = block.base[1][q], bk = block.base[2][q];
-        key[p] = std::uint64_t(bi) | (std::uint64_t(bj) << 21) | (std::uint64_t(bk) << 42);
-        const std::size_t flat =
-            std::size_t(bi) + std::size_t(bd.i) * (std::size_t(bj) + std::size_t(bd.j) * std::size_t(bk));
-        if (runLength != 0 && flat != runFlat) endRun();
-        if (runLength == 0) {  // a run's particles share one base: the box grows once a run
-          runFlat = flat;
-          runBi = bi;
-          acc.add(bi, bj, bk);
-        }
-        ++runLength;
+        if (k == runKey) continue;  // a run's particles share one base: the box grows once a run
+        endRun();
+        runKey = k;
+        runBi = int(k & 0x1FFFFF);
+        runBj = int((k >> 21) & 0x1FFFFF);
+        runBk = int(k >> 42);
+        acc.add(runBi, runBj, runBk);
       }
     }
     endRun();
@@ -275,7 +274,7 @@ void MpmGrid::bin(const MpmParticles& particles, std::size_t materialCount) {
   kernel.rowLow = rowLow;
   kernel.rowHigh = rowHigh;
   kernel.firstBad = &firstBad;
-  kernel.avx2 = cpuHasAvx2Fma();
+  kernel.avx2 = cpuHasAvx2Fma() && materialCount <= std::numeric_limits<std::uint32_t>::max();
   const BaseBox box = reduceKernel<BaseBox>(kernel, np, 2048);
 
   if (const std::size_t bad = firstBad.load(); bad != kNone) {
