@@ -104,10 +104,17 @@ __attribute__((target("avx2"))) void keysAvx2(const Vec3d* X, const std::uint32_
     const double* p = x + 3 * q;
     const __m128i m = _mm_loadu_si128(reinterpret_cast<const __m128i*>(mat + q));
     __m256i ok = _mm256_cvtepi32_epi64(_mm_cmplt_epi32(_mm_xor_si128(m, bias), limit));
+    // The four positions (x0 y0 z0 x1 | y1 z1 x2 y2 | z2 x3 y3 z3) as one
+    // vector per axis: three loads, three lane swaps, three shuffles.
+    const __m256d a0 = _mm256_loadu_pd(p), a1 = _mm256_loadu_pd(p + 4), a2 = _mm256_loadu_pd(p + 8);
+    const __m256d t0 = _mm256_permute2f128_pd(a0, a1, 0x30);  // x0 y0 | x2 y2
+    const __m256d t1 = _mm256_permute2f128_pd(a0, a2, 0x21);  // z0 x1 | z2 x3
+    const __m256d t2 = _mm256_permute2f128_pd(a1, a2, 0x30);  // y1 z1 | y3 z3
+    const __m256d axis[3] = {_mm256_shuffle_pd(t0, t1, 0xA), _mm256_shuffle_pd(t0, t2, 0x5),
+                             _mm256_shuffle_pd(t1, t2, 0xA)};
     __m256i packed = _mm256_setzero_si256();
     for (int a = 0; a < 3; ++a) {
-      const __m256d u = _mm256_mul_pd(
-          _mm256_sub_pd(_mm256_setr_pd(p[a], p[a + 3], p[a + 6], p[a + 9]), _mm256_set1_pd(origin[a])), inv);
+      const __m256d u = _mm256_mul_pd(_mm256_sub_pd(axis[a], _mm256_set1_pd(origin[a])), inv);
       const __m256d b = _mm256_round_pd(u, _MM_FROUND_TO_NEG_INF | _MM_FROUND_NO_EXC);
       // quadraticBaseFloor: b - 1 where u - b < 1/2 (b - 0 is b, bit for bit).
       const __m256d f = _mm256_sub_pd(b, _mm256_and_pd(_mm256_cmp_pd(_mm256_sub_pd(u, b), half, _CMP_LT_OQ), one));
