@@ -146,9 +146,8 @@ int main(int argc, char** argv) {
     csv << "body,nodes_per_axis,H0_A_per_m,start,newton_iterations,cg_iterations,line_search_cuts,relative_residual,"
            "status,material_cells,seconds_solve,seconds_stage,threads,tolerance,seconds_initial,seconds_wall,"
            "seconds_setup,seconds_cg,seconds_line_search,law,wall_prediction,seconds_wall_prediction,"
-           "pre_smoothing,post_smoothing,seconds_transfer,seconds_applied_field,seconds_fields,seconds_force,grid,grid_"
-           "nodes,"
-           "H_difference,force_difference\n";
+           "pre_smoothing,post_smoothing,seconds_transfer,seconds_applied_field,seconds_fields,seconds_force,"
+           "grid,grid_nodes,H_difference,force_difference\n";
     const int threads = tbb::info::default_concurrency();
     // The solver predicts the open wall with multigrid only.
     const bool predicted =
