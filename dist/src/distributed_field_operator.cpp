@@ -5,14 +5,15 @@
 #include <cstdint>
 #include <map>
 
+#include "distributed_field_impl.h"
 #include "lodestone/core/base/constants.h"
 #include "lodestone/core/base/error.h"
 #include "lodestone/core/field/element_build.h"
 #include "lodestone/core/field/langevin_batch.h"
 #include "lodestone/core/field/multipole_blocks.h"
 #include "lodestone/core/field/open_wall_lattice.h"
+#include "lodestone/core/field/open_wall_sum.h"
 #include "lodestone/core/field/q1_element.h"
-#include "distributed_field_impl.h"
 
 #if !defined(PETSC_SUCCESS)  // PETSc before 3.19
 #define PETSC_SUCCESS 0
@@ -82,14 +83,14 @@ void DistributedFieldSolve::Impl::setWallTargets(const std::vector<double>& mome
     for (int a = 0; a < 3; ++a)
       for (int c = 0; c < 3; ++c) blocks[b].quadrupole[a][c] = m[3 + 3 * a + c];
   }
-  const PackedMultipoles packed(blocks);
   const OpenWallLattice lattice(grid, clearance);
+  const OpenWallSum farField(blocks, grid, multipoleBlockEdgeFor(clearance), clearance, lattice);
   std::map<std::size_t, double> latticeValues;  // lattice nodes summed so far
   const auto latticeValue = [&](int p, int q, int r) {
     const std::size_t key = grid.index(p, q, r);
     const auto it = latticeValues.find(key);
     if (it != latticeValues.end()) return it->second;
-    const double v = multipoleSum(packed.arrays(), grid.nodePosition(p, q, r)) / (4.0 * kPi);
+    const double v = farField.sum(p, q, r) / (4.0 * kPi);
     latticeValues.emplace(key, v);
     return v;
   };

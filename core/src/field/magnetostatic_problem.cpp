@@ -11,13 +11,14 @@
 #include <tbb/parallel_sort.h>
 
 #include "lodestone/core/base/coloured_scatter.h"
-#include "lodestone/core/base/kept_capacity.h"
 #include "lodestone/core/base/error.h"
+#include "lodestone/core/base/kept_capacity.h"
+#include "lodestone/core/base/parallel.h"
 #include "lodestone/core/field/element_build.h"
+#include "lodestone/core/field/langevin_batch.h"
 #include "lodestone/core/field/multipole_blocks.h"
 #include "lodestone/core/field/open_wall_lattice.h"
-#include "lodestone/core/field/langevin_batch.h"
-#include "lodestone/core/base/parallel.h"
+#include "lodestone/core/field/open_wall_sum.h"
 #include "lodestone/core/field/q1_element.h"
 #include "lodestone/core/field/q1_stencil.h"
 
@@ -524,11 +525,10 @@ void MagnetostaticProblem::applyOpenBoundary(const std::vector<Multipole>& multi
       }
     });
   };
-  const PackedMultipoles packed(multipoles);
-  const MultipoleArrays& blocks = packed.arrays();
+  const OpenWallSum farField(multipoles, grid_, blockEdge_, wallClearance_, lattice);
   forWallNodes([&](int i, int j, int k) {
     if (!lattice.onLattice(i, j, k)) return;
-    phi[grid_.index(i, j, k)] = multipoleSum(blocks, grid_.nodePosition(i, j, k)) / (4.0 * kPi);
+    phi[grid_.index(i, j, k)] = farField.sum(i, j, k) / (4.0 * kPi);
   });
   // Off-lattice wall nodes: interpolated between the lattice nodes around them.
   forWallNodes([&](int i, int j, int k) {

@@ -11,6 +11,7 @@
 
 #include "lodestone/core/base/error.h"
 #include "lodestone/core/base/stopwatch.h"
+#include "lodestone/core/field/open_wall_sum.h"
 #include "lodestone/core/stage/far_field.h"
 
 namespace lodestone {
@@ -19,36 +20,17 @@ inline namespace stage {
 namespace {
 using Clock = std::chrono::steady_clock;
 
-bool emptyMoment(const Multipole& m) {
-  if (!(m.dipole == Vec3d{})) return false;
-  for (const auto& row : m.quadrupole)
-    for (double v : row)
-      if (v != 0) return false;
-  return true;
-}
-
 /// `blocks` merged into clusters of edge `edge` (m): each cluster's moments
 /// about the mean of its blocks' centres (N_ij + m_i (c_b - c)_j), clusters
 /// in the order of their cells.
 std::vector<Multipole> clustered(const std::vector<Multipole>& blocks, double edge) {
   std::map<std::array<long, 3>, std::vector<const Multipole*>> cells;
   for (const Multipole& m : blocks)
-    if (!emptyMoment(m))
+    if (!m.empty())
       cells[{long(std::floor(m.centre.x / edge)), long(std::floor(m.centre.y / edge)), long(std::floor(m.centre.z / edge))}]
           .push_back(&m);
   std::vector<Multipole> out;
-  for (const auto& [cell, members] : cells) {
-    Multipole c;
-    for (const Multipole* m : members) c.centre += m->centre;
-    c.centre = c.centre / double(members.size());
-    for (const Multipole* m : members) {
-      const Vec3d shift = m->centre - c.centre;
-      c.dipole += m->dipole;
-      for (int i = 0; i < 3; ++i)
-        for (int j = 0; j < 3; ++j) c.quadrupole[i][j] += m->quadrupole[i][j] + m->dipole[i] * shift[j];
-    }
-    out.push_back(c);
-  }
+  for (const auto& [cell, members] : cells) out.push_back(mergedMultipole(members.data(), members.size()));
   return out;
 }
 
@@ -69,7 +51,7 @@ std::vector<Multipole> farBlocks(const std::vector<std::vector<Multipole>>& mome
       out.insert(out.end(), c.begin(), c.end());
     } else {
       for (const Multipole& m : moments[q])
-        if (!emptyMoment(m)) out.push_back(m);
+        if (!m.empty()) out.push_back(m);
     }
   }
   return out;
@@ -228,7 +210,7 @@ MagneticPatchReport MagneticPatches::run(const std::vector<ParticleView>& points
       const GridSpec& g = stages_[p]->grid();
       const std::vector<Multipole> farBefore = farBlocks(moments_, p, g), farAfter = farBlocks(next, p, g);
       for (const Multipole& own : next[p]) {
-        if (emptyMoment(own)) continue;
+        if (own.empty()) continue;
         const Vec3d before = farFieldOf(farBefore, own.centre), after = farFieldOf(farAfter, own.centre);
         diff = std::max(diff, norm(after - before));
         scale = std::max(scale, norm(sources.field(own.centre, time) + after));

@@ -57,6 +57,15 @@ struct Multipole {
     return h / (4.0 * kPi);
   }
 
+  /// No dipole and no quadrupole moment: a block without magnetization.
+  bool empty() const {
+    if (!(dipole == Vec3d{})) return false;
+    for (const auto& row : quadrupole)
+      for (double v : row)
+        if (v != 0) return false;
+    return true;
+  }
+
   Multipole& operator+=(const Multipole& o) {
     dipole += o.dipole;
     for (int i = 0; i < 3; ++i)

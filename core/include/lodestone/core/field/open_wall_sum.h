@@ -1,0 +1,72 @@
+#pragma once
+// The open wall's far field at its lattice nodes (open_wall_lattice.h),
+// summed for core's solve (magnetostatic_problem.h) and dist/'s alike: the
+// blocks' expansions (multipole.h) through a tree. Blocks are merged 2x2x2
+// level by level into clusters (moments about the mean of the members'
+// centres, mergedMultipole), and a patch of wall nodes takes a cluster as
+// one expansion when the cluster's extent s (how far its material can lie
+// from its centre, m) over its distance d from the patch is at most theta;
+// otherwise it opens the cluster. A truncated expansion's relative error
+// grows as (s / d)^2; theta = min(1/4, a block's half diagonal / the
+// material's clearance), so that no cluster is taken where its truncation
+// exceeds what the nearest wall node already accepts of each block
+// (measured: the solve's H and force then differ from the blocks' by less
+// than the blocks differ from a larger domain). Each patch's expansions are
+// packed once and summed at its nodes four at a time (multipoleSum).
+// Clusters and patches are both counted from the two ends of each axis
+// towards the grid's mid-plane, as the blocks are (multipole_blocks.h), so
+// that the sum, and with it the field of a mirror-symmetric body, is
+// mirror-symmetric.
+#include <array>
+#include <cstddef>
+#include <map>
+#include <memory>
+#include <vector>
+
+#include "lodestone/core/base/grid.h"
+#include "lodestone/core/field/multipole.h"
+#include "lodestone/core/field/open_wall_lattice.h"
+
+namespace lodestone {
+inline namespace field {
+
+class OpenWallSum {
+ public:
+  /// `blocks`: one expansion per block of `blockEdge` cells on `grid` (those
+  /// with zero moments are left out); `clearance`: the material's clearance
+  /// to the wall, in cells. Throws InvalidArgument for a block edge below 1.
+  OpenWallSum(const std::vector<Multipole>& blocks, const GridSpec& grid, int blockEdge, int clearance,
+              const OpenWallLattice& lattice);
+
+  /// 4 pi phi (A m) at wall node (i, j, k) of the lattice: each block's
+  /// potential, or that of the largest cluster holding it that the node's
+  /// patch sees from at least the cluster's extent / theta.
+  double sum(int i, int j, int k) const;
+
+  /// The acceptance ratio (dimensionless, in (0, 1/4]).
+  double theta() const { return theta_; }
+  /// Expansions summed per lattice node on average (the blocks' count
+  /// without the tree), and the patches of wall nodes.
+  double meanTerms() const;
+  std::size_t patchCount() const { return patches_.size(); }
+
+  /// Nodes of the wall per patch edge.
+  static constexpr int kPatchNodes = 16;
+
+ private:
+  using Key = std::array<long, 3>;
+  Key patchKey(int i, int j, int k) const;
+
+  GridSpec grid_;
+  double theta_ = 0.25;
+  std::map<Key, std::size_t> patchOf_;
+  std::vector<std::unique_ptr<PackedMultipoles>> patches_;
+  std::vector<std::size_t> patchNodes_;  // lattice nodes per patch
+};
+
+/// Expansions merged into one about the mean of their centres c:
+/// m = sum m_b, N_ij = sum (N_b,ij + m_b,i (c_b - c)_j).
+Multipole mergedMultipole(const Multipole* const* members, std::size_t count);
+
+}  // namespace field
+}  // namespace lodestone
