@@ -11,10 +11,12 @@
 //  - Open: phi on the outer layer of nodes is the free-space potential of
 //    the current magnetization (a far-field condition), summed over cubic
 //    blocks of cells (edge 8 cells, up to 32 when the material is far from
-//    the wall), each as a dipole + quadrupole about its own centroid. Blocks
-//    and the wall lattice on which the sum is evaluated are counted from both
-//    ends of each axis, so a mirror-symmetric body in a symmetric field gets
-//    no net force from the wall on any grid size. Interior nodes are unknowns.
+//    the wall), each as a dipole + quadrupole about its own centroid; far
+//    from a patch of wall nodes, blocks merged into clusters stand in for
+//    their members (open_wall_sum.h). Blocks, clusters, patches and the wall
+//    lattice on which the sum is evaluated are counted from both ends of
+//    each axis, so a mirror-symmetric body in a symmetric field gets no net
+//    force from the wall on any grid size. Interior nodes are unknowns.
 //  - Shield: the paper's wall, grad(phi).n = M.n (natural condition); every
 //    node is an unknown and phi is defined up to a constant (kept at mean 0).
 //
@@ -134,8 +136,8 @@ class MagnetostaticProblem {
   /// [materialColourStart()[c], materialColourStart()[c + 1]) have colour c.
   const std::size_t* materialColourStart() const { return colourStart_; }
 
-  /// Open boundary: writes the summed block-multipole potential into the
-  /// fixed nodes of phi.
+  /// Open boundary: writes the blocks' summed far-field potential
+  /// (OpenWallSum) into the fixed nodes of phi.
   void applyOpenBoundary(const std::vector<Multipole>& multipoles, double* phi) const;
 
   /// Block multipoles of the first-order change of M when phi changes by
