@@ -102,8 +102,9 @@ std::vector<Index3> wallNodes(const GridSpec& g, const OpenWallLattice& lattice,
 }  // namespace
 
 TEST(OpenWallSum, StaysWithinTheBlocksWorstErrorWithFewerTerms) {
-  // Radius 20 cells in a 96-cell box: clearance 27-28 cells, blocks of 8.
-  const Source s = ball(97, 20.0, {48, 48, 48}, [](const Vec3d& x) {
+  // Radius 26 cells in a 96-cell box: clearance 22 cells, blocks of 8, a
+  // lattice spacing of 2 (patches of 16 nodes).
+  const Source s = ball(97, 26.0, {48, 48, 48}, [](const Vec3d& x) {
     return Vec3d{2e4 * (x.y - 0.48) / 0.2, 0.0, 1e5 * (1.0 + 0.3 * (x.x - 0.48) / 0.2)};
   });
   const OpenWallLattice lattice(s.grid, s.clearance);
@@ -120,8 +121,8 @@ TEST(OpenWallSum, StaysWithinTheBlocksWorstErrorWithFewerTerms) {
               s.blocks.size(), tree.meanTerms(), tree.theta(), worstBlocks, worstTree);
   // A cluster taken at extent / distance <= theta drops an octupole of at
   // most about theta^2 of its terms' magnitude; its moments shifted wrongly
-  // would leave first-order terms (with its sign flipped: 1.4e-2). Measured: blocks 8.0e-5,
-  // tree 8.4e-4 of the magnitudes, theta = 0.247.
+  // would leave first-order terms (with the shift's sign flipped: 1.2e-2).
+  // Measured: blocks 2.5e-4, tree 5.1e-4 of the magnitudes, theta = 0.25.
   EXPECT_LT(worstBlocks, 1e-3);
   EXPECT_LT(worstTree, tree.theta() * tree.theta() / 16);
   // The tree took clusters somewhere: fewer terms than the blocks (padded to 4).

@@ -50,11 +50,12 @@ long axisCell(double c, double lo, double hi, double edge, double dx) {
   return kFromTop - long(std::floor((hi - c) / edge));
 }
 
-// The patch of node coordinate c on an axis of n nodes, counted from the
-// nearer end; the middle node of an odd count is a patch of its own.
-long axisPatch(int c, int n) {
-  if (2 * c < n - 1) return c / OpenWallSum::kPatchNodes;
-  if (2 * c > n - 1) return kFromTop - (n - 1 - c) / OpenWallSum::kPatchNodes;
+// The patch of node coordinate c on an axis of n nodes, `width` nodes a
+// patch counted from the nearer end; the middle node of an odd count is a
+// patch of its own.
+long axisPatch(int c, int n, int width) {
+  if (2 * c < n - 1) return c / width;
+  if (2 * c > n - 1) return kFromTop - (n - 1 - c) / width;
   return kMiddle;
 }
 
@@ -71,12 +72,13 @@ double boxDistance2(const Vec3d& x, const Vec3d& lo, const Vec3d& hi) {
 }  // namespace
 
 OpenWallSum::Key OpenWallSum::patchKey(int i, int j, int k) const {
-  return {axisPatch(i, grid_.dims.i), axisPatch(j, grid_.dims.j), axisPatch(k, grid_.dims.k)};
+  return {axisPatch(i, grid_.dims.i, patchNodes_), axisPatch(j, grid_.dims.j, patchNodes_),
+          axisPatch(k, grid_.dims.k, patchNodes_)};
 }
 
 OpenWallSum::OpenWallSum(const std::vector<Multipole>& blocks, const GridSpec& grid, int blockEdge, int clearance,
                          const OpenWallLattice& lattice)
-    : grid_(grid) {
+    : grid_(grid), patchNodes_(kPatchLattice * lattice.spacing()) {
   require(blockEdge >= 1, "open wall sum: block edge ", blockEdge, " cells is not >= 1");
   const double dx = grid.dx;
   const double halfDiagonal = 0.5 * std::sqrt(3.0) * double(blockEdge) * dx;  // m
@@ -116,8 +118,8 @@ OpenWallSum::OpenWallSum(const std::vector<Multipole>& blocks, const GridSpec& g
     level.push_back(std::move(above));
   }
 
-  // The patches: the wall's lattice nodes grouped per kPatchNodes on each
-  // axis, each patch's box (m).
+  // The patches: the wall's lattice nodes grouped per kPatchLattice
+  // spacings on each axis, each patch's box (m).
   struct Patch {
     Vec3d lo{1e300, 1e300, 1e300}, hi{-1e300, -1e300, -1e300};
     std::size_t nodes = 0;
@@ -140,8 +142,8 @@ OpenWallSum::OpenWallSum(const std::vector<Multipole>& blocks, const GridSpec& g
         ++p.nodes;
       }
     }
-  patchNodes_.resize(patches.size());
-  for (std::size_t p = 0; p < patches.size(); ++p) patchNodes_[p] = patches[p].nodes;
+  patchSize_.resize(patches.size());
+  for (std::size_t p = 0; p < patches.size(); ++p) patchSize_[p] = patches[p].nodes;
 
   // Each patch's expansions: depth first from each root, children in
   // order, a cluster taken whole where the patch is at least extent / theta
@@ -177,8 +179,8 @@ double OpenWallSum::meanTerms() const {
   double terms = 0, nodes = 0;
   for (std::size_t p = 0; p < patches_.size(); ++p) {
     // PackedMultipoles pads to 4: count the padded terms, which are summed too.
-    terms += double(patches_[p]->arrays().count) * double(patchNodes_[p]);
-    nodes += double(patchNodes_[p]);
+    terms += double(patches_[p]->arrays().count) * double(patchSize_[p]);
+    nodes += double(patchSize_[p]);
   }
   return nodes > 0 ? terms / nodes : 0.0;
 }

@@ -50,18 +50,21 @@ class OpenWallSum {
   double meanTerms() const;
   std::size_t patchCount() const { return patches_.size(); }
 
-  /// Nodes of the wall per patch edge.
-  static constexpr int kPatchNodes = 16;
+  /// Lattice spacings per patch edge: a patch holds up to 8 x 8 of a face's
+  /// lattice nodes, so the packed expansions (104 B a term) stay within
+  /// about 1.6 B a lattice node per term whatever the spacing.
+  static constexpr int kPatchLattice = 8;
 
  private:
   using Key = std::array<long, 3>;
   Key patchKey(int i, int j, int k) const;
 
   GridSpec grid_;
+  int patchNodes_ = 0;  // grid nodes per patch edge
   double theta_ = 0.25;
   std::map<Key, std::size_t> patchOf_;
   std::vector<std::unique_ptr<PackedMultipoles>> patches_;
-  std::vector<std::size_t> patchNodes_;  // lattice nodes per patch
+  std::vector<std::size_t> patchSize_;  // lattice nodes per patch
 };
 
 /// Expansions merged into one about the mean of their centres c:
