@@ -515,15 +515,9 @@ void MagnetostaticProblem::applyOpenBoundary(const std::vector<Multipole>& multi
   // with spacing s (a power of 2 <= d/6, at least 2) and interpolated
   // (bi)linearly in between: relative error about (s/d)^2/8 <= 0.4%, below
   // the blocks' truncated octupole.
-  const int nx = grid_.dims.i, ny = grid_.dims.j, nz = grid_.dims.k;
   const OpenWallLattice lattice(grid_, wallClearance_);
   const auto forWallNodes = [&](const auto& fn) {
-    tbb::parallel_for(0, nz, [&](int k) {
-      for (int j = 0; j < ny; ++j) {
-        const bool wallRow = k == 0 || k == nz - 1 || j == 0 || j == ny - 1;
-        for (int i = 0; i < nx; i += (wallRow || i == nx - 1) ? 1 : nx - 1) fn(i, j, k);
-      }
-    });
+    tbb::parallel_for(0, grid_.dims.k, [&](int k) { grid_.forEachBoundaryNodeOfLayer(k, fn); });
   };
   const OpenWallSum farField(multipoles, grid_, blockEdge_, wallClearance_, lattice);
   forWallNodes([&](int i, int j, int k) {
@@ -541,13 +535,8 @@ void MagnetostaticProblem::applyOpenBoundary(const std::vector<Multipole>& multi
 std::vector<std::size_t> MagnetostaticProblem::fixedNodes() const {
   std::vector<std::size_t> out;
   if (boundary_ != BoundaryKind::Open) return out;
-  const int nx = grid_.dims.i, ny = grid_.dims.j, nz = grid_.dims.k;
   out.reserve(grid_.nodeCount() - freeNodeCount());
-  for (int k = 0; k < nz; ++k)
-    for (int j = 0; j < ny; ++j) {
-      const bool wallRow = k == 0 || k == nz - 1 || j == 0 || j == ny - 1;
-      for (int i = 0; i < nx; i += (wallRow || i == nx - 1) ? 1 : nx - 1) out.push_back(grid_.index(i, j, k));
-    }
+  grid_.forEachBoundaryNode([&](int i, int j, int k) { out.push_back(grid_.index(i, j, k)); });
   return out;
 }
 

@@ -125,23 +125,18 @@ OpenWallSum::OpenWallSum(const std::vector<Multipole>& blocks, const GridSpec& g
     std::size_t nodes = 0;
   };
   std::vector<Patch> patches;
-  const int nx = grid.dims.i, ny = grid.dims.j, nz = grid.dims.k;
-  for (int k = 0; k < nz; ++k)
-    for (int j = 0; j < ny; ++j) {
-      const bool wallRow = k == 0 || k == nz - 1 || j == 0 || j == ny - 1;
-      for (int i = 0; i < nx; i += (wallRow || i == nx - 1) ? 1 : nx - 1) {
-        if (!lattice.onLattice(i, j, k)) continue;
-        const auto found = patchOf_.emplace(patchKey(i, j, k), patches.size());
-        if (found.second) patches.emplace_back();
-        Patch& p = patches[found.first->second];
-        const Vec3d x = grid.nodePosition(i, j, k);
-        for (int a = 0; a < 3; ++a) {
-          p.lo[a] = std::min(p.lo[a], x[a]);
-          p.hi[a] = std::max(p.hi[a], x[a]);
-        }
-        ++p.nodes;
-      }
+  grid.forEachBoundaryNode([&](int i, int j, int k) {
+    if (!lattice.onLattice(i, j, k)) return;
+    const auto found = patchOf_.emplace(patchKey(i, j, k), patches.size());
+    if (found.second) patches.emplace_back();
+    Patch& p = patches[found.first->second];
+    const Vec3d x = grid.nodePosition(i, j, k);
+    for (int a = 0; a < 3; ++a) {
+      p.lo[a] = std::min(p.lo[a], x[a]);
+      p.hi[a] = std::max(p.hi[a], x[a]);
     }
+    ++p.nodes;
+  });
   patchSize_.resize(patches.size());
   for (std::size_t p = 0; p < patches.size(); ++p) patchSize_[p] = patches[p].nodes;
 

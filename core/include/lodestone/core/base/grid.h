@@ -52,6 +52,20 @@ struct GridSpec {
   bool isBoundaryNode(int i, int j, int k) const {
     return i == 0 || j == 0 || k == 0 || i == dims.i - 1 || j == dims.j - 1 || k == dims.k - 1;
   }
+  /// Calls fn(i, j, k) for each boundary node of layer k, in index order:
+  /// every node of a row on the k or j faces, the two ends of the others.
+  template <typename Fn>
+  void forEachBoundaryNodeOfLayer(int k, const Fn& fn) const {
+    for (int j = 0; j < dims.j; ++j) {
+      const bool faceRow = k == 0 || k == dims.k - 1 || j == 0 || j == dims.j - 1;
+      for (int i = 0; i < dims.i; i += (faceRow || i == dims.i - 1) ? 1 : dims.i - 1) fn(i, j, k);
+    }
+  }
+  /// Calls fn(i, j, k) for each boundary node, in index order.
+  template <typename Fn>
+  void forEachBoundaryNode(const Fn& fn) const {
+    for (int k = 0; k < dims.k; ++k) forEachBoundaryNodeOfLayer(k, fn);
+  }
   /// Cell volume dx^3, m^3.
   double cellVolume() const { return dx * dx * dx; }
 
