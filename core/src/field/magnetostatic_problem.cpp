@@ -511,10 +511,8 @@ std::vector<Multipole> MagnetostaticProblem::linearizedMultipoles(const double* 
 void MagnetostaticProblem::applyOpenBoundary(const std::vector<Multipole>& multipoles, double* phi) const {
   if (boundary_ != BoundaryKind::Open) return;
   // The far-field potential is smooth on the wall on the scale of the
-  // material's clearance d, so it is summed exactly on a lattice of wall nodes
-  // with spacing s (a power of 2 <= d/6, at least 2) and interpolated
-  // (bi)linearly in between: relative error about (s/d)^2/8 <= 0.4%, below
-  // the blocks' truncated octupole.
+  // material's clearance, so it is summed on a lattice of wall nodes and
+  // interpolated in between (open_wall_lattice.h).
   const OpenWallLattice lattice(grid_, wallClearance_);
   const auto forWallNodes = [&](const auto& fn) {
     tbb::parallel_for(0, grid_.dims.k, [&](int k) { grid_.forEachBoundaryNodeOfLayer(k, fn); });

@@ -50,10 +50,12 @@ class OpenWallSum {
   double meanTerms() const;
   std::size_t patchCount() const { return patches_.size(); }
 
-  /// Lattice spacings per patch edge: a patch holds up to 8 x 8 of a face's
+  /// Lattice spacings per patch edge: a patch holds up to 4 x 4 of a face's
   /// lattice nodes, so the packed expansions (104 B a term) stay within
-  /// about 1.6 B a lattice node per term whatever the spacing.
-  static constexpr int kPatchLattice = 8;
+  /// about 6.5 B a lattice node per term whatever the spacing, and a patch
+  /// spans at most 1.6 clearances (the spacing is at most 0.4 of it): wider
+  /// patches see fewer clusters from far enough to take them whole.
+  static constexpr int kPatchLattice = 4;
 
  private:
   using Key = std::array<long, 3>;
