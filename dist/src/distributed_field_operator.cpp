@@ -84,19 +84,21 @@ void DistributedFieldSolve::Impl::setWallTargets(const std::vector<double>& mome
       for (int c = 0; c < 3; ++c) blocks[b].quadrupole[a][c] = m[3 + 3 * a + c];
   }
   const OpenWallLattice lattice(grid, clearance);
-  const OpenWallSum farField(blocks, grid, multipoleBlockEdgeFor(clearance), clearance, lattice);
-  std::map<std::size_t, double> latticeValues;  // lattice nodes summed so far
-  const auto latticeValue = [&](int p, int q, int r) {
-    const std::size_t key = grid.index(p, q, r);
-    const auto it = latticeValues.find(key);
-    if (it != latticeValues.end()) return it->second;
-    const double v = farField.sum(p, q, r) / (4.0 * kPi);
-    latticeValues.emplace(key, v);
-    return v;
-  };
+  // The lattice nodes this rank's fixed nodes interpolate from, summed once.
+  std::map<std::size_t, Index3> needed;
+  for (const Index3& n : fixedNodes)
+    lattice.interpolate(n.i, n.j, n.k, [&](int p, int q, int r) {
+      needed.emplace(grid.index(p, q, r), Index3{p, q, r});
+      return 0.0;
+    });
+  std::vector<Index3> only;
+  only.reserve(needed.size());
+  for (const auto& entry : needed) only.push_back(entry.second);
+  const OpenWallSum farField(blocks, grid, multipoleBlockEdgeFor(clearance), clearance, lattice, &only);
   for (std::size_t f = 0; f < fixedNodes.size(); ++f) {
     const Index3 n = fixedNodes[f];
-    fixedTarget[f] = lattice.interpolate(n.i, n.j, n.k, latticeValue);
+    fixedTarget[f] =
+        lattice.interpolate(n.i, n.j, n.k, [&](int p, int q, int r) { return farField.sum(p, q, r) / (4.0 * kPi); });
   }
 }
 

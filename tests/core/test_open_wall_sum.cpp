@@ -128,6 +128,13 @@ TEST(OpenWallSum, StaysWithinTheBlocksWorstErrorWithFewerTerms) {
   // The tree took clusters somewhere: fewer terms than the blocks (padded to
   // 4). Measured: 244 against 280.
   EXPECT_LT(tree.meanTerms(), 0.9 * double(packed.arrays().count));
+  // Summed at a few nodes only (as a rank of the distributed solve sums
+  // those its wall interpolates from), each node gets the same value.
+  const std::vector<Index3> few = wallNodes(s.grid, lattice, 97);
+  const OpenWallSum some(s.blocks, s.grid, s.edge, s.clearance, lattice, &few);
+  for (const Index3& p : few) EXPECT_EQ(some.sum(p.i, p.j, p.k), tree.sum(p.i, p.j, p.k));
+  const Index3 other = wallNodes(s.grid, lattice, 1)[1];  // not among the few
+  EXPECT_THROW((void)some.sum(other.i, other.j, other.k), InvalidArgument);
 }
 
 TEST(OpenWallSum, AMirrorSymmetricBodyGetsAMirrorSymmetricWall) {
@@ -182,6 +189,14 @@ TEST(OpenWallSum, NamesABadBlockEdgeOrANodeOffTheLattice) {
   try {
     (void)empty.sum(16, 16, 16);
     FAIL() << "an interior node was summed";
+  } catch (const InvalidArgument& e) {
+    EXPECT_NE(std::string(e.what()).find("(16, 16, 16)"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW((void)empty.sum(-1, 0, 0), InvalidArgument);
+  const std::vector<Index3> interior{{0, 0, 0}, {16, 16, 16}};
+  try {
+    const OpenWallSum some({}, g, 8, 8, lattice, &interior);
+    FAIL() << "an interior node was accepted";
   } catch (const InvalidArgument& e) {
     EXPECT_NE(std::string(e.what()).find("(16, 16, 16)"), std::string::npos) << e.what();
   }

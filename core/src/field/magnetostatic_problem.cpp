@@ -518,10 +518,7 @@ void MagnetostaticProblem::applyOpenBoundary(const std::vector<Multipole>& multi
     tbb::parallel_for(0, grid_.dims.k, [&](int k) { grid_.forEachBoundaryNodeOfLayer(k, fn); });
   };
   const OpenWallSum farField(multipoles, grid_, blockEdge_, wallClearance_, lattice);
-  forWallNodes([&](int i, int j, int k) {
-    if (!lattice.onLattice(i, j, k)) return;
-    phi[grid_.index(i, j, k)] = farField.sum(i, j, k) / (4.0 * kPi);
-  });
+  farField.forEachSum([&](std::size_t node, double value) { phi[node] = value / (4.0 * kPi); });
   // Off-lattice wall nodes: interpolated between the lattice nodes around them.
   forWallNodes([&](int i, int j, int k) {
     if (lattice.onLattice(i, j, k)) return;

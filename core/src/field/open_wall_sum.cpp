@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <map>
+#include <tuple>
 #include <utility>
 
 #include <tbb/parallel_for.h>
@@ -77,7 +79,7 @@ OpenWallSum::Key OpenWallSum::patchKey(int i, int j, int k) const {
 }
 
 OpenWallSum::OpenWallSum(const std::vector<Multipole>& blocks, const GridSpec& grid, int blockEdge, int clearance,
-                         const OpenWallLattice& lattice)
+                         const OpenWallLattice& lattice, const std::vector<Index3>* only)
     : grid_(grid), patchNodes_(kPatchLattice * lattice.spacing()) {
   require(blockEdge >= 1, "open wall sum: block edge ", blockEdge, " cells is not >= 1");
   const double dx = grid.dx;
@@ -119,15 +121,18 @@ OpenWallSum::OpenWallSum(const std::vector<Multipole>& blocks, const GridSpec& g
   }
 
   // The patches: the wall's lattice nodes grouped per kPatchLattice
-  // spacings on each axis, each patch's box (m).
+  // spacings on each axis, each patch's box (m, over all its lattice nodes,
+  // so that a patch takes the same clusters whichever of its nodes are
+  // summed) and the nodes to sum at.
   struct Patch {
     Vec3d lo{1e300, 1e300, 1e300}, hi{-1e300, -1e300, -1e300};
-    std::size_t nodes = 0;
+    std::vector<Index3> nodes;
   };
   std::vector<Patch> patches;
+  std::map<Key, std::size_t> patchOf;
   grid.forEachBoundaryNode([&](int i, int j, int k) {
     if (!lattice.onLattice(i, j, k)) return;
-    const auto found = patchOf_.emplace(patchKey(i, j, k), patches.size());
+    const auto found = patchOf.emplace(patchKey(i, j, k), patches.size());
     if (found.second) patches.emplace_back();
     Patch& p = patches[found.first->second];
     const Vec3d x = grid.nodePosition(i, j, k);
@@ -135,17 +140,29 @@ OpenWallSum::OpenWallSum(const std::vector<Multipole>& blocks, const GridSpec& g
       p.lo[a] = std::min(p.lo[a], x[a]);
       p.hi[a] = std::max(p.hi[a], x[a]);
     }
-    ++p.nodes;
+    if (!only) p.nodes.push_back({i, j, k});
   });
-  patchSize_.resize(patches.size());
-  for (std::size_t p = 0; p < patches.size(); ++p) patchSize_[p] = patches[p].nodes;
+  if (only) {
+    for (const Index3& n : *only) {
+      const bool onWall = n.i >= 0 && n.j >= 0 && n.k >= 0 && n.i < grid.dims.i && n.j < grid.dims.j &&
+                          n.k < grid.dims.k && grid.isBoundaryNode(n.i, n.j, n.k);
+      require(onWall && lattice.onLattice(n.i, n.j, n.k), "open wall sum: node (", n.i, ", ", n.j, ", ", n.k,
+              ") is not on the wall's lattice");
+      patches[patchOf.at(patchKey(n.i, n.j, n.k))].nodes.push_back(n);
+    }
+  }
+  patchCount_ = patches.size();
 
-  // Each patch's expansions: depth first from each root, children in
-  // order, a cluster taken whole where the patch is at least extent / theta
-  // from its centre.
-  patches_.resize(patches.size());
+  // Each patch's expansions, depth first from each root, children in order,
+  // a cluster taken whole where the patch is at least extent / theta from
+  // its centre; packed and summed at the patch's nodes, then dropped.
+  std::vector<std::size_t> offset(patches.size() + 1, 0);
+  for (std::size_t p = 0; p < patches.size(); ++p) offset[p + 1] = offset[p] + patches[p].nodes.size();
+  std::vector<std::pair<std::size_t, double>> values(offset.back());
+  std::vector<double> terms(patches.size(), 0.0);
   const int top = int(level.size()) - 1;
   tbb::parallel_for(std::size_t(0), patches.size(), [&](std::size_t p) {
+    if (patches[p].nodes.empty()) return;
     std::vector<Multipole> taken;
     std::vector<std::pair<int, std::uint32_t>> stack;
     for (std::uint32_t r = std::uint32_t(level[std::size_t(top)].size()); r-- > 0;) stack.emplace_back(top, r);
@@ -160,24 +177,31 @@ OpenWallSum::OpenWallSum(const std::vector<Multipole>& blocks, const GridSpec& g
       }
       for (std::size_t m = c.members.size(); m-- > 0;) stack.emplace_back(L - 1, c.members[m]);
     }
-    patches_[p] = std::make_unique<PackedMultipoles>(taken);
+    const PackedMultipoles packed(taken);
+    // PackedMultipoles pads to 4: the padded terms are summed too.
+    terms[p] = double(packed.arrays().count) * double(patches[p].nodes.size());
+    for (std::size_t n = 0; n < patches[p].nodes.size(); ++n) {
+      const Index3 x = patches[p].nodes[n];
+      values[offset[p] + n] = {grid.index(x.i, x.j, x.k),
+                               multipoleSum(packed.arrays(), grid.nodePosition(x.i, x.j, x.k))};
+    }
   });
+  std::sort(values.begin(), values.end());
+  nodes_.resize(values.size());
+  values_.resize(values.size());
+  for (std::size_t n = 0; n < values.size(); ++n) std::tie(nodes_[n], values_[n]) = values[n];
+  double total = 0;
+  for (const double t : terms) total += t;
+  meanTerms_ = values.empty() ? 0.0 : total / double(values.size());
 }
 
 double OpenWallSum::sum(int i, int j, int k) const {
-  const auto it = patchOf_.find(patchKey(i, j, k));
-  require(it != patchOf_.end(), "open wall sum: node (", i, ", ", j, ", ", k, ") is not on the wall's lattice");
-  return multipoleSum(patches_[it->second]->arrays(), grid_.nodePosition(i, j, k));
-}
-
-double OpenWallSum::meanTerms() const {
-  double terms = 0, nodes = 0;
-  for (std::size_t p = 0; p < patches_.size(); ++p) {
-    // PackedMultipoles pads to 4: count the padded terms, which are summed too.
-    terms += double(patches_[p]->arrays().count) * double(patchSize_[p]);
-    nodes += double(patchSize_[p]);
-  }
-  return nodes > 0 ? terms / nodes : 0.0;
+  const bool inside = i >= 0 && j >= 0 && k >= 0 && i < grid_.dims.i && j < grid_.dims.j && k < grid_.dims.k;
+  const std::size_t node = inside ? grid_.index(i, j, k) : 0;
+  const auto it = std::lower_bound(nodes_.begin(), nodes_.end(), node);
+  require(inside && it != nodes_.end() && *it == node, "open wall sum: node (", i, ", ", j, ", ", k,
+          ") is not on the wall's lattice or not among the nodes summed");
+  return values_[std::size_t(it - nodes_.begin())];
 }
 
 }  // namespace field

@@ -19,8 +19,6 @@
 // mirror-symmetric.
 #include <array>
 #include <cstddef>
-#include <map>
-#include <memory>
 #include <vector>
 
 #include "lodestone/core/base/grid.h"
@@ -32,29 +30,39 @@ inline namespace field {
 
 class OpenWallSum {
  public:
-  /// `blocks`: one expansion per block of `blockEdge` cells on `grid` (those
-  /// with zero moments are left out); `clearance`: the material's clearance
-  /// to the wall, in cells. Throws InvalidArgument for a block edge below 1.
+  /// Sums at the wall's lattice nodes, or at `only` (each on the lattice;
+  /// InvalidArgument names the first that is not). `blocks`: one expansion
+  /// per block of `blockEdge` cells on `grid` (those with zero moments are
+  /// left out); `clearance`: the material's clearance to the wall, in
+  /// cells. Throws InvalidArgument for a block edge below 1. Each patch's
+  /// expansions are packed, summed at its nodes and dropped: what is kept is
+  /// one value a node.
   OpenWallSum(const std::vector<Multipole>& blocks, const GridSpec& grid, int blockEdge, int clearance,
-              const OpenWallLattice& lattice);
+              const OpenWallLattice& lattice, const std::vector<Index3>* only = nullptr);
 
-  /// 4 pi phi (A m) at wall node (i, j, k) of the lattice: each block's
-  /// potential, or that of the largest cluster holding it that the node's
-  /// patch sees from at least the cluster's extent / theta.
+  /// 4 pi phi (A m) at lattice node (i, j, k): each block's potential, or
+  /// that of the largest cluster holding it that the node's patch sees from
+  /// at least the cluster's extent / theta. InvalidArgument for a node not
+  /// summed.
   double sum(int i, int j, int k) const;
+  /// fn(flat node index, 4 pi phi in A m) for every node summed, in index
+  /// order.
+  template <typename Fn>
+  void forEachSum(const Fn& fn) const {
+    for (std::size_t n = 0; n < nodes_.size(); ++n) fn(nodes_[n], values_[n]);
+  }
 
   /// The acceptance ratio (dimensionless, in (0, 1/4]).
   double theta() const { return theta_; }
-  /// Expansions summed per lattice node on average (the blocks' count
-  /// without the tree), and the patches of wall nodes.
-  double meanTerms() const;
-  std::size_t patchCount() const { return patches_.size(); }
+  /// Expansions summed per node on average (the blocks' count without the
+  /// tree), and the patches of nodes.
+  double meanTerms() const { return meanTerms_; }
+  std::size_t patchCount() const { return patchCount_; }
 
   /// Lattice spacings per patch edge: a patch holds up to 4 x 4 of a face's
-  /// lattice nodes, so the packed expansions (104 B a term) stay within
-  /// about 6.5 B a lattice node per term whatever the spacing, and a patch
-  /// spans at most 1.6 clearances (the spacing is at most 0.4 of it): wider
-  /// patches see fewer clusters from far enough to take them whole.
+  /// lattice nodes, and spans at most 1.6 clearances (the spacing is at most
+  /// 0.4 of it): wider patches see fewer clusters from far enough to take
+  /// them whole, narrower ones pack their expansions for fewer nodes.
   static constexpr int kPatchLattice = 4;
 
  private:
@@ -64,9 +72,10 @@ class OpenWallSum {
   GridSpec grid_;
   int patchNodes_ = 0;  // grid nodes per patch edge
   double theta_ = 0.25;
-  std::map<Key, std::size_t> patchOf_;
-  std::vector<std::unique_ptr<PackedMultipoles>> patches_;
-  std::vector<std::size_t> patchSize_;  // lattice nodes per patch
+  double meanTerms_ = 0;
+  std::size_t patchCount_ = 0;
+  std::vector<std::size_t> nodes_;  // flat indices of the nodes summed, ascending
+  std::vector<double> values_;      // 4 pi phi at nodes_, A m
 };
 
 /// Expansions merged into one about the mean of their centres c:
