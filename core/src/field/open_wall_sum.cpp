@@ -4,7 +4,6 @@
 #include <cmath>
 #include <cstdint>
 #include <map>
-#include <tuple>
 #include <utility>
 
 #include <tbb/parallel_for.h>
@@ -144,8 +143,7 @@ OpenWallSum::OpenWallSum(const std::vector<Multipole>& blocks, const GridSpec& g
   });
   if (only) {
     for (const Index3& n : *only) {
-      const bool onWall = n.i >= 0 && n.j >= 0 && n.k >= 0 && n.i < grid.dims.i && n.j < grid.dims.j &&
-                          n.k < grid.dims.k && grid.isBoundaryNode(n.i, n.j, n.k);
+      const bool onWall = grid.hasNode(n.i, n.j, n.k) && grid.isBoundaryNode(n.i, n.j, n.k);
       require(onWall && lattice.onLattice(n.i, n.j, n.k), "open wall sum: node (", n.i, ", ", n.j, ", ", n.k,
               ") is not on the wall's lattice");
       patches[patchOf.at(patchKey(n.i, n.j, n.k))].nodes.push_back(n);
@@ -158,7 +156,8 @@ OpenWallSum::OpenWallSum(const std::vector<Multipole>& blocks, const GridSpec& g
   // its centre; packed and summed at the patch's nodes, then dropped.
   std::vector<std::size_t> offset(patches.size() + 1, 0);
   for (std::size_t p = 0; p < patches.size(); ++p) offset[p + 1] = offset[p] + patches[p].nodes.size();
-  std::vector<std::pair<std::size_t, double>> values(offset.back());
+  std::vector<std::pair<std::size_t, double>>& values = sums_;
+  values.resize(offset.back());
   std::vector<double> terms(patches.size(), 0.0);
   const int top = int(level.size()) - 1;
   tbb::parallel_for(std::size_t(0), patches.size(), [&](std::size_t p) {
@@ -187,21 +186,19 @@ OpenWallSum::OpenWallSum(const std::vector<Multipole>& blocks, const GridSpec& g
     }
   });
   std::sort(values.begin(), values.end());
-  nodes_.resize(values.size());
-  values_.resize(values.size());
-  for (std::size_t n = 0; n < values.size(); ++n) std::tie(nodes_[n], values_[n]) = values[n];
   double total = 0;
   for (const double t : terms) total += t;
   meanTerms_ = values.empty() ? 0.0 : total / double(values.size());
 }
 
 double OpenWallSum::sum(int i, int j, int k) const {
-  const bool inside = i >= 0 && j >= 0 && k >= 0 && i < grid_.dims.i && j < grid_.dims.j && k < grid_.dims.k;
+  const bool inside = grid_.hasNode(i, j, k);
   const std::size_t node = inside ? grid_.index(i, j, k) : 0;
-  const auto it = std::lower_bound(nodes_.begin(), nodes_.end(), node);
-  require(inside && it != nodes_.end() && *it == node, "open wall sum: node (", i, ", ", j, ", ", k,
+  const auto it = std::lower_bound(sums_.begin(), sums_.end(), node,
+                                   [](const std::pair<std::size_t, double>& s, std::size_t n) { return s.first < n; });
+  require(inside && it != sums_.end() && it->first == node, "open wall sum: node (", i, ", ", j, ", ", k,
           ") is not on the wall's lattice or not among the nodes summed");
-  return values_[std::size_t(it - nodes_.begin())];
+  return it->second;
 }
 
 }  // namespace field

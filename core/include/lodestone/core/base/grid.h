@@ -49,6 +49,10 @@ struct GridSpec {
   }
   /// World position of the last node, m.
   Vec3d maxCorner() const { return nodePosition(dims.i - 1, dims.j - 1, dims.k - 1); }
+  /// (i, j, k) is a node of this grid.
+  bool hasNode(int i, int j, int k) const {
+    return i >= 0 && j >= 0 && k >= 0 && i < dims.i && j < dims.j && k < dims.k;
+  }
   bool isBoundaryNode(int i, int j, int k) const {
     return i == 0 || j == 0 || k == 0 || i == dims.i - 1 || j == dims.j - 1 || k == dims.k - 1;
   }

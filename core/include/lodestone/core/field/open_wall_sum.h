@@ -19,6 +19,7 @@
 // mirror-symmetric.
 #include <array>
 #include <cstddef>
+#include <utility>
 #include <vector>
 
 #include "lodestone/core/base/grid.h"
@@ -49,7 +50,7 @@ class OpenWallSum {
   /// order.
   template <typename Fn>
   void forEachSum(const Fn& fn) const {
-    for (std::size_t n = 0; n < nodes_.size(); ++n) fn(nodes_[n], values_[n]);
+    for (const auto& s : sums_) fn(s.first, s.second);
   }
 
   /// The acceptance ratio (dimensionless, in (0, 1/4]).
@@ -74,8 +75,7 @@ class OpenWallSum {
   double theta_ = 0.25;
   double meanTerms_ = 0;
   std::size_t patchCount_ = 0;
-  std::vector<std::size_t> nodes_;  // flat indices of the nodes summed, ascending
-  std::vector<double> values_;      // 4 pi phi at nodes_, A m
+  std::vector<std::pair<std::size_t, double>> sums_;  // (flat node index, 4 pi phi in A m), ascending
 };
 
 /// Expansions merged into one about the mean of their centres c:
