@@ -20,10 +20,10 @@ struct Cells {
   std::vector<double> packed;  // 36 per cell: upper triangle of a random symmetric matrix
 };
 
-Cells randomCells(unsigned seed) {
+Cells randomCells(unsigned seed, Index3 dims = {9, 7, 6}) {
   Cells c;
   c.grid.dx = 0.01;
-  c.grid.dims = {9, 7, 6};
+  c.grid.dims = dims;
   std::mt19937 rng(seed);
   std::uniform_real_distribution<double> U(-1, 1);
   const Index3 cd = c.grid.cellDims();
@@ -68,7 +68,7 @@ double relativeDifference(const std::vector<double>& a, const std::vector<double
 
 TEST(HullStencil, AssembledRowsEqualTheElementProduct) {
   for (unsigned seed : {1u, 2u, 3u}) {
-    const Cells c = randomCells(seed);
+    const Cells c = randomCells(seed, seed == 3 ? Index3{41, 5, 4} : Index3{9, 7, 6});
     HullStencil<double> st;
     st.build(c.grid, c.base.data(), c.base.size());
     st.assemble(c.packed.data());
@@ -93,6 +93,40 @@ TEST(HullStencil, AssembledRowsEqualTheElementProduct) {
   }
 }
 
+// Rows longer than a block (HullStencil::kBlock = 16): whole blocks go
+// through the block kernel, partial ones node by node. Both sum a node's taps
+// in the same order, so a row split anywhere gives the same bits.
+TEST(HullStencil, RowsOfSeveralBlocksSplitAnywhereGiveTheSameBits) {
+  const Cells c = randomCells(5, {53, 7, 6});
+  HullStencil<double> st;
+  st.build(c.grid, c.base.data(), c.base.size());
+  st.assemble(c.packed.data());
+  const std::size_t n = c.grid.nodeCount();
+  std::vector<double> v(n), ref(n, 0.0), whole(n, 0.0), split(n, 0.0);
+  std::mt19937 rng(21);
+  std::uniform_real_distribution<double> U(-1, 1);
+  for (double& x : v) x = U(rng);
+  elementProduct(c, v.data(), ref.data());
+  st.addProduct(v.data(), whole.data());
+  EXPECT_LT(relativeDifference(whole, ref), 1e-14);
+  int longRows = 0;
+  for (int k = 0; k < c.grid.dims.k; ++k)
+    for (int j = 0; j < c.grid.dims.j; ++j) {
+      const int lo = st.lo(j, k), hi = st.hi(j, k);
+      longRows += hi - lo > 2 * HullStencil<double>::kBlock;
+      const std::size_t row = c.grid.index(0, j, k);
+      // Three pieces cut at random places (empty pieces included).
+      std::uniform_int_distribution<int> cut(lo, hi);
+      int a = cut(rng), b = cut(rng);
+      if (a > b) std::swap(a, b);
+      st.addRow(j, k, lo, a, v.data() + row, split.data() + row);
+      st.addRow(j, k, a, b, v.data() + row, split.data() + row);
+      st.addRow(j, k, b, hi, v.data() + row, split.data() + row);
+    }
+  EXPECT_GT(longRows, 10);
+  for (std::size_t m = 0; m < n; ++m) ASSERT_EQ(split[m], whole[m]) << "node " << m;
+}
+
 TEST(HullStencil, ScatteredElementsEqualTheGatheredAssembly) {
   const Cells c = randomCells(7);
   HullStencil<double> gathered, scattered;
@@ -101,13 +135,13 @@ TEST(HullStencil, ScatteredElementsEqualTheGatheredAssembly) {
   scattered.build(c.grid, c.base.data(), c.base.size());
   scattered.clear();
   // Element by element: E_cd into tap (c -> d) of corner c's node.
-  const std::size_t n = scattered.size();
+  using H = HullStencil<double>;
   for (std::size_t s = 0; s < c.base.size(); ++s)
     for (int a = 0, e = 0; a < 8; ++a)
       for (int b = a; b < 8; ++b, ++e) {
         const double E = c.packed[s * 36 + std::size_t(e)];
-        scattered.values()[std::size_t(HullStencil<double>::tap(a, b)) * n + scattered.corner(s, a)] += E;
-        if (b != a) scattered.values()[std::size_t(HullStencil<double>::tap(b, a)) * n + scattered.corner(s, b)] += E;
+        scattered.values()[H::at(scattered.corner(s, a), H::tap(a, b))] += E;
+        if (b != a) scattered.values()[H::at(scattered.corner(s, b), H::tap(b, a))] += E;
       }
   ASSERT_EQ(gathered.size(), scattered.size());
   const std::size_t count = std::size_t(HullStencil<double>::kTaps) * gathered.size();

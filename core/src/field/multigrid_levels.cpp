@@ -315,9 +315,8 @@ void MultigridPreconditioner::Hierarchy<T>::refreshValues(const MagnetostaticPro
   Level& F = *levels_.front();
   const HullStencil<double>& P = problem.materialStencil();
   F.stencil.assignConverted(P);
-  const double* centre = P.values() + std::size_t(13) * P.size();
   forEachHullNode(F, [&](std::size_t m, int i, int j, int k) {
-    F.diagonal[m] = laplacianDiagonalAt(F.grid, i, j, k) + centre[P.rowStart(j, k) + std::size_t(i - P.lo(j, k))];
+    F.diagonal[m] = laplacianDiagonalAt(F.grid, i, j, k) + P.value(i, j, k, 13);
     setInverseDiagonal(F, m, i, j, k);
   });
   // Coarse levels: coefficient D = mean of the children's D (the problem's
