@@ -175,11 +175,11 @@ int main(int argc, char** argv) {
         for (const NewtonIterationRecord& h : r.solve.history)
           std::printf(
               "    newton %2d  residual %9.2e  eta %8.1e  cg %3d (%8.1e, wall %d)  step %5.3f%s  cuts %d"
-              "  %.3f s  (wall %.3f, set-up %.3f, cg %.3f, wall prediction %.3f, line search %.3f)%s%s\n",
+              "  %.3f s  (wall %.3f, set-up %.3f, cg %.3f, wall prediction %.3f, line search %.3f)%s%s%s\n",
               h.iteration, h.relativeResidual, h.forcing, h.cgIterations, h.cgRelativeResidual, h.wallCgIterations,
               h.step, h.wallPredicted ? "+wall" : "", h.lineSearchCuts, h.seconds, h.secondsWall, h.secondsSetup,
               h.secondsCg, h.secondsWallPrediction, h.secondsLineSearch,
-              h.jacobianRebuilt ? "  [deferred Jacobian built]" : "",
+              h.jacobianRebuilt ? "  [deferred Jacobian built]" : "", h.chord ? "  [chord: the Jacobian before]" : "",
               h.jacobianDeferred ? "  [Jacobian deferred]" : "");
       }
       std::fflush(stdout);

@@ -36,9 +36,13 @@ struct NewtonIterationRecord {
   /// The accepted trial point was evaluated without the Jacobian's element
   /// matrices, because the step's CG solves left less than the tolerance
   /// (FieldSolveSettings::deferFinalJacobian). When the tolerance was still
-  /// missed, the next iteration built them (jacobianRebuilt there).
+  /// missed, the next iteration built them (jacobianRebuilt there) or kept
+  /// the earlier ones (chord there).
   bool jacobianDeferred = false;
   bool jacobianRebuilt = false;  ///< this iteration first built the Jacobian the previous one deferred
+  /// This iteration's step kept the Jacobian and multigrid of the iterate
+  /// before the deferred one (FieldSolveSettings::chordAfterDeferredMiss).
+  bool chord = false;
   /// This iteration's predicted wall was the second that did not help (see
   /// FieldSolveReport::wallPredictionDropped): later steps let the wall lag.
   bool wallPredictionDropped = false;

@@ -53,6 +53,14 @@ struct FieldSolveSettings {
   /// tolerance was missed after all. false: built at every trial point (the
   /// same iterates, to rounding).
   bool deferFinalJacobian = true;
+  /// When such a trial point missed the tolerance by less than 10x, the next
+  /// step solves with the Jacobian and multigrid of the iterate before it (a
+  /// chord step) instead of building them at the trial point: what a step
+  /// aimed at the tolerance leaves is mostly the open wall's lag behind M,
+  /// which the Jacobian's change does not touch. At most one chord step in a
+  /// row. false: the Jacobian is built (the iterates of deferFinalJacobian
+  /// off, to rounding).
+  bool chordAfterDeferredMiss = true;
 
   /// Throws InvalidArgument naming the first bad value.
   void validate() const;
