@@ -197,9 +197,9 @@ PcgResult NewtonSolver::newtonStep(NewtonIterationRecord& rec) {
       ev_ = be_.evaluate(NodeVec::Phi, NodeVec::F, true, NodeVec::Kphi);
       rec.jacobianRebuilt = true;
     }
-    chordTaken_ = rec.chord;
     jacobianDeferred_ = false;
   }
+  chordTaken_ = rec.chord;
   if (!rec.chord) be_.updatePreconditioner();
   rep_.multigridLevels = be_.preconditionerLevels();
   rec.secondsSetup = secondsSince(tp);
