@@ -93,38 +93,74 @@ TEST(HullStencil, AssembledRowsEqualTheElementProduct) {
   }
 }
 
-// Rows longer than a block (HullStencil::kBlock = 16): whole blocks go
-// through the block kernel, partial ones node by node. Both sum a node's taps
-// in the same order, so a row split anywhere gives the same bits.
-TEST(HullStencil, RowsOfSeveralBlocksSplitAnywhereGiveTheSameBits) {
-  const Cells c = randomCells(5, {53, 7, 6});
-  HullStencil<double> st;
-  st.build(c.grid, c.base.data(), c.base.size());
-  st.assemble(c.packed.data());
-  const std::size_t n = c.grid.nodeCount();
-  std::vector<double> v(n), ref(n, 0.0), whole(n, 0.0), split(n, 0.0);
+// Cells i in [i0, i1) of every (j, k) on a 53 x 7 x 6 grid: rows of
+// i1 - i0 + 1 nodes.
+Cells slabCells(int i0, int i1, unsigned seed) {
+  Cells c;
+  c.grid.dx = 0.01;
+  c.grid.dims = {53, 7, 6};
+  const Index3 cd = c.grid.cellDims();
+  for (int k = 0; k < cd.k; ++k)
+    for (int j = 0; j < cd.j; ++j)
+      for (int i = i0; i < i1; ++i) c.base.push_back(c.grid.index(i, j, k));
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> U(-1, 1);
+  c.packed.resize(c.base.size() * 36);
+  for (double& v : c.packed) v = U(rng);
+  return c;
+}
+
+// The block (16, 8 or 4 slots) follows the rows' length: the largest whose
+// padding stays within a fifth of the slots that blocks of 4 need. Whole
+// blocks go through the block kernel, partial ones lane by lane; both sum a
+// node's taps in the same order, so a row split anywhere gives the same bits.
+TEST(HullStencil, BlocksFollowTheRowsAndRowsSplitAnywhereGiveTheSameBits) {
+  struct Case {
+    Cells cells;
+    int block;
+  };
+  const std::vector<Case> cases = {
+      {randomCells(5, {53, 7, 6}), 16},  // rows of 53 nodes: 64 slots against 56
+      {slabCells(10, 30, 6), 8},         // 21 nodes: 24 slots (16: 32)
+      {slabCells(10, 19, 7), 4},         // 10 nodes: 12 slots (8: 16)
+      {slabCells(20, 21, 8), 4},         // a sheet one cell thick: 2 nodes, 4 slots (8: 8)
+  };
   std::mt19937 rng(21);
   std::uniform_real_distribution<double> U(-1, 1);
-  for (double& x : v) x = U(rng);
-  elementProduct(c, v.data(), ref.data());
-  st.addProduct(v.data(), whole.data());
-  EXPECT_LT(relativeDifference(whole, ref), 1e-14);
-  int longRows = 0;
-  for (int k = 0; k < c.grid.dims.k; ++k)
-    for (int j = 0; j < c.grid.dims.j; ++j) {
-      const int lo = st.lo(j, k), hi = st.hi(j, k);
-      longRows += hi - lo > 2 * HullStencil<double>::kBlock;
-      const std::size_t row = c.grid.index(0, j, k);
-      // Three pieces cut at random places (empty pieces included).
-      std::uniform_int_distribution<int> cut(lo, hi);
-      int a = cut(rng), b = cut(rng);
-      if (a > b) std::swap(a, b);
-      st.addRow(j, k, lo, a, v.data() + row, split.data() + row);
-      st.addRow(j, k, a, b, v.data() + row, split.data() + row);
-      st.addRow(j, k, b, hi, v.data() + row, split.data() + row);
-    }
-  EXPECT_GT(longRows, 10);
-  for (std::size_t m = 0; m < n; ++m) ASSERT_EQ(split[m], whole[m]) << "node " << m;
+  for (const Case& cs : cases) {
+    const Cells& c = cs.cells;
+    HullStencil<double> st;
+    st.build(c.grid, c.base.data(), c.base.size());
+    st.assemble(c.packed.data());
+    EXPECT_EQ(st.block(), cs.block);
+    const std::size_t n = c.grid.nodeCount();
+    std::vector<double> v(n), ref(n, 0.0), whole(n, 0.0), split(n, 0.0);
+    for (double& x : v) x = U(rng);
+    elementProduct(c, v.data(), ref.data());
+    st.addProduct(v.data(), whole.data());
+    EXPECT_LT(relativeDifference(whole, ref), 1e-14) << "block " << st.block();
+    for (int k = 0; k < c.grid.dims.k; ++k)
+      for (int j = 0; j < c.grid.dims.j; ++j) {
+        const int lo = st.lo(j, k), hi = st.hi(j, k);
+        const std::size_t row = c.grid.index(0, j, k);
+        // Three pieces cut at random places (empty pieces included).
+        std::uniform_int_distribution<int> cut(lo, hi);
+        int a = cut(rng), b = cut(rng);
+        if (a > b) std::swap(a, b);
+        st.addRow(j, k, lo, a, v.data() + row, split.data() + row);
+        st.addRow(j, k, a, b, v.data() + row, split.data() + row);
+        st.addRow(j, k, b, hi, v.data() + row, split.data() + row);
+      }
+    for (std::size_t m = 0; m < n; ++m) ASSERT_EQ(split[m], whole[m]) << "block " << st.block() << ", node " << m;
+    // The float copy keeps the layout.
+    HullStencil<float> f;
+    f.assignConverted(st);
+    EXPECT_EQ(f.block(), st.block());
+    std::vector<float> vf(v.begin(), v.end()), got(n, 0.0f);
+    f.addProduct(vf.data(), got.data());
+    std::vector<double> gd(got.begin(), got.end());
+    EXPECT_LT(relativeDifference(gd, ref), 1e-5) << "block " << st.block();
+  }
 }
 
 TEST(HullStencil, ScatteredElementsEqualTheGatheredAssembly) {
@@ -140,8 +176,8 @@ TEST(HullStencil, ScatteredElementsEqualTheGatheredAssembly) {
     for (int a = 0, e = 0; a < 8; ++a)
       for (int b = a; b < 8; ++b, ++e) {
         const double E = c.packed[s * 36 + std::size_t(e)];
-        scattered.values()[H::at(scattered.corner(s, a), H::tap(a, b))] += E;
-        if (b != a) scattered.values()[H::at(scattered.corner(s, b), H::tap(b, a))] += E;
+        scattered.values()[scattered.at(scattered.corner(s, a), H::tap(a, b))] += E;
+        if (b != a) scattered.values()[scattered.at(scattered.corner(s, b), H::tap(b, a))] += E;
       }
   ASSERT_EQ(gathered.size(), scattered.size());
   const std::size_t count = std::size_t(HullStencil<double>::kTaps) * gathered.size();

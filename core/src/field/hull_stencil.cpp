@@ -35,11 +35,28 @@ void HullStencil<T>::build(const GridSpec& grid, const std::size_t* cellBase, st
         hi_[row] = std::max(hi_[row], std::int32_t(i + 2));
       }
   }
-  rowStart_.assign(rows + 1, 0);
+  // Slots with blocks of 4, 8 and 16: the largest block whose padding
+  // stays within a fifth of the smallest's slots.
+  std::size_t slots[3] = {0, 0, 0};
   for (std::size_t row = 0; row < rows; ++row) {
     if (lo_[row] >= hi_[row]) lo_[row] = hi_[row] = 0;
-    rowStart_[row + 1] = rowStart_[row] + (std::size_t(hi_[row] - lo_[row]) + kBlock - 1) / kBlock * kBlock;
+    const std::size_t len = std::size_t(hi_[row] - lo_[row]);
+    for (int b = 0; b < 3; ++b) {
+      const std::size_t B = std::size_t(kMaxBlock >> (2 - b));
+      slots[b] += (len + B - 1) / B * B;
+    }
   }
+  int shift = 2;
+  for (int b = 2; b > 0; --b)
+    if (5 * slots[b] <= 6 * slots[0]) {
+      shift = b + 2;
+      break;
+    }
+  blockShift_ = shift;
+  const std::size_t B = std::size_t(block());
+  rowStart_.assign(rows + 1, 0);
+  for (std::size_t row = 0; row < rows; ++row)
+    rowStart_[row + 1] = rowStart_[row] + (std::size_t(hi_[row] - lo_[row]) + B - 1) / B * B;
   corner_.resize(cells * 8);
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, cells, 1024), [&](const tbb::blocked_range<std::size_t>& r) {
     for (std::size_t s = r.begin(); s != r.end(); ++s) {
@@ -83,6 +100,7 @@ void HullStencil<T>::assemble(const double* packed) {
   }();
   const Index3 d = grid_.dims;
   const Index3 cd = grid_.cellDims();
+  const std::size_t B = std::size_t(block());
   T* out = values_.data();
   tbb::parallel_for(tbb::blocked_range<int>(0, d.k, 1), [&](const tbb::blocked_range<int>& kr) {
     for (int k = kr.begin(); k != kr.end(); ++k)
@@ -90,8 +108,8 @@ void HullStencil<T>::assemble(const double* packed) {
         const int a0 = lo(j, k), a1 = hi(j, k);
         if (a0 >= a1) continue;
         const std::size_t row = rowStart(j, k);
-        const std::size_t blocks = (std::size_t(a1 - a0) + kBlock - 1) / kBlock;
-        std::fill(out + at(row, 0), out + at(row, 0) + blocks * kTaps * kBlock, T(0));
+        const std::size_t blocks = (std::size_t(a1 - a0) + B - 1) / B;
+        std::fill(out + at(row, 0), out + at(row, 0) + blocks * kTaps * B, T(0));
         // The row's nodes are corner c = a + 2b + 4e of the cells based at
         // (i - a, j - b, k - e): one cell row per (b, e), in a fixed order.
         for (int c = 0; c < 8; ++c) {
@@ -106,7 +124,7 @@ void HullStencil<T>::assemble(const double* packed) {
             const double* E = packed + std::size_t(slot) * 36;
             const std::size_t node = row + std::size_t(i - a0);
             T* o = out + at(node, 0);
-            for (int e = 0; e < 8; ++e) o[std::size_t(taps[e]) * kBlock] += T(E[pos[e]]);
+            for (int e = 0; e < 8; ++e) o[std::size_t(taps[e]) * B] += T(E[pos[e]]);
           }
         }
       }
@@ -125,6 +143,7 @@ void HullStencil<T>::assignConverted(const HullStencil<U>& other) {
   lo_ = other.lo_;
   hi_ = other.hi_;
   rowStart_ = other.rowStart_;
+  blockShift_ = other.blockShift_;
   corner_.clear();
   cellBase_.clear();
   cellSlot_.clear();
@@ -171,25 +190,15 @@ void HullStencil<T>::addDiagonal(T* out) const {
 
 namespace {
 
-// 32-byte vectors of T (GCC and Clang vector extensions): the portable
-// variant runs each as two SSE2 operations, the AVX2 variant as one.
-template <typename T>
-struct Vec32;
-template <>
-struct Vec32<float> {
-  typedef float type __attribute__((vector_size(32)));
-};
-template <>
-struct Vec32<double> {
-  typedef double type __attribute__((vector_size(32)));
-};
-
-template <typename T>
+// Blocks of B slots, as vectors of up to 32 bytes, N vectors of L lanes
+// (GCC and Clang vector extensions): the portable variant runs a 32-byte
+// vector as two SSE2 operations, the AVX2 variant as one.
+template <typename T, int B>
 inline void addBlocksKernel(const T* c, const T* x, T* o, std::size_t blocks, int first, int last, std::ptrdiff_t sy,
                             std::ptrdiff_t sz) {
-  using W = typename Vec32<T>::type;
-  constexpr int B = HullStencil<T>::kBlock, taps = HullStencil<T>::kTaps;
-  constexpr int L = int(sizeof(W) / sizeof(T)), N = B / L;
+  constexpr int taps = HullStencil<T>::kTaps;
+  constexpr int L = B * int(sizeof(T)) < 32 ? B : 32 / int(sizeof(T)), N = B / L;
+  typedef T W __attribute__((vector_size(L * sizeof(T))));
   static_assert(B % L == 0, "a block is whole vectors");
   for (std::size_t b = 0; b < blocks; ++b, c += taps * B, x += B, o += B) {
     const int q0 = b == 0 ? first : 0, q1 = b + 1 == blocks ? last : B;
@@ -223,25 +232,41 @@ inline void addBlocksKernel(const T* c, const T* x, T* o, std::size_t blocks, in
 #if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
 #define LODESTONE_HULL_AVX2 1
 // AVX2 without FMA: a multiply and an add round as in the portable variant.
-template <typename T>
+template <typename T, int B>
 __attribute__((target("avx2"))) void addBlocksAvx2(const T* c, const T* x, T* o, std::size_t blocks, int first,
                                                    int last, std::ptrdiff_t sy, std::ptrdiff_t sz) {
-  addBlocksKernel(c, x, o, blocks, first, last, sy, sz);
+  addBlocksKernel<T, B>(c, x, o, blocks, first, last, sy, sz);
 }
 #endif
+
+template <typename T, int B>
+void addBlocksOf(const T* c, const T* x, T* o, std::size_t blocks, int first, int last, std::ptrdiff_t sy,
+                 std::ptrdiff_t sz) {
+#if defined(LODESTONE_HULL_AVX2)
+  if (cpuHasAvx2Fma()) {
+    addBlocksAvx2<T, B>(c, x, o, blocks, first, last, sy, sz);
+    return;
+  }
+#endif
+  addBlocksKernel<T, B>(c, x, o, blocks, first, last, sy, sz);
+}
 
 }  // namespace
 
 template <typename T>
 void HullStencil<T>::addBlocks(const T* c, const T* x, T* o, std::size_t blocks, int first, int last, std::ptrdiff_t sy,
-                               std::ptrdiff_t sz) {
-#if defined(LODESTONE_HULL_AVX2)
-  if (cpuHasAvx2Fma()) {
-    addBlocksAvx2(c, x, o, blocks, first, last, sy, sz);
-    return;
+                               std::ptrdiff_t sz) const {
+  switch (block()) {
+    case kMaxBlock:
+      addBlocksOf<T, kMaxBlock>(c, x, o, blocks, first, last, sy, sz);
+      break;
+    case kMaxBlock / 2:
+      addBlocksOf<T, kMaxBlock / 2>(c, x, o, blocks, first, last, sy, sz);
+      break;
+    default:
+      addBlocksOf<T, kMaxBlock / 4>(c, x, o, blocks, first, last, sy, sz);
+      break;
   }
-#endif
-  addBlocksKernel(c, x, o, blocks, first, last, sy, sz);
 }
 
 template class HullStencil<double>;

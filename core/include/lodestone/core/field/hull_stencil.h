@@ -10,13 +10,16 @@
 // additions.
 //
 // Hull slots are numbered row by row (row j + ny k), along x within a row,
-// and each row's hull is padded to whole blocks of kBlock slots (the padding's
-// coefficients are 0). Coefficient t of slot a multiplies the neighbour at
-// offset (di, dj, dk) = (t % 3 - 1, (t / 3) % 3 - 1, t / 9 - 1) and lives at
-// values()[at(a, t)]: block by block, the block's 27 taps one after the
-// other, kBlock slots each, so that a product reads one stream of
+// and each row's hull is padded to whole blocks of block() slots (the
+// padding's coefficients are 0). Coefficient t of slot a multiplies the
+// neighbour at offset (di, dj, dk) = (t % 3 - 1, (t / 3) % 3 - 1, t / 9 - 1)
+// and lives at values()[at(a, t)]: block by block, the block's 27 taps one
+// after the other, block() slots each, so that a product reads one stream of
 // coefficients. (With one array per tap, 27 streams 1.2 MB apart for a
 // sphere of radius 32 cells, the double product took about twice as long.)
+// build() takes blocks of 16 slots, or 8 or 4 where the rows are short
+// (thin bodies across x): the largest whose padding adds at most a fifth to
+// the slots that blocks of 4 need.
 #include <algorithm>
 #include <cstddef>
 #include <cstdint>
@@ -31,11 +34,16 @@ template <typename T>
 class HullStencil {
  public:
   static constexpr int kTaps = 27;
-  static constexpr int kBlock = 16;
+  /// The largest block build() takes; it takes kMaxBlock, kMaxBlock / 2 or
+  /// kMaxBlock / 4.
+  static constexpr int kMaxBlock = 16;
 
+  /// Slots per block (16, 8 or 4; chosen by build()).
+  int block() const { return 1 << blockShift_; }
   /// Position in values() of coefficient t of hull slot a.
-  static std::size_t at(std::size_t a, int t) {
-    return (a / kBlock) * std::size_t(kTaps * kBlock) + std::size_t(t) * kBlock + a % kBlock;
+  std::size_t at(std::size_t a, int t) const {
+    const std::size_t b = blockShift_;
+    return (((a >> b) * kTaps + std::size_t(t)) << b) + (a & ((std::size_t(1) << b) - 1));
   }
 
   /// Builds the hull of the cells with base nodes `cellBase[0..cells)` on
@@ -58,7 +66,7 @@ class HullStencil {
   /// Row (j, k)'s hull [lo, hi) in i; lo == hi when the row has none.
   int lo(int j, int k) const { return lo_[std::size_t(j) + std::size_t(grid_.dims.j) * std::size_t(k)]; }
   int hi(int j, int k) const { return hi_[std::size_t(j) + std::size_t(grid_.dims.j) * std::size_t(k)]; }
-  /// Hull slot of node (lo(j, k), j, k); a multiple of kBlock.
+  /// Hull slot of node (lo(j, k), j, k); a multiple of block().
   std::size_t rowStart(int j, int k) const {
     return rowStart_[std::size_t(j) + std::size_t(grid_.dims.j) * std::size_t(k)];
   }
@@ -90,13 +98,13 @@ class HullStencil {
 
  private:
   /// Adds the rows of `blocks` consecutive blocks times x to o: lanes
-  /// [first, kBlock) of the first block, every lane of the middle ones and
-  /// lanes [0, last) of the last (0 < last <= kBlock). c points at the first
+  /// [first, block()) of the first block, every lane of the middle ones and
+  /// lanes [0, last) of the last (0 < last <= block()). c points at the first
   /// block's coefficients, x and o at its lane 0; every neighbour exists.
   /// Compiled for AVX2 too, chosen at run time; without FMA, so that both
   /// give the same bits.
-  static void addBlocks(const T* c, const T* x, T* o, std::size_t blocks, int first, int last, std::ptrdiff_t sy,
-                        std::ptrdiff_t sz);
+  void addBlocks(const T* c, const T* x, T* o, std::size_t blocks, int first, int last, std::ptrdiff_t sy,
+                 std::ptrdiff_t sz) const;
 
   GridSpec grid_;
   std::vector<std::int32_t> lo_, hi_;
@@ -105,6 +113,7 @@ class HullStencil {
   std::vector<std::size_t> cellBase_;  // what build() was given
   std::vector<std::int32_t> cellSlot_; // slot of each grid cell (-1: none)
   std::vector<T> values_;
+  int blockShift_ = 4;  // log2 of block()
 
   template <typename>
   friend class HullStencil;
@@ -123,8 +132,9 @@ void HullStencil<T>::addRow(int j, int k, int from, int to, const T* v, T* out) 
   const int in0 = interiorRow ? std::max(from, 1) : to, in1 = interiorRow ? std::min(to, d.i - 1) : to;
   if (in0 < in1) {
     const std::size_t a0 = start + std::size_t(in0 - rowLo), a1 = start + std::size_t(in1 - rowLo);
-    const std::size_t blocks = (a1 - 1) / kBlock - a0 / kBlock + 1;
-    const int first = int(a0 % kBlock), last = int(a1 - ((a1 - 1) / kBlock) * kBlock);
+    const std::size_t B = std::size_t(block());
+    const std::size_t blocks = (a1 - 1) / B - a0 / B + 1;
+    const int first = int(a0 % B), last = int(a1 - ((a1 - 1) / B) * B);
     const int i0 = in0 - first;  // the node of the first block's lane 0
     addBlocks(values_.data() + at(a0 - std::size_t(first), 0), v + i0, out + i0, blocks, first, last, sy, sz);
   }
