@@ -37,14 +37,13 @@ void HullStencil<T>::build(const GridSpec& grid, const std::size_t* cellBase, st
   }
   // Slots with blocks of 4, 8 and 16: the largest block whose padding
   // stays within a fifth of the smallest's slots.
+  const auto padded = [&](std::size_t row, std::size_t B) {
+    return (std::size_t(hi_[row] - lo_[row]) + B - 1) / B * B;
+  };
   std::size_t slots[3] = {0, 0, 0};
   for (std::size_t row = 0; row < rows; ++row) {
     if (lo_[row] >= hi_[row]) lo_[row] = hi_[row] = 0;
-    const std::size_t len = std::size_t(hi_[row] - lo_[row]);
-    for (int b = 0; b < 3; ++b) {
-      const std::size_t B = std::size_t(kMaxBlock >> (2 - b));
-      slots[b] += (len + B - 1) / B * B;
-    }
+    for (int b = 0; b < 3; ++b) slots[b] += padded(row, std::size_t(kMaxBlock >> (2 - b)));
   }
   int shift = 2;
   for (int b = 2; b > 0; --b)
@@ -53,10 +52,8 @@ void HullStencil<T>::build(const GridSpec& grid, const std::size_t* cellBase, st
       break;
     }
   blockShift_ = shift;
-  const std::size_t B = std::size_t(block());
   rowStart_.assign(rows + 1, 0);
-  for (std::size_t row = 0; row < rows; ++row)
-    rowStart_[row + 1] = rowStart_[row] + (std::size_t(hi_[row] - lo_[row]) + B - 1) / B * B;
+  for (std::size_t row = 0; row < rows; ++row) rowStart_[row + 1] = rowStart_[row] + padded(row, std::size_t(block()));
   corner_.resize(cells * 8);
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, cells, 1024), [&](const tbb::blocked_range<std::size_t>& r) {
     for (std::size_t s = r.begin(); s != r.end(); ++s) {
@@ -107,9 +104,9 @@ void HullStencil<T>::assemble(const double* packed) {
       for (int j = 0; j < d.j; ++j) {
         const int a0 = lo(j, k), a1 = hi(j, k);
         if (a0 >= a1) continue;
-        const std::size_t row = rowStart(j, k);
-        const std::size_t blocks = (std::size_t(a1 - a0) + B - 1) / B;
-        std::fill(out + at(row, 0), out + at(row, 0) + blocks * kTaps * B, T(0));
+        const std::size_t r = std::size_t(j) + std::size_t(d.j) * std::size_t(k), row = rowStart_[r];
+        // The row's slots, padding included, are kTaps * (its slot count) values from at(row, 0).
+        std::fill(out + at(row, 0), out + at(row, 0) + kTaps * (rowStart_[r + 1] - row), T(0));
         // The row's nodes are corner c = a + 2b + 4e of the cells based at
         // (i - a, j - b, k - e): one cell row per (b, e), in a fixed order.
         for (int c = 0; c < 8; ++c) {

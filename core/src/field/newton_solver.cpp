@@ -84,7 +84,7 @@ bool NewtonSolver::start() {
   r0_ = rep_.referenceResidual;
   prevNorm_ = 0;
   prevEta_ = s_.forcingMax;
-  wallCurrent_ = jacobianDeferred_ = chordTaken_ = false;
+  wallCurrent_ = jacobianDeferred_ = false;
   wallStrikes_ = wallUpdates_ = 0;
   be_.copy(NodeVec::Phi, NodeVec::LastGood);
   // K phi (the vacuum part of F) is kept up to date through every change of
@@ -192,14 +192,14 @@ PcgResult NewtonSolver::newtonStep(NewtonIterationRecord& rec) {
   if (jacobianDeferred_) {
     // The backend still holds the Jacobian of the iterate before Phi (an
     // evaluation without the Jacobian leaves it).
-    rec.chord = s_.chordAfterDeferredMiss && !chordTaken_ && rec.relativeResidual <= kChordMiss * s_.tolerance;
+    const bool afterChord = !rep_.history.empty() && rep_.history.back().chord;
+    rec.chord = s_.chordAfterDeferredMiss && !afterChord && rec.relativeResidual <= kChordMiss * s_.tolerance;
     if (!rec.chord) {
       ev_ = be_.evaluate(NodeVec::Phi, NodeVec::F, true, NodeVec::Kphi);
       rec.jacobianRebuilt = true;
     }
     jacobianDeferred_ = false;
   }
-  chordTaken_ = rec.chord;
   if (!rec.chord) be_.updatePreconditioner();
   rep_.multigridLevels = be_.preconditionerLevels();
   rec.secondsSetup = secondsSince(tp);

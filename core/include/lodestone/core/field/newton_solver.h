@@ -81,7 +81,6 @@ class NewtonSolver {
   double prevNorm_ = 0, prevEta_ = 0, eta_ = 0;
   bool wallCurrent_ = false;       ///< Phi's wall holds the far field of ev_ (a coupled step set it)
   bool jacobianDeferred_ = false;  ///< ev_ was evaluated without the Jacobian
-  bool chordTaken_ = false;        ///< the last Newton step was a chord step
   int wallStrikes_ = 0;            ///< predicted-wall steps that did not help
   int wallUpdates_ = 0;            ///< far-field updates so far (relaxation)
 };
