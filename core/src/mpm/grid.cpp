@@ -210,6 +210,7 @@ struct DepositKernel {
       __builtin_prefetch(&Jp[q]);
       __builtin_prefetch(&M[q]);
       __builtin_prefetch(&V0[q]);
+      __builtin_prefetch(&mat[q]);
     };
     // The row's first kAhead particles, asked for together: a short row
     // (material thin along x) would otherwise wait on each in turn.
