@@ -4,7 +4,7 @@ namespace lodestone {
 inline namespace base {
 
 bool cpuHasAvx2Fma() {
-#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
+#if defined(LODESTONE_X86_AVX2)
   static const bool has = [] {
     __builtin_cpu_init();
     return __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");

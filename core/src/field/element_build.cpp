@@ -3,8 +3,7 @@
 #include "lodestone/core/base/cpu_features.h"
 #include "lodestone/core/field/q1_element.h"
 
-#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
-#define LODESTONE_ELEMENT_AVX2 1
+#if defined(LODESTONE_X86_AVX2)
 #include <immintrin.h>
 #endif
 
@@ -48,7 +47,7 @@ void buildElementMatrixScalar(double dx, const ResponseBatch& r, double E[36]) {
   }
 }
 
-#if defined(LODESTONE_ELEMENT_AVX2)
+#if defined(LODESTONE_X86_AVX2)
 namespace {
 // Full rows of dN_qc . dN_qd and the shape gradients by component, per q.
 struct FullTables {

@@ -191,8 +191,8 @@ namespace {
 // (GCC and Clang vector extensions): the portable variant runs a 32-byte
 // vector as two SSE2 operations, the AVX2 variant as one.
 template <typename T, int B>
-inline void addBlocksKernel(const T* c, const T* x, T* o, std::size_t blocks, int first, int last, std::ptrdiff_t sy,
-                            std::ptrdiff_t sz) {
+__attribute__((always_inline)) inline void addBlocksKernel(const T* c, const T* x, T* o, std::size_t blocks, int first,
+                                                           int last, std::ptrdiff_t sy, std::ptrdiff_t sz) {
   constexpr int taps = HullStencil<T>::kTaps;
   constexpr int L = B * int(sizeof(T)) < 32 ? B : 32 / int(sizeof(T)), N = B / L;
   typedef T W __attribute__((vector_size(L * sizeof(T))));
@@ -226,26 +226,13 @@ inline void addBlocksKernel(const T* c, const T* x, T* o, std::size_t blocks, in
   }
 }
 
-#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
-#define LODESTONE_HULL_AVX2 1
-// AVX2 without FMA: a multiply and an add round as in the portable variant.
-template <typename T, int B>
-__attribute__((target("avx2"))) void addBlocksAvx2(const T* c, const T* x, T* o, std::size_t blocks, int first,
-                                                   int last, std::ptrdiff_t sy, std::ptrdiff_t sz) {
-  addBlocksKernel<T, B>(c, x, o, blocks, first, last, sy, sz);
-}
-#endif
-
 template <typename T, int B>
 void addBlocksOf(const T* c, const T* x, T* o, std::size_t blocks, int first, int last, std::ptrdiff_t sy,
                  std::ptrdiff_t sz) {
-#if defined(LODESTONE_HULL_AVX2)
-  if (cpuHasAvx2Fma()) {
-    addBlocksAvx2<T, B>(c, x, o, blocks, first, last, sy, sz);
-    return;
-  }
-#endif
-  addBlocksKernel<T, B>(c, x, o, blocks, first, last, sy, sz);
+  // AVX2 without FMA: a multiply and an add round as in the portable variant.
+  runWidest<FusedMultiplyAdd::Forbidden>(
+      [](auto&&... args) __attribute__((always_inline)) { addBlocksKernel<T, B>(args...); }, c, x, o, blocks, first,
+      last, sy, sz);
 }
 
 }  // namespace

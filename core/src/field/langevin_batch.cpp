@@ -4,7 +4,7 @@
 
 #include "lodestone/core/base/cpu_features.h"
 
-#if defined(LODESTONE_HAVE_LIBMVEC) && defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
+#if defined(LODESTONE_HAVE_LIBMVEC) && defined(LODESTONE_X86_AVX2)
 #define LODESTONE_BATCH_AVX2 1
 #include <immintrin.h>
 #endif

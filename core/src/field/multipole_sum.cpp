@@ -4,8 +4,7 @@
 
 #include "lodestone/core/base/cpu_features.h"
 
-#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
-#define LODESTONE_MULTIPOLE_AVX2 1
+#if defined(LODESTONE_X86_AVX2)
 #include <immintrin.h>
 #endif
 
@@ -30,7 +29,7 @@ double sumPortable(const MultipoleArrays& B, const Vec3d& x) {
   return (acc[0] + acc[1]) + (acc[2] + acc[3]);
 }
 
-#if defined(LODESTONE_MULTIPOLE_AVX2)
+#if defined(LODESTONE_X86_AVX2)
 __attribute__((target("avx2,fma"))) double sumAvx2(const MultipoleArrays& B, const Vec3d& x) {
   const __m256d px = _mm256_set1_pd(x.x), py = _mm256_set1_pd(x.y), pz = _mm256_set1_pd(x.z);
   const __m256d half = _mm256_set1_pd(0.5), threeHalves = _mm256_set1_pd(1.5), three = _mm256_set1_pd(3.0);
@@ -91,7 +90,7 @@ PackedMultipoles::PackedMultipoles(const std::vector<Multipole>& blocks) {
 }
 
 double multipoleSum(const MultipoleArrays& blocks, const Vec3d& x) {
-#if defined(LODESTONE_MULTIPOLE_AVX2)
+#if defined(LODESTONE_X86_AVX2)
   if (cpuHasAvx2Fma()) return sumAvx2(blocks, x);
 #endif
   return sumPortable(blocks, x);

@@ -19,7 +19,7 @@
 #include "lodestone/core/mpm/grid.h"
 #include "grid_kernels.h"
 
-#if defined(LODESTONE_MPM_AVX2)
+#if defined(LODESTONE_X86_AVX2)
 #include <immintrin.h>
 #endif
 
@@ -85,7 +85,7 @@ void keysScalar(const Vec3d* X, const std::uint32_t* mat, std::size_t from, std:
   }
 }
 
-#if defined(LODESTONE_MPM_AVX2)
+#if defined(LODESTONE_X86_AVX2)
 /// keysScalar four particles at a time: the same operations (subtract,
 /// multiply, floor, the half-cell test), so the same keys. Needs
 /// materialCount <= 2^32 - 1.
@@ -197,7 +197,7 @@ struct BinKernel {
     };
     for (std::size_t first = begin; first < end; first += kKeyBlock) {
       const std::size_t n = std::min(kKeyBlock, end - first);
-#if defined(LODESTONE_MPM_AVX2)
+#if defined(LODESTONE_X86_AVX2)
       if (avx2)
         keysAvx2(X + first, mat + first, n, o, invDx, bd, materialCount, key + first);
       else

@@ -12,43 +12,18 @@
 #include "lodestone/core/base/cpu_features.h"
 #include "lodestone/core/mpm/grid.h"
 
-#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
-#define LODESTONE_MPM_AVX2 1
-#endif
-
 namespace lodestone {
 inline namespace mpm {
 
 namespace {
 
-// The kernels below (DepositKernel, G2PKernel, BinKernel, SpeedKernel) are
-// compiled twice: for any x86-64 CPU and for AVX2 with FMA, chosen at run
-// time. The compiler fuses a multiply and an add into one FMA where the
-// expression allows, so the AVX2 variant rounds once where the portable one
-// rounds twice: a machine gives the same bits run after run and for any
-// thread count, and machines with and without AVX2 differ in the last digits.
-template <typename Kernel, typename... Args>
-void runPortable(const Kernel& kernel, Args&&... args) {
-  kernel(std::forward<Args>(args)...);
-}
-
-#if defined(LODESTONE_MPM_AVX2)
-template <typename Kernel, typename... Args>
-__attribute__((target("avx2,fma"))) void runAvx2(const Kernel& kernel, Args&&... args) {
-  kernel(std::forward<Args>(args)...);
-}
-#endif
-
-/// kernel(args...) in the widest variant the CPU runs.
+// The kernels below (DepositKernel, G2PKernel, BinKernel, SpeedKernel) run
+// in the widest variant the CPU has (runWidest, base/cpu_features.h), FMA
+// allowed: a machine gives the same bits run after run and for any thread
+// count, and machines with and without AVX2 differ in the last digits.
 template <typename Kernel, typename... Args>
 void runKernel(const Kernel& kernel, Args&&... args) {
-#if defined(LODESTONE_MPM_AVX2)
-  if (cpuHasAvx2Fma()) {
-    runAvx2(kernel, std::forward<Args>(args)...);
-    return;
-  }
-#endif
-  runPortable(kernel, std::forward<Args>(args)...);
+  runWidest<FusedMultiplyAdd::Allowed>(kernel, std::forward<Args>(args)...);
 }
 
 /// kernel(begin, end, acc) over [0, count) in chunks of `grain`, each
