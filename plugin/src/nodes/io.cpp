@@ -20,11 +20,7 @@ namespace {
 /// `fileParams`, then the surfacing parameters; `paths` picks the files.
 NodeDecl renderOutputNode(std::string type, std::string label, std::string help, std::vector<ParamDecl> fileParams,
                           std::function<RenderOutputPaths(const ParamSet&)> paths) {
-  NodeDecl d;
-  d.type = std::move(type);
-  d.label = std::move(label);
-  d.category = "io";
-  d.help = std::move(help);
+  NodeDecl d = declareNode(std::move(type), std::move(label), "io", std::move(help));
   d.params = std::move(fileParams);
   addSurfaceParams(d.params);
   d.inputs = {{"simulation", PortType::Simulation, "A simulation; its current particles are surfaced."}};
@@ -42,11 +38,9 @@ NodeDecl renderOutputNode(std::string type, std::string label, std::string help,
 
 // ---- VDB export ------------------------------------------------------------------------
 NodeDecl vdbExportNode() {
-  NodeDecl d;
-  d.type = "vdb_export";
-  d.label = "VDB Export";
-  d.category = "io";
-  d.help = "Writes the fields of a solve (n, phi, H, M, B, force) to one .vdb file (docs/vdb.md); needs OpenVDB.";
+  NodeDecl d = declareNode(
+      "vdb_export", "VDB Export", "io",
+      "Writes the fields of a solve (n, phi, H, M, B, force) to one .vdb file (docs/vdb.md); needs OpenVDB.");
   auto& q = d.params;
   q.push_back(required(stringParam("path", "Path", "fields.vdb", "File to write (atomically).")));
   q.push_back(boolParam("double_precision", "Double precision", false, "Write DoubleGrid/Vec3dGrid instead of float."));
@@ -63,15 +57,12 @@ NodeDecl vdbExportNode() {
 
 // ---- field lines -----------------------------------------------------------------------
 NodeDecl fieldLinesNode() {
-  NodeDecl d;
-  d.type = "field_lines";
-  d.label = "Field Lines";
-  d.category = "io";
-  d.help =
+  NodeDecl d = declareNode(
+      "field_lines", "Field Lines", "io",
       "Traces lines of the magnetic induction B of a solve (its nodal B inside the grid plus the sources' closed "
       "form) from seeds spread on the magnets and on the material's boundary, and writes them as a .ply (vertices "
       "with |B| in T, edges) or .obj (l polylines) file (docs/vdb.md). Lines close, leave the grid's box or stop at "
-      "10 box diagonals.";
+      "10 box diagonals.");
   auto& q = d.params;
   q.push_back(required(stringParam("path", "Path", "field_lines.ply", "File to write (.ply or .obj, atomically).")));
   q.push_back(

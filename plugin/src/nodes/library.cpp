@@ -1,6 +1,8 @@
 // The node library's shared parts (library.h) and its registry.
 #include <cstddef>
 #include <cstdint>
+#include <string>
+#include <utility>
 
 #include "lodestone/core/base/error.h"
 #include "lodestone/core/field/material.h"
@@ -10,6 +12,15 @@
 
 namespace lodestone::plugin {
 namespace nodes {
+
+NodeDecl declareNode(std::string type, std::string label, std::string category, std::string help) {
+  NodeDecl d;
+  d.type = std::move(type);
+  d.label = std::move(label);
+  d.category = std::move(category);
+  d.help = std::move(help);
+  return d;
+}
 
 ParticlesData mergeParticles(const std::vector<NodeValue>& inputs) {
   ParticlesData out;

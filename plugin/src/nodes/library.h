@@ -24,6 +24,11 @@ namespace nodes {
 /// Velocity conditions of colliders, magnets and the MPM walls.
 inline const std::vector<std::string> kBoundaryModes{"sticky", "slip", "separate"};
 
+/// A node's declaration with its identity filled in: its type (the name
+/// networks and scene files use), label, category and help; the parameters,
+/// ports and cook follow.
+NodeDecl declareNode(std::string type, std::string label, std::string category, std::string help);
+
 /// A cook's output value holding `data`.
 template <typename T>
 NodeValue value(T&& data) {

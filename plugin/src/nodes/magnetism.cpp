@@ -11,13 +11,10 @@ namespace lodestone::plugin::nodes {
 
 // ---- magnetization transfer ------------------------------------------------------
 NodeDecl transferNode() {
-  NodeDecl d;
-  d.type = "magnetization_transfer";
-  d.label = "Magnetization Transfer";
-  d.category = "magnetism";
-  d.help =
-      "Deposits the micro-particle density n_i = sum_p w_ip n_p / dx^3 (quadratic B-splines) on a grid "
-      "enclosing the magnetic particles plus a margin of free space.";
+  NodeDecl d =
+      declareNode("magnetization_transfer", "Magnetization Transfer", "magnetism",
+                  "Deposits the micro-particle density n_i = sum_p w_ip n_p / dx^3 (quadratic B-splines) on a grid "
+                  "enclosing the magnetic particles plus a margin of free space.");
   auto& q = d.params;
   q.push_back(positive(floatParam("dx", "Grid spacing", 0.01, "m", "Spacing of the field-solve grid.")));
   q.push_back(intParam("padding", "Padding", 4, 0, 64, "Cells of free space around the particles' bounding box."));
@@ -54,13 +51,10 @@ NodeDecl transferNode() {
 }
 
 NodeDecl fieldSolveNode() {
-  NodeDecl d;
-  d.type = "field_solve";
-  d.label = "Field Solve";
-  d.category = "magnetism";
-  d.help =
-      "Solves the nonlinear magnetostatic problem for phi on the density's grid (Newton-PCG) and recovers "
-      "H, M, B and the Einstein-Laub force at the nodes.";
+  NodeDecl d =
+      declareNode("field_solve", "Field Solve", "magnetism",
+                  "Solves the nonlinear magnetostatic problem for phi on the density's grid (Newton-PCG) and recovers "
+                  "H, M, B and the Einstein-Laub force at the nodes.");
   addSolveParams(d.params, "");
   d.params.push_back(floatParam("time", "Time", 0.0, "s", "Time at which the sources are evaluated."));
   d.inputs = {{"density", PortType::Density, "Micro-particle density and its material."},
@@ -80,13 +74,10 @@ NodeDecl fieldSolveNode() {
 
 // ---- magnetic force --------------------------------------------------------------------
 NodeDecl magneticForceNode() {
-  NodeDecl d;
-  d.type = "magnetic_force";
-  d.label = "Magnetic Force";
-  d.category = "magnetism";
-  d.help =
-      "Conservative magnetic force on each material point (N): the nodal Einstein-Laub forces shared among "
-      "the particles whose deposit made the density (sum over particles = sum over nodes).";
+  NodeDecl d =
+      declareNode("magnetic_force", "Magnetic Force", "magnetism",
+                  "Conservative magnetic force on each material point (N): the nodal Einstein-Laub forces shared among "
+                  "the particles whose deposit made the density (sum over particles = sum over nodes).");
   d.inputs = {{"field", PortType::Field, "A solved field."},
               {"particles", PortType::Particles, "The particles that were transferred.", false, true}};
   d.outputs = {{"forces", PortType::Forces, "Per-particle forces, N."}};

@@ -10,13 +10,10 @@ namespace lodestone::plugin::nodes {
 
 // ---- MPM solver ------------------------------------------------------------------------
 NodeDecl mpmSolverNode() {
-  NodeDecl d;
-  d.type = "mpm_solver";
-  d.label = "MPM Solver";
-  d.category = "mpm";
-  d.help =
+  NodeDecl d = declareNode(
+      "mpm_solver", "MPM Solver", "mpm",
       "The reference MLS-MPM with the magnetic-force stage: steps the particles for a number of frames in a "
-      "box domain with walls, gravity, colliders and magnets.";
+      "box domain with walls, gravity, colliders and magnets.");
   auto& q = d.params;
   q.push_back(required(vec3Param("domain.min", "Domain min", {-0.1, -0.1, -0.1}, "m", "Lower corner of the MPM box.")));
   q.push_back(required(vec3Param("domain.max", "Domain max", {0.1, 0.1, 0.1}, "m", "Upper corner of the MPM box.")));

@@ -103,13 +103,10 @@ void addLatticeParams(std::vector<ParamDecl>& q) {
 
 // ---- material ------------------------------------------------------------
 NodeDecl materialNode() {
-  NodeDecl d;
-  d.type = "material";
-  d.label = "Material";
-  d.category = "material";
-  d.help =
+  NodeDecl d = declareNode(
+      "material", "Material", "material",
       "An MPM material (Neo-Hookean solid, viscous or viscoplastic fluid, or damped elastoplastic solid) with an "
-      "optional magnetization law.";
+      "optional magnetization law.");
   auto& q = d.params;
   q.push_back(required(stringParam("name", "Name", "material", "Name by which bodies refer to the material.")));
   q.push_back(
@@ -200,13 +197,10 @@ NodeDecl materialNode() {
 }
 
 NodeDecl particleSourceNode() {
-  NodeDecl d;
-  d.type = "particle_source";
-  d.label = "Particle Source";
-  d.category = "particles";
-  d.help =
-      "Fills a shape with material points on a lattice (particles per cell of the MPM grid), each with its "
-      "volume, mass and micro-particle count n_p = n0 V_p.";
+  NodeDecl d =
+      declareNode("particle_source", "Particle Source", "particles",
+                  "Fills a shape with material points on a lattice (particles per cell of the MPM grid), each with its "
+                  "volume, mass and micro-particle count n_p = n0 V_p.");
   auto& q = d.params;
   q.push_back(stringParam("name", "Name", "body", "Name of the body."));
   addShapeParams(q, {"box", "sphere", "cylinder", "level_set", "mesh"}, "box");
@@ -242,15 +236,12 @@ NodeDecl particleSourceNode() {
 
 // ---- particle emitter ---------------------------------------------------------
 NodeDecl particleEmitterNode() {
-  NodeDecl d;
-  d.type = "particle_emitter";
-  d.label = "Particle Emitter";
-  d.category = "particles";
-  d.help =
+  NodeDecl d = declareNode(
+      "particle_emitter", "Particle Emitter", "particles",
       "Emits material over time from a shape (a nozzle is a cylinder along its axis) that may move: whole "
       "lattice fills of the shape (chunks) at a rate, while the time line is on, each placed where the shape was "
       "at its birth and moved on by the emission velocity since; points where material already is are left out "
-      "(docs/scenes.md, Emitters).";
+      "(docs/scenes.md, Emitters).");
   auto& q = d.params;
   q.push_back(stringParam("name", "Name", "emitter", "Name of the emitter."));
   addShapeParams(q, {"box", "sphere", "cylinder"}, "cylinder");
@@ -307,13 +298,10 @@ NodeDecl particleEmitterNode() {
 
 // ---- host particles ---------------------------------------------------------
 NodeDecl hostParticlesNode() {
-  NodeDecl d;
-  d.type = "host_particles";
-  d.label = "Host Particles";
-  d.category = "particles";
-  d.help =
+  NodeDecl d = declareNode(
+      "host_particles", "Host Particles", "particles",
       "A host's own material points: positions and micro-particle counts n_p (C ABI: network_set_particles), "
-      "each with the volume n_p / n0 of its material (or the given volumes) and the mass rho V_p.";
+      "each with the volume n_p / n0 of its material (or the given volumes) and the mass rho V_p.");
   auto& q = d.params;
   q.push_back(floatListParam("positions", "Positions", {}, "m", 0, std::numeric_limits<std::size_t>::max(),
                              "x, y, z of each point, one after the other (3 numbers a point)."));
@@ -355,13 +343,10 @@ NodeDecl hostParticlesNode() {
 
 // ---- magnet -----------------------------------------------------------------
 NodeDecl magnetNode() {
-  NodeDecl d;
-  d.type = "magnet";
-  d.label = "Magnet";
-  d.category = "sources";
-  d.help =
-      "A uniformly magnetized permanent magnet (sphere, box or cylinder) with a closed-form field; "
-      "optionally also a collider of the MPM.";
+  NodeDecl d =
+      declareNode("magnet", "Magnet", "sources",
+                  "A uniformly magnetized permanent magnet (sphere, box or cylinder) with a closed-form field; "
+                  "optionally also a collider of the MPM.");
   auto& q = d.params;
   addShapeParams(q, {"sphere", "box", "cylinder"}, "cylinder");
   q.push_back(required(vec3Param("center", "Center", {0, 0, -0.05}, "m", "Centre of the magnet.")));
@@ -395,13 +380,10 @@ NodeDecl magnetNode() {
 
 // ---- applied field ---------------------------------------------------------
 NodeDecl appliedFieldNode() {
-  NodeDecl d;
-  d.type = "applied_field";
-  d.label = "Applied Field";
-  d.category = "sources";
-  d.help =
-      "An applied field H_ext: uniform, a point dipole, or a vector grid of a VDB file (needs OpenVDB); "
-      "optionally switched on by a linear ramp.";
+  NodeDecl d =
+      declareNode("applied_field", "Applied Field", "sources",
+                  "An applied field H_ext: uniform, a point dipole, or a vector grid of a VDB file (needs OpenVDB); "
+                  "optionally switched on by a linear ramp.");
   auto& q = d.params;
   q.push_back(required(choiceParam("type", "Type", {"uniform", "dipole", "vdb"}, "uniform", "Kind of field.")));
   q.push_back(when(required(range(vec3Param("H", "Field", {0, 0, 1e4}, "A/m", "Uniform field."), -1e8, 1e8)), "type",
@@ -426,13 +408,10 @@ NodeDecl appliedFieldNode() {
 
 // ---- collider ------------------------------------------------------------------
 NodeDecl colliderNode() {
-  NodeDecl d;
-  d.type = "collider";
-  d.label = "Collider";
-  d.category = "mpm";
-  d.help =
+  NodeDecl d = declareNode(
+      "collider", "Collider", "mpm",
       "An obstacle of the MPM (plane, box, sphere, cylinder, level set or mesh; inverted for containers): static, "
-      "moving as scripted, or a dynamic rigid body that the material and contacts move.";
+      "moving as scripted, or a dynamic rigid body that the material and contacts move.");
   auto& q = d.params;
   addShapeParams(q, {"plane", "box", "sphere", "cylinder", "level_set", "mesh"}, "plane");
   q.push_back(
