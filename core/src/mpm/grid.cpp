@@ -144,6 +144,7 @@ struct MaterialParams {
   bool fluid = false;
   bool viscoplastic = false;
   bool elastoplastic = false;             // tracks F_E, Hencky + von Mises + Kelvin-Voigt (viscosity = eta)
+  bool neoHookean = false;                // a solid of Eq. 18 (none of the above)
   double mu = 0, lambda = 0;              // Pa (solid)
   double viscosity = 0, bulkModulus = 0;  // Pa*s, Pa (fluid)
   double yieldStress = 0, consistency = 0, flowIndex = 1, maxViscosity = 0;  // Pa, Pa*s^n, -, Pa*s
@@ -157,6 +158,7 @@ std::vector<MaterialParams> paramsOf(const std::vector<MpmMaterial>& materials) 
     out[m].fluid = mat.isFluid();  // tracks J only
     out[m].viscoplastic = mat.model == MpmModel::ViscoplasticFluid;
     out[m].elastoplastic = mat.model == MpmModel::ElastoplasticSolid;
+    out[m].neoHookean = !out[m].fluid && !out[m].elastoplastic;
     out[m].yieldStress = mat.yieldStress;
     out[m].consistency = mat.consistency;
     out[m].flowIndex = mat.flowIndex;
@@ -216,6 +218,11 @@ struct DepositKernel {
     // (material thin along x) would otherwise wait on each in turn.
     const std::uint32_t* rowFirstParticle = sorted + offsets[rowStart[row]];
     for (const std::uint32_t* q = rowFirstParticle; q <= rowLast && q - rowFirstParticle < kAhead; ++q) prefetch(*q);
+    // ln J of the row's Neo-Hookean solids, kLogs particles at a time in a
+    // loop of their own: the logarithm is a call, and inside the deposit it
+    // made the particle's live values be saved and reloaded around it.
+    constexpr std::ptrdiff_t kLogs = 8;
+    double logJ[kLogs];
     // Node (i, bj + b, bk + c) at nodes[origin[b + 3 c] + i].
     std::ptrdiff_t origin[9];
     rows.stencilRows(bj, bk, origin);
@@ -226,6 +233,12 @@ struct DepositKernel {
       if (it == end) continue;
       for (; it != end; ++it) {
         const std::size_t p = *it;
+        const std::ptrdiff_t inRow = it - rowFirstParticle;
+        if (inRow % kLogs == 0) {
+          const std::ptrdiff_t n = std::min(kLogs, rowLast - it + 1);
+          for (std::ptrdiff_t g = 0; g < n; ++g)
+            if (params[mat[it[g]]].neoHookean) logJ[g] = std::log(flooredVolumeRatio(Fp[it[g]]));
+        }
         prefetch(rowLast - it > kAhead ? it[kAhead] : *rowLast);
         const Vec3d x = X[p];
         const double ux = (x.x - o.x) * invDx, uy = (x.y - o.y) * invDx, uz = (x.z - o.z) * invDx;
@@ -241,7 +254,7 @@ struct DepositKernel {
                                                                     mp.flowIndex, mp.maxViscosity, mp.bulkModulus)
                     : mp.fluid         ? viscousFluidKirchhoff(Cp[p], Jp[p], mp.viscosity, mp.bulkModulus)
                     : mp.elastoplastic ? elastoplasticKirchhoff(Fp[p], Cp[p], mp.mu, mp.lambda, mp.viscosity)
-                                       : neoHookeanKirchhoff(Fp[p], mp.mu, mp.lambda);
+                                       : neoHookeanKirchhoffWithLogJ(Fp[p], mp.mu, mp.lambda, logJ[inRow % kLogs]);
         // The capillary stress T_p (Cauchy, Pa) of the liquids with surface tension: tau += J T_p.
         if (capillary) {
           const Mat3d& Tc = capillary[p];

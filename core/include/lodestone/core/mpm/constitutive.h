@@ -81,13 +81,20 @@ LODESTONE_HOSTDEV inline T trace(const Mat3<T>& A) {
   return A(0, 0) + A(1, 1) + A(2, 2);
 }
 
-/// Neo-Hookean Kirchhoff stress tau = mu (F F^T - I) + lambda ln J I (Pa), Eq. 18 times J.
+/// The volume ratio J = det F inside the laws' ln J and 1/J, floored at
+/// kMinVolumeRatio.
 template <typename T>
-LODESTONE_HOSTDEV inline Mat3<T> neoHookeanKirchhoff(const Mat3<T>& F, T mu, T lambda) {
-  using std::log;
+LODESTONE_HOSTDEV inline T flooredVolumeRatio(const Mat3<T>& F) {
   T J = determinant(F);
   if (!(J > T(kMinVolumeRatio))) J = T(kMinVolumeRatio);
-  const T p = lambda * log(J);
+  return J;
+}
+
+/// neoHookeanKirchhoff with logJ = ln flooredVolumeRatio(F) given: for
+/// callers that take several particles' logarithms in a loop of their own.
+template <typename T>
+LODESTONE_HOSTDEV inline Mat3<T> neoHookeanKirchhoffWithLogJ(const Mat3<T>& F, T mu, T lambda, T logJ) {
+  const T p = lambda * logJ;
   Mat3<T> tau;
   for (int i = 0; i < 3; ++i)
     for (int j = 0; j < 3; ++j) {
@@ -97,11 +104,17 @@ LODESTONE_HOSTDEV inline Mat3<T> neoHookeanKirchhoff(const Mat3<T>& F, T mu, T l
   return tau;
 }
 
+/// Neo-Hookean Kirchhoff stress tau = mu (F F^T - I) + lambda ln J I (Pa), Eq. 18 times J.
+template <typename T>
+LODESTONE_HOSTDEV inline Mat3<T> neoHookeanKirchhoff(const Mat3<T>& F, T mu, T lambda) {
+  using std::log;
+  return neoHookeanKirchhoffWithLogJ(F, mu, lambda, T(log(flooredVolumeRatio(F))));
+}
+
 /// Neo-Hookean Cauchy stress sigma = tau / J (Pa), Eq. 18.
 template <typename T>
 LODESTONE_HOSTDEV inline Mat3<T> neoHookeanCauchy(const Mat3<T>& F, T mu, T lambda) {
-  T J = determinant(F);
-  if (!(J > T(kMinVolumeRatio))) J = T(kMinVolumeRatio);
+  const T J = flooredVolumeRatio(F);
   Mat3<T> s = neoHookeanKirchhoff(F, mu, lambda);
   for (int i = 0; i < 3; ++i)
     for (int j = 0; j < 3; ++j) s(i, j) /= J;
@@ -112,8 +125,7 @@ LODESTONE_HOSTDEV inline Mat3<T> neoHookeanCauchy(const Mat3<T>& F, T mu, T lamb
 template <typename T>
 LODESTONE_HOSTDEV inline T neoHookeanEnergyDensity(const Mat3<T>& F, T mu, T lambda) {
   using std::log;
-  T J = determinant(F);
-  if (!(J > T(kMinVolumeRatio))) J = T(kMinVolumeRatio);
+  const T J = flooredVolumeRatio(F);
   T frob = 0;
   for (int i = 0; i < 3; ++i)
     for (int j = 0; j < 3; ++j) frob += F(i, j) * F(i, j);
@@ -266,8 +278,7 @@ template <typename T>
 LODESTONE_HOSTDEV inline Mat3<T> elastoplasticKirchhoff(const Mat3<T>& F, const Mat3<T>& C, T mu, T lambda,
                                                         T viscosity) {
   Mat3<T> tau = henckyKirchhoff(F, mu, lambda);
-  T J = determinant(F);
-  if (!(J > T(kMinVolumeRatio))) J = T(kMinVolumeRatio);
+  const T J = flooredVolumeRatio(F);
   const T third = trace(C) / T(3);
   for (int i = 0; i < 3; ++i)
     for (int j = 0; j < 3; ++j)
