@@ -6,6 +6,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include "lodestone/core/base/kept_capacity.h"
 #include "lodestone/core/base/error.h"
 #include "lodestone/core/base/parallel.h"
 
@@ -50,9 +51,9 @@ CpuSolveBackend::CpuSolveBackend(MagnetostaticProblem& problem, std::vector<doub
                                                &ws_.lastGood, &ws_.wallRhs, &ws_.wallDelta};
   std::copy(roles, roles + kNodeVecCount, nodes_);
   // Every vector is fully written before it is read: resizing a kept
-  // workspace needs no clearing.
+  // workspace needs no clearing, and new storage none either.
   for (std::vector<double>* x : nodes_)
-    if (x != &phi && x != &ws_.lastGood) x->resize(n_);
+    if (x != &phi && x != &ws_.lastGood) resizeKeepingCapacity(*x, n_);
   for (std::vector<double>& x : wallVecs_) x.assign(wall_.size(), 0.0);
   applyJ_ = [this](const double* x, double* out) { problem_.applyJacobian(x, out); };
   applyJDot_ = [this](const double* x, double* out) { return problem_.applyJacobianDot(x, out); };
@@ -92,7 +93,10 @@ double CpuSolveBackend::materialEnergyAlong(NodeVec x, NodeVec d, double lambda,
 
 double CpuSolveBackend::norm(NodeVec x) { return std::sqrt(deterministicDot(p(x), p(x), n_)); }
 void CpuSolveBackend::fill(NodeVec x, double value) { std::fill(v(x).begin(), v(x).end(), value); }
-void CpuSolveBackend::copy(NodeVec from, NodeVec to) { v(to) = v(from); }
+void CpuSolveBackend::copy(NodeVec from, NodeVec to) {
+  reserveKeepingCapacity(v(to), v(from).size());  // a first copy into an empty vector: storage advised for huge pages
+  v(to) = v(from);
+}
 void CpuSolveBackend::swap(NodeVec a, NodeVec b) { v(a).swap(v(b)); }
 void CpuSolveBackend::negate(NodeVec from, NodeVec to) {
   const double* x = p(from);

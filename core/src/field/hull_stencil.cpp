@@ -54,7 +54,7 @@ void HullStencil<T>::build(const GridSpec& grid, const std::size_t* cellBase, st
   blockShift_ = shift;
   rowStart_.assign(rows + 1, 0);
   for (std::size_t row = 0; row < rows; ++row) rowStart_[row + 1] = rowStart_[row] + padded(row, std::size_t(block()));
-  corner_.resize(cells * 8);
+  resizeKeepingCapacity(corner_, cells * 8);  // every corner is written below
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, cells, 1024), [&](const tbb::blocked_range<std::size_t>& r) {
     for (std::size_t s = r.begin(); s != r.end(); ++s) {
       const std::size_t b = cellBase[s];
@@ -67,6 +67,7 @@ void HullStencil<T>::build(const GridSpec& grid, const std::size_t* cellBase, st
     }
   });
   cellBase_.assign(cellBase, cellBase + cells);
+  reserveKeepingCapacity(cellSlot_, grid.cellCount());
   cellSlot_.assign(grid.cellCount(), -1);
   for (std::size_t s = 0; s < cells; ++s) {
     const std::size_t b = cellBase[s];
@@ -144,7 +145,7 @@ void HullStencil<T>::assignConverted(const HullStencil<U>& other) {
   corner_.clear();
   cellBase_.clear();
   cellSlot_.clear();
-  values_.resize(other.values_.size());
+  resizeKeepingCapacity(values_, other.values_.size());
   const U* src = other.values_.data();
   T* dst = values_.data();
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, values_.size(), 1 << 15),

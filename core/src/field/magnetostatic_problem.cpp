@@ -322,7 +322,7 @@ MagnetostaticProblem::Evaluation MagnetostaticProblem::evaluate(const double* ph
   }
   const double h = grid_.dx, w = grid_.cellVolume() / 8.0, fScale = h * h / 8.0;
   std::vector<CellSums>& sums = sums_;
-  sums.resize(cellBase_.size());
+  resizeKeepingCapacity(sums, cellBase_.size());  // every cell's sums are written before they are read
   scatterCells(F, [&](std::size_t s, double local[8]) {
     double pc[8];
     gatherCorners(cellBase_[s], phi, pc);

@@ -5,6 +5,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include "lodestone/core/base/kept_capacity.h"
 #include "lodestone/core/field/magnetostatic_problem.h"
 #include "lodestone/core/base/parallel.h"
 #include "lodestone/core/field/pcg_iteration.h"
@@ -13,7 +14,7 @@ namespace lodestone {
 inline namespace field {
 
 void JacobiPreconditioner::update(const MagnetostaticProblem& problem) {
-  inverseDiagonal_.resize(problem.nodeCount());
+  resizeKeepingCapacity(inverseDiagonal_, problem.nodeCount());
   problem.jacobianDiagonal(inverseDiagonal_.data());
   double* d = inverseDiagonal_.data();
   parallelForEach(inverseDiagonal_.size(), [&](std::size_t m) { d[m] = d[m] > 0 ? 1.0 / d[m] : 0.0; });
@@ -38,7 +39,7 @@ class CpuPcgOps {
             const Preconditioner& preconditioner, const double* b, double* x, const std::function<void(double*)>& project,
             PcgWorkspace& ws, const std::function<double(const double*, double*)>& applyADot)
       : n_(n), applyA_(applyA), pre_(preconditioner), b_(b), x_(x), project_(project), applyADot_(applyADot), ws_(ws) {
-    for (std::vector<double>* v : {&ws.r, &ws.z, &ws.p, &ws.Ap}) v->resize(n);
+    for (std::vector<double>* v : {&ws.r, &ws.z, &ws.p, &ws.Ap}) resizeKeepingCapacity(*v, n);
   }
 
   double start() {

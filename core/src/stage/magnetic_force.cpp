@@ -11,6 +11,7 @@
 
 #include "lodestone/core/base/constants.h"
 #include "lodestone/core/base/error.h"
+#include "lodestone/core/base/kept_capacity.h"
 #include "lodestone/core/base/parallel.h"
 #include "lodestone/core/sources/field_source.h"
 #include "plane_sweep.h"
@@ -102,8 +103,8 @@ const std::uint8_t* materialMask(GridView<const double> n, int dilation, GridScr
       [](double a, double b) { return std::max(a, b); });
   const double threshold = kMaskDustFraction * nMax;
   std::vector<std::uint8_t>&a = scratch.mask0, &b = scratch.mask1;
-  a.resize(count);  // every value is written before it is read
-  b.resize(count);
+  resizeKeepingCapacity(a, count);  // every value is written before it is read
+  resizeKeepingCapacity(b, count);
   const auto rows = [&](const auto& rowFn) {
     tbb::parallel_for(0, g.dims.k, [&](int k) {
       for (int j = 0; j < g.dims.j; ++j) rowFn(j, k, g.index(0, j, k));

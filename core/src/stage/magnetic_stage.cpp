@@ -10,6 +10,7 @@
 #include <tbb/parallel_for.h>
 
 #include "lodestone/core/base/constants.h"
+#include "lodestone/core/base/kept_capacity.h"
 #include "lodestone/core/base/stopwatch.h"
 #include "lodestone/core/base/error.h"
 #include "lodestone/core/field/magnetostatic_problem.h"
@@ -62,6 +63,7 @@ MagneticForceStage::MagneticForceStage(const GridSpec& grid, const MagneticMater
   grid_.validate("magnetic stage grid");
   settings_.validate();
   n_.reset(grid_, 0.0);
+  reserveKeepingCapacity(phi_, grid_.nodeCount());
   phi_.assign(grid_.nodeCount(), 0.0);
   hext_.reset(grid_);
   h_.reset(grid_);

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "lodestone/core/base/error.h"
+#include "lodestone/core/base/kept_capacity.h"
 #include "lodestone/core/base/vec3.h"
 
 namespace lodestone {
@@ -128,6 +129,7 @@ class DenseGrid {
   void reset(const GridSpec& spec, const T& value = T{}) {
     spec.validate();
     spec_ = spec;
+    reserveKeepingCapacity(data_, spec.nodeCount());
     data_.assign(spec.nodeCount(), value);
   }
   void fill(const T& value) { std::fill(data_.begin(), data_.end(), value); }
