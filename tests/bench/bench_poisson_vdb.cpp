@@ -20,6 +20,11 @@
 //            incomplete-Cholesky (and, second, Jacobi) preconditioner,
 //            stopped at an infinity-norm residual relative to ||b||_inf of
 //            `tol`; timed as the matrix and preconditioner set-up plus CG.
+// With --active-region M (default 4) ours also runs, multigrid, on the grid
+// the MPM solver's planner solves this sphere on (effects_planner.h): the
+// ball's box plus the stencil's 3 cells, M free cells and the solver's 4
+// cells of slack, on the box's lattice, with the same open wall; its H error
+// is against the same closed form.
 // The OpenVDB problem is the linear solve inside one Newton step of ours for
 // a material with chi = 0 (no coupling, no boundary update), so it is a lower
 // bound on what any solve of the magnetized sphere costs on this grid.
@@ -45,6 +50,7 @@
 #include "lodestone/core/field/langevin.h"
 #include "lodestone/core/stage/magnetic_stage.h"
 #include "lodestone/core/field/material.h"
+#include "lodestone/core/planner/effects_planner.h"
 #include "lodestone/core/sources/uniform_field.h"
 
 using namespace lodestone;
@@ -98,6 +104,7 @@ struct Row {
   double tolerance = 0, achieved = 0;
   int iterations = 0;  // CG iterations (ours: total over Newton steps)
   int newton = 0;
+  std::size_t solveNodes = 0;  // nodes of the grid solved on
   double secondsSetup = 0;   // OpenVDB: index tree, matrix, preconditioner
   double secondsSolve = 0;   // ours: Newton-PCG; OpenVDB: CG
   double secondsTotal = 0;   // ours: whole stage; OpenVDB: set-up + CG
@@ -112,6 +119,7 @@ Row vdbSolve(const GridSpec& g, const openvdb::DoubleTree& source, double tol, c
   using VecT = math::pcg::Vector<double>;
   Row r;
   r.solver = "openvdb";
+  r.solveNodes = g.nodeCount();
   r.problem = "lap phi = div M (M given)";
   r.preconditioner = name;
   r.boundary = "Dirichlet phi = 0 outside the box";
@@ -157,8 +165,10 @@ Row vdbSolve(const GridSpec& g, const openvdb::DoubleTree& source, double tol, c
   return r;
 }
 
+/// Our stage on grid g (the whole box, or the planner's active region on
+/// the box's lattice when `region`), frac: ballFraction(g).
 Row oursSolve(const GridSpec& g, const DenseGrid<double>& frac, const MagneticMaterial& mat, PreconditionerKind pk,
-              double tol, double H0) {
+              double tol, double H0, bool region) {
   DenseGrid<double> n(g, 0.0);
   for (std::size_t m = 0; m < g.nodeCount(); ++m) n[m] = frac[m] * mat.numberDensity;
   MagneticStageSettings s;
@@ -173,7 +183,10 @@ Row oursSolve(const GridSpec& g, const DenseGrid<double>& frac, const MagneticMa
   r.solver = "lodestone";
   r.problem = concat("div((1+chi) grad) Newton, ", mat.law.kind == LawKind::Linear ? "linear" : "langevin", " law");
   r.preconditioner = concat(toString(pk), "-PCG");
-  r.boundary = "open (far-field multipole wall)";
+  r.boundary = region ? concat("open (far-field multipole wall) on the planner's active region ", g.dims.i, "x",
+                               g.dims.j, "x", g.dims.k)
+                      : std::string("open (far-field multipole wall)");
+  r.solveNodes = g.nodeCount();
   r.norm = "2-norm of Newton residual / residual at phi = 0";
   r.tolerance = tol;
   r.achieved = rep.solve.relativeResidual;
@@ -201,6 +214,7 @@ int main(int argc, char** argv) {
   try {
     int N = 129;
     double tol = 1e-8;
+    int activeMargin = 4;  // free cells (effects_planner.h)
     std::string csvPath = "docs/data/solve_vs_openvdb.csv";
     CLI::App app("lodestone-bench-poisson-vdb: our field solve next to openvdb::tools::poisson on the same grid",
                  "lodestone-bench-poisson-vdb");
@@ -213,6 +227,12 @@ int main(int argc, char** argv) {
         ->type_name("X")
         ->check(cli::number())
         ->default_str(cli::formatNumber(tol));
+    cli::addNumber(app, "--active-region", activeMargin,
+                   "also solve (multigrid, both laws) on the planner's active region with this margin of free cells "
+                   "(4: the 0.5% decision share, 8: 0.1%; 0: not)")
+        ->type_name("M")
+        ->check(cli::wholeNumber(0, 64))
+        ->default_str(cli::formatNumber(activeMargin));
     app.add_option("--csv", csvPath, "CSV output")->type_name("FILE")->capture_default_str();
     if (const std::optional<int> code = cli::parse(app, argc, argv)) return *code;
     require(tol > 0 && tol < 1, "--tolerance: ", tol, " is not in (0, 1)");
@@ -260,25 +280,34 @@ int main(int argc, char** argv) {
         g, source, tol, "Jacobi-PCG", H0, Mz, sphereInteriorField(lin, H0)));
     for (const MagneticMaterial* m : {&lin, &lang})
       for (PreconditionerKind pk : {PreconditionerKind::Multigrid, PreconditionerKind::Jacobi})
-        show(oursSolve(g, frac, *m, pk, tol, H0));
+        show(oursSolve(g, frac, *m, pk, tol, H0, false));
+    if (activeMargin > 0) {
+      // The grid the MPM solver's planner solves this sphere on: its box, the
+      // stencil's 3 cells, `activeMargin` free cells and the solver's slack.
+      const Vec3d a{kRadius, kRadius, kRadius};
+      const GridSpec rg = widenedRegion(activeRegionGrid(g, -1.0 * a, a, activeMargin), g, kActiveRegionSlackCells);
+      const DenseGrid<double> rfrac = ballFraction(rg);
+      for (const MagneticMaterial* m : {&lin, &lang})
+        show(oursSolve(rg, rfrac, *m, PreconditionerKind::Multigrid, tol, H0, true));
+    }
 
     const double vdb = rows[0].secondsTotal;
     std::printf("\nratios to OpenVDB incomplete-Cholesky-PCG (set-up + CG, %.3f s):\n", vdb);
     for (const Row& r : rows)
-      std::printf("  %-9s %-42s %-24s solve %6.2fx   total %6.2fx\n", r.solver.c_str(), r.problem.c_str(),
-                  r.preconditioner.c_str(), r.secondsSolve / vdb, r.secondsTotal / vdb);
+      std::printf("  %-9s %-42s %-24s solve %6.2fx   total %6.2fx  (%zu nodes)\n", r.solver.c_str(), r.problem.c_str(),
+                  r.preconditioner.c_str(), r.secondsSolve / vdb, r.secondsTotal / vdb, r.solveNodes);
 
     std::ofstream csv(csvPath);
     require(bool(csv), "cannot write ", csvPath);
     csv.precision(8);
     csv << "solver,problem,preconditioner,boundary,tolerance,tolerance_norm,achieved_residual,cg_iterations,"
            "newton_iterations,seconds_setup,seconds_solve,seconds_total,total_vs_openvdb_ic,interior_H_error,"
-           "nodes_per_axis,threads\n";
+           "nodes_per_axis,threads,solve_nodes\n";
     for (const Row& r : rows)
       csv << r.solver << ",\"" << r.problem << "\"," << r.preconditioner << ",\"" << r.boundary << "\"," << r.tolerance
           << ",\"" << r.norm << "\"," << r.achieved << ',' << r.iterations << ',' << r.newton << ',' << r.secondsSetup
           << ',' << r.secondsSolve << ',' << r.secondsTotal << ',' << r.secondsTotal / vdb << ',' << r.interiorError
-          << ',' << N << ',' << tbb::info::default_concurrency() << '\n';
+          << ',' << N << ',' << tbb::info::default_concurrency() << ',' << r.solveNodes << '\n';
     std::printf("CSV written to %s\n", csvPath.c_str());
     return 0;
   } catch (const std::exception& e) {
