@@ -48,10 +48,10 @@
 
 #include "lodestone/core/base/error.h"
 #include "lodestone/core/field/langevin.h"
-#include "lodestone/core/stage/magnetic_stage.h"
 #include "lodestone/core/field/material.h"
 #include "lodestone/core/planner/effects_planner.h"
 #include "lodestone/core/sources/uniform_field.h"
+#include "lodestone/core/stage/magnetic_stage.h"
 
 using namespace lodestone;
 
@@ -105,10 +105,10 @@ struct Row {
   int iterations = 0;  // CG iterations (ours: total over Newton steps)
   int newton = 0;
   std::size_t solveNodes = 0;  // nodes of the grid solved on
-  double secondsSetup = 0;   // OpenVDB: index tree, matrix, preconditioner
-  double secondsSolve = 0;   // ours: Newton-PCG; OpenVDB: CG
-  double secondsTotal = 0;   // ours: whole stage; OpenVDB: set-up + CG
-  double interiorError = 0;  // |mean interior H_z - closed form| / closed form
+  double secondsSetup = 0;     // OpenVDB: index tree, matrix, preconditioner
+  double secondsSolve = 0;     // ours: Newton-PCG; OpenVDB: CG
+  double secondsTotal = 0;     // ours: whole stage; OpenVDB: set-up + CG
+  double interiorError = 0;    // |mean interior H_z - closed form| / closed form
 };
 
 template <typename Precond>

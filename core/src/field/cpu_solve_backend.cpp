@@ -6,8 +6,8 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
-#include "lodestone/core/base/kept_capacity.h"
 #include "lodestone/core/base/error.h"
+#include "lodestone/core/base/kept_capacity.h"
 #include "lodestone/core/base/parallel.h"
 
 namespace lodestone {
