@@ -10,6 +10,7 @@
 #include <type_traits>
 
 #include "lodestone/core/base/error.h"
+#include "lodestone/core/base/kept_capacity.h"
 #include "lodestone/core/base/parallel.h"
 
 namespace lodestone {
@@ -172,8 +173,10 @@ void MpmParticles::permute(const std::vector<std::uint32_t>& order) {
     require(o < order.size() && !seen[o], "MPM particles: the order is not a permutation (entry ", o, ")");
     seen[o] = 1;
   }
-  // Not zeroed: the gather writes every byte it later reads.
+  // Not zeroed: the gather writes every byte it later reads. Fresh on every
+  // sort, so on 2 MiB pages where the system has them (kept_capacity.h).
   const std::unique_ptr<unsigned char[]> scratch(new unsigned char[order.size() * sizeof(Mat3d)]);
+  adviseHugePages(scratch.get(), order.size() * sizeof(Mat3d));
   static_assert(sizeof(Mat3d) >= sizeof(Vec3d) && sizeof(Mat3d) >= sizeof(std::uint64_t),
                 "the scratch holds the widest attribute");
   permuteArray(x, order, scratch.get());
