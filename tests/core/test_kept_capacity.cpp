@@ -87,6 +87,19 @@ TEST(KeptCapacity, GrowsWithAnEighthOfRoomAndKeepsStorage) {
   EXPECT_EQ(v[99], 0.0);
 }
 
+TEST(KeptCapacity, AssignSetsEveryValueInTheKeptStorage) {
+  std::vector<int> v;
+  assignKeepingCapacity(v, 800, 7);
+  ASSERT_EQ(v.size(), 800u);
+  EXPECT_GE(v.capacity(), 900u);
+  const int* storage = v.data();
+  v[3] = 1;
+  assignKeepingCapacity(v, 880, -1);  // within the room: the storage kept, every value set
+  EXPECT_EQ(v.data(), storage);
+  ASSERT_EQ(v.size(), 880u);
+  for (int x : v) ASSERT_EQ(x, -1);
+}
+
 TEST(KeptCapacity, AdviceNeedsAWholeHugePage) {
   EXPECT_FALSE(adviseHugePages(nullptr, 64 * kMiB));
   std::vector<char> small(kMiB);

@@ -67,8 +67,7 @@ void HullStencil<T>::build(const GridSpec& grid, const std::size_t* cellBase, st
     }
   });
   cellBase_.assign(cellBase, cellBase + cells);
-  reserveKeepingCapacity(cellSlot_, grid.cellCount());
-  cellSlot_.assign(grid.cellCount(), -1);
+  assignKeepingCapacity(cellSlot_, grid.cellCount(), std::int32_t(-1));
   for (std::size_t s = 0; s < cells; ++s) {
     const std::size_t b = cellBase[s];
     cellSlot_[grid.cellIndex(int(b % nx), int((b / nx) % ny), int(b / (nx * ny)))] = std::int32_t(s);

@@ -63,8 +63,7 @@ MagneticForceStage::MagneticForceStage(const GridSpec& grid, const MagneticMater
   grid_.validate("magnetic stage grid");
   settings_.validate();
   n_.reset(grid_, 0.0);
-  reserveKeepingCapacity(phi_, grid_.nodeCount());
-  phi_.assign(grid_.nodeCount(), 0.0);
+  assignKeepingCapacity(phi_, grid_.nodeCount(), 0.0);
   hext_.reset(grid_);
   h_.reset(grid_);
   m_.reset(grid_);

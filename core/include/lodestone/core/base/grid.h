@@ -129,8 +129,7 @@ class DenseGrid {
   void reset(const GridSpec& spec, const T& value = T{}) {
     spec.validate();
     spec_ = spec;
-    reserveKeepingCapacity(data_, spec.nodeCount());
-    data_.assign(spec.nodeCount(), value);
+    assignKeepingCapacity(data_, spec.nodeCount(), value);
   }
   void fill(const T& value) { std::fill(data_.begin(), data_.end(), value); }
 

@@ -53,5 +53,13 @@ void resizeKeepingCapacity(std::vector<T>& v, std::size_t n) {
   v.resize(n);
 }
 
+/// v set to n copies of value in v's storage when it holds n
+/// (reserveKeepingCapacity). For arrays that start from one value.
+template <typename T>
+void assignKeepingCapacity(std::vector<T>& v, std::size_t n, const T& value) {
+  reserveKeepingCapacity(v, n);
+  v.assign(n, value);
+}
+
 }  // namespace base
 }  // namespace lodestone
