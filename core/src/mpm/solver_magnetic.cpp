@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "lodestone/core/base/error.h"
+#include "lodestone/core/base/kept_capacity.h"
 #include "lodestone/core/base/parallel.h"
 #include "lodestone/core/base/stopwatch.h"
 #include "lodestone/core/mpm/solver.h"
@@ -67,7 +68,9 @@ bool MpmSolver::lastSolveHolds() {
 MagneticPlan MpmSolver::planMagneticNow() const { return planMagneticAt(time_); }
 
 MagneticPlan MpmSolver::planMagneticAt(double t) const {
-  const std::vector<Vec3d> positions = magneticPoints().x;
+  MagneticPoints points;
+  magneticPoints(points);
+  const std::vector<Vec3d>& positions = points.x;
   const MagneticMaterial* law = magneticLaw();
   poseMagnetsAt(t);
   PlannerInputs in = plannerInputs(positions, law ? *law : nonMagneticMaterial());
@@ -102,7 +105,8 @@ void MpmSolver::solveMagnetic(MpmStepReport& rep) {
   const auto t0 = Clock::now();
   // The magnetic points, handed to the stage as an external host would
   // (with a partition: every process's, so that each runs the same solve).
-  const MagneticPoints points = magneticPoints();
+  magneticPoints(magneticPoints_);
+  const MagneticPoints& points = magneticPoints_;
   const std::vector<std::uint32_t>& index = points.index;
   const std::vector<Vec3d>& positions = points.x;
   const std::vector<double>& counts = points.count;
@@ -178,7 +182,8 @@ void MpmSolver::solveMagnetic(MpmStepReport& rep) {
   if (sameGrid_) {
     magneticDropped_ = gatherToSupport(stage_->nodalForce(), stage_->density(), magneticForce_.view());
   } else {
-    std::vector<Vec3d> forces(positions.size());
+    std::vector<Vec3d>& forces = magneticPointForces_;
+    resizeKeepingCapacity(forces, positions.size());  // written whole by particleForces
     stage_->particleForces(view, forces.data());
     for (std::size_t q = 0; q < index.size(); ++q)
       if (index[q] != MagneticPoints::kElsewhere) particles_.magneticForce[index[q]] = forces[q];

@@ -55,16 +55,20 @@ void MpmSolver::gatherParticlesToRoot() {
   if (partition_) partition_->gatherToRoot(particles_);
 }
 
-MpmSolver::MagneticPoints MpmSolver::magneticPoints() const {
-  MagneticPoints pts;
+void MpmSolver::magneticPoints(MagneticPoints& pts) const {
+  pts.index.clear();
+  pts.x.clear();
+  pts.count.clear();
+  pts.id.clear();
   if (!partition_) {
+    // (clear() keeps the storage: the arrays grow only past their largest count.)
     for (std::size_t p = 0; p < particles_.size(); ++p) {
       if (!isMagneticPoint(p)) continue;
       pts.index.push_back(std::uint32_t(p));
       pts.x.push_back(particles_.x[p]);
       pts.count.push_back(particles_.count[p]);
     }
-    return pts;
+    return;
   }
   // Records of 7 values: id, x, y, z, n_p, rank, index.
   constexpr std::size_t R = 7;
@@ -83,7 +87,6 @@ MpmSolver::MagneticPoints MpmSolver::magneticPoints() const {
     pts.count.push_back(r[4]);
     pts.index.push_back(int(r[5]) == me ? std::uint32_t(r[6]) : MagneticPoints::kElsewhere);
   }
-  return pts;
 }
 
 bool MpmSolver::magneticPointsWithin(double distance) const {

@@ -513,7 +513,9 @@ class MpmSolver {
     std::vector<double> count;
     std::vector<std::uint64_t> id;  // with a partition (ascending)
   };
-  MagneticPoints magneticPoints() const;
+  // Fills `out` with the magnetic points, keeping its storage: a solve every
+  // substep refills the same arrays instead of growing new ones.
+  void magneticPoints(MagneticPoints& out) const;
   // Whether every magnetic point lies within `distance` (m) of its place at
   // the last solve (FieldReuse::pointsWithin). With a partition each process
   // tests its own points against the record, which every process keeps in
@@ -541,6 +543,9 @@ class MpmSolver {
   void solvePatches(const MagneticPoints& points, const MagneticMaterial& law, MpmStepReport& rep);
   SolveProgress fieldSolveProgress_;  // setFieldSolveProgress
   DenseGrid<Vec3d> magneticForce_;  // on the MPM grid (same-grid coupling)
+  // solveMagnetic's points and their forces (N), kept between solves.
+  MagneticPoints magneticPoints_;
+  std::vector<Vec3d> magneticPointForces_;
   Vec3d magneticDropped_;
   bool haveMagneticForce_ = false;
   bool frameStart_ = false;
